@@ -1,0 +1,206 @@
+"""Configuration of the tissue, the solver and the grasp scene.
+
+All configs are frozen dataclasses with SI units stated per field. Each validates itself in
+``__post_init__`` and raises :class:`ValueError` naming the field and the allowed range: a bad value
+is never clamped silently.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields, replace
+from typing import Literal
+
+CouplingMode = Literal["thesis", "consistent"]
+COUPLING_MODES: tuple[str, ...] = ("thesis", "consistent")
+
+
+def _check_range(
+    owner: str, name: str, value: float, lo: float, hi: float, *, lo_open: bool = False, hi_open: bool = False
+) -> None:
+    """Raise ValueError unless lo <(=) value <(=) hi; the message names the field and the range."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f"{owner}.{name} must be a finite number, got {value!r}")
+    below = value <= lo if lo_open else value < lo
+    above = value >= hi if hi_open else value > hi
+    if below or above:
+        left = "(" if lo_open else "["
+        right = ")" if hi_open else "]"
+        raise ValueError(f"{owner}.{name} must be in {left}{lo}, {hi}{right}, got {value!r}")
+
+
+def _check_int(owner: str, name: str, value: int, lo: int, hi: int) -> None:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ValueError(f"{owner}.{name} must be an integer, got {value!r}")
+    if not lo <= value <= hi:
+        raise ValueError(f"{owner}.{name} must be in [{lo}, {hi}], got {value!r}")
+
+
+@dataclass(frozen=True)
+class TissueConfig:
+    """Soft tissue wrapped around a rigid core (thesis 5.1.1 and 5.2.1).
+
+    The core's surface is sampled with *attached* particles; each gets one *outer* partner pushed
+    out by ``extrude`` along the direction from the core's centre of mass.
+    """
+
+    density: float = 10_000.0
+    """Attached particles per square metre of core surface [1/m^2]; 10,000/m^2 is ~10 mm spacing."""
+    extrude: float = 0.008
+    """Distance from an attached particle to its outer partner [m] (thesis 5.2.1 *extrude*)."""
+    group_size: int = 8
+    """Particles per implicit shape-matching group, centre included (thesis 5.2.1 *groupSize*)."""
+    tissue_density: float = 1_000.0
+    """Mass density of the tissue [kg/m^3]; particle mass = density * (its share of the layer volume)."""
+    stiffness: float = 0.5
+    """Shape-matching stiffness k in (0, 1] per *step*; made iteration-independent (Mueller 2007)."""
+    radius_scale: float = 0.6
+    """Tangential ellipsoid radius as a fraction of the particle spacing (>0.5 closes gaps)."""
+    normal_radius: float = 0.003
+    """Ellipsoid radius along the surface normal [m] (flat, pebble-like particles)."""
+    friction_static: float = 0.9
+    """Coulomb static friction coefficient mu_s of the tissue surface [-]."""
+    friction_dynamic: float = 0.7
+    """Coulomb dynamic (kinetic) friction coefficient mu_k of the tissue surface [-]."""
+
+    def __post_init__(self) -> None:
+        o = "TissueConfig"
+        _check_range(o, "density", self.density, 100.0, 1e7)
+        _check_range(o, "extrude", self.extrude, 0.0, 0.1, lo_open=True)
+        _check_int(o, "group_size", self.group_size, 4, 64)
+        _check_range(o, "tissue_density", self.tissue_density, 0.0, 1e5, lo_open=True)
+        _check_range(o, "stiffness", self.stiffness, 0.0, 1.0, lo_open=True)
+        _check_range(o, "radius_scale", self.radius_scale, 0.0, 2.0, lo_open=True)
+        _check_range(o, "normal_radius", self.normal_radius, 0.0, 0.1, lo_open=True)
+        _check_range(o, "friction_static", self.friction_static, 0.0, 10.0)
+        _check_range(o, "friction_dynamic", self.friction_dynamic, 0.0, 10.0)
+        if self.friction_dynamic > self.friction_static:
+            raise ValueError(
+                "TissueConfig.friction_dynamic must not exceed friction_static, got "
+                f"{self.friction_dynamic!r} > {self.friction_static!r}"
+            )
+
+    @property
+    def spacing(self) -> float:
+        """Mean distance between neighbouring attached particles [m]."""
+        return 1.0 / math.sqrt(self.density)
+
+
+@dataclass(frozen=True)
+class SimConfig:
+    """Time stepping and solver settings shared by tissue and pybullet."""
+
+    dt: float = 1.0 / 240.0
+    """Physics step [s]; one tissue step and one pybullet step per world step."""
+    iterations: int = 4
+    """Gauss-Seidel iterations over the shape-matching groups and contacts per step."""
+    rotation_iterations: int = 4
+    """Most warm-started rotation-extraction sweeps per group solve (Mueller et al. 2016); stops
+    early once the correction is below 1e-10 rad."""
+    gravity: float = 9.81
+    """Gravitational acceleration along -z [m/s^2]."""
+    damping: float = 0.5
+    """Linear velocity damping of the tissue [1/s]: v <- v * exp(-damping * dt). 0 disables it."""
+    coupling: CouplingMode = "thesis"
+    """'thesis': core infinitely heavy inside the solve, error -> impulse, snap back (thesis 5.1.3).
+    'consistent': attachment projected with the core's generalised inverse mass (XPBD)."""
+    orientation: Literal["reaction", "goal"] = "reaction"
+    """How particle orientations follow their groups. 'goal': only a group's centre turns toward
+    the group rotation (Mueller & Chentanez 2011 sec. 4.3); leaks angular momentum. 'reaction':
+    all members take up the projection's torque as spin, conserving angular momentum."""
+    contact_margin: float = 0.002
+    """Extra distance [m] within which contact candidates are collected per step."""
+
+    def __post_init__(self) -> None:
+        o = "SimConfig"
+        _check_range(o, "dt", self.dt, 1e-5, 0.05)
+        _check_int(o, "iterations", self.iterations, 1, 200)
+        _check_int(o, "rotation_iterations", self.rotation_iterations, 1, 100)
+        _check_range(o, "gravity", self.gravity, 0.0, 100.0)
+        _check_range(o, "damping", self.damping, 0.0, 1e4)
+        if self.coupling not in COUPLING_MODES:
+            raise ValueError(f"SimConfig.coupling must be one of {COUPLING_MODES}, got {self.coupling!r}")
+        if self.orientation not in ("reaction", "goal"):
+            raise ValueError(f"SimConfig.orientation must be 'reaction' or 'goal', got {self.orientation!r}")
+        _check_range(o, "contact_margin", self.contact_margin, 0.0, 0.1)
+
+
+@dataclass(frozen=True)
+class SceneConfig:
+    """The grasp scene: ground, a two-finger gripper and a cylinder (thesis 5.2.1)."""
+
+    soft: bool = True
+    """True: fingers are combined bodies (core + tissue). False: rigid-only fingers, same cores."""
+    cylinder_radius: float = 0.03
+    """Cylinder radius [m]."""
+    cylinder_height: float = 0.10
+    """Cylinder height [m]."""
+    cylinder_mass: float = 0.1
+    """Cylinder mass [kg]."""
+    cylinder_friction: float = 1.0
+    """The cylinder's lateral friction in pybullet, which multiplies the other body's: 1 makes the
+    ground's and the rigid fingers' own coefficients the effective ones."""
+    finger_half_extents: tuple[float, float, float] = (0.008, 0.02, 0.03)
+    """Half extents of a finger core box [m]: x (closing direction), y, z."""
+    finger_mass: float = 0.05
+    """Mass of one finger core [kg]."""
+    finger_force: float = 10.0
+    """Force limit of each finger's closing motor [N]."""
+    finger_speed: float = 0.1
+    """Maximum closing speed of a finger [m/s]."""
+    finger_max_opening: float = 0.06
+    """Largest distance of a finger core's inner face from the gripper centre [m]."""
+    palm_mass: float = 0.5
+    """Mass of the gripper palm [kg]."""
+    palm_force: float = 200.0
+    """Force limit of the constraint that drives the palm [N]."""
+    ground_friction: float = 0.5
+    """Friction coefficient of the ground [-]."""
+    lateral_offset: float = 0.0
+    """Misalignment: gripper offset along y (the finger face's long direction) [m]."""
+    yaw: float = 0.0
+    """Misalignment: gripper yaw about z [rad]."""
+    tissue: TissueConfig = field(default_factory=TissueConfig)
+    sim: SimConfig = field(default_factory=SimConfig)
+
+    def __post_init__(self) -> None:
+        o = "SceneConfig"
+        if not isinstance(self.soft, bool):
+            raise ValueError(f"SceneConfig.soft must be a bool, got {self.soft!r}")
+        _check_range(o, "cylinder_radius", self.cylinder_radius, 0.005, 0.2)
+        _check_range(o, "cylinder_height", self.cylinder_height, 0.01, 0.5)
+        _check_range(o, "cylinder_mass", self.cylinder_mass, 0.001, 10.0)
+        _check_range(o, "cylinder_friction", self.cylinder_friction, 0.0, 10.0)
+        if len(self.finger_half_extents) != 3:
+            raise ValueError(f"SceneConfig.finger_half_extents must have 3 entries, got {self.finger_half_extents!r}")
+        for i, h in enumerate(self.finger_half_extents):
+            _check_range(o, f"finger_half_extents[{i}]", h, 0.001, 0.2)
+        _check_range(o, "finger_mass", self.finger_mass, 0.001, 10.0)
+        _check_range(o, "finger_force", self.finger_force, 0.0, 1000.0, lo_open=True)
+        _check_range(o, "finger_speed", self.finger_speed, 0.0, 10.0, lo_open=True)
+        _check_range(o, "finger_max_opening", self.finger_max_opening, 0.005, 0.3)
+        _check_range(o, "palm_mass", self.palm_mass, 0.01, 100.0)
+        _check_range(o, "palm_force", self.palm_force, 0.0, 1e4, lo_open=True)
+        _check_range(o, "ground_friction", self.ground_friction, 0.0, 10.0)
+        _check_range(o, "lateral_offset", self.lateral_offset, -0.1, 0.1)
+        _check_range(o, "yaw", self.yaw, -math.pi / 4, math.pi / 4)
+        if not isinstance(self.tissue, TissueConfig):
+            raise ValueError(f"SceneConfig.tissue must be a TissueConfig, got {type(self.tissue).__name__}")
+        if not isinstance(self.sim, SimConfig):
+            raise ValueError(f"SceneConfig.sim must be a SimConfig, got {type(self.sim).__name__}")
+
+
+def field_names(cls: type) -> tuple[str, ...]:
+    """Names of a config dataclass's fields (used by CLIs to map flags onto configs)."""
+    return tuple(f.name for f in fields(cls))
+
+
+__all__ = [
+    "COUPLING_MODES",
+    "CouplingMode",
+    "SceneConfig",
+    "SimConfig",
+    "TissueConfig",
+    "field_names",
+    "replace",
+]

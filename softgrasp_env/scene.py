@@ -1,0 +1,170 @@
+"""The grasp scene (thesis 5.2.1): a static ground, a gripper whose two finger links are the rigid
+cores, and a rigid cylinder. With ``soft=True`` each core is wrapped in oriented-particle tissue;
+with ``soft=False`` the same cores touch the cylinder through pybullet's own contacts.
+
+Frames: z up, the cylinder stands at the origin. The gripper palm is a pybullet base driven by a
+force-limited fixed constraint (the "arm"); the fingers are prismatic links closing along the
+palm's x axis, each driven by a force-limited position motor: the motors push, the tissue pushes
+back, so the squeeze is a force, not a teleport.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pybullet as p
+
+from .config import SceneConfig
+from .sim.bullet import RigidRef, connect
+from .sim.world import ShapeSpec, TissueSpec, World
+from .tissue.builder import build_combined_body, core_shape_from_bullet
+
+PALM_HALF_EXTENTS = (0.09, 0.03, 0.01)
+FINGER_DROP = 0.04
+"""Gap between the palm's underside and the top of a finger core [m] (the finger's upper part is
+not modelled: only the fingertip segment touches anything)."""
+
+
+class GraspScene:
+    """Builds and drives the scene; ``world.step()`` advances it."""
+
+    def __init__(self, config: SceneConfig | None = None, *, gui: bool = False) -> None:
+        self.config = cfg = config if config is not None else SceneConfig()
+        self.client = c = connect(gui=gui)
+        sim = cfg.sim
+        c.setGravity(0.0, 0.0, -sim.gravity)
+        # One pybullet step per world step, no substeps: the tissue and the rigid bodies share dt.
+        c.setPhysicsEngineParameter(fixedTimeStep=sim.dt, numSubSteps=0, deterministicOverlappingPairs=1)
+
+        # --- ground
+        plane = c.createCollisionShape(p.GEOM_PLANE)
+        self.ground = c.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=plane)
+        c.changeDynamics(self.ground, -1, lateralFriction=cfg.ground_friction)
+
+        # --- cylinder (a free rigid body)
+        r, h = cfg.cylinder_radius, cfg.cylinder_height
+        cyl_col = c.createCollisionShape(p.GEOM_CYLINDER, radius=r, height=h)
+        cyl_vis = c.createVisualShape(p.GEOM_CYLINDER, radius=r, length=h, rgbaColor=[0.9, 0.6, 0.2, 1.0])
+        self.cylinder = c.createMultiBody(
+            baseMass=cfg.cylinder_mass, baseCollisionShapeIndex=cyl_col, baseVisualShapeIndex=cyl_vis,
+            basePosition=[0.0, 0.0, 0.5 * h],
+        )  # fmt: skip
+        c.changeDynamics(self.cylinder, -1, lateralFriction=cfg.cylinder_friction, linearDamping=0.0,
+                         angularDamping=0.0)  # fmt: skip
+        self.cylinder_rest_z = 0.5 * h
+
+        # --- gripper: palm base + two prismatic finger links
+        fh = cfg.finger_half_extents
+        self.grasp_height = 0.5 * h  # finger centres at the cylinder's mid height
+        self.palm_offset = PALM_HALF_EXTENTS[2] + FINGER_DROP + fh[2]  # palm centre above finger centres
+        palm_col = c.createCollisionShape(p.GEOM_BOX, halfExtents=PALM_HALF_EXTENTS)
+        palm_vis = c.createVisualShape(p.GEOM_BOX, halfExtents=PALM_HALF_EXTENTS, rgbaColor=[0.4, 0.4, 0.45, 1])
+        fin_col = c.createCollisionShape(p.GEOM_BOX, halfExtents=fh)
+        fin_vis = c.createVisualShape(p.GEOM_BOX, halfExtents=fh, rgbaColor=[0.3, 0.3, 0.8, 1.0])
+        open_x = cfg.finger_max_opening + fh[0]  # finger centre when fully open
+        self.start_palm = np.array([0.0, cfg.lateral_offset, self.grasp_height + self.palm_offset + 0.05])
+        self.start_yaw = cfg.yaw
+        self.gripper = c.createMultiBody(
+            baseMass=cfg.palm_mass,
+            baseCollisionShapeIndex=palm_col,
+            baseVisualShapeIndex=palm_vis,
+            basePosition=self.start_palm.tolist(),
+            baseOrientation=c.getQuaternionFromEuler([0.0, 0.0, cfg.yaw]),
+            linkMasses=[cfg.finger_mass, cfg.finger_mass],
+            linkCollisionShapeIndices=[fin_col, fin_col],
+            linkVisualShapeIndices=[fin_vis, fin_vis],
+            linkPositions=[[-open_x, 0.0, -self.palm_offset], [open_x, 0.0, -self.palm_offset]],
+            linkOrientations=[[0, 0, 0, 1], [0, 0, 0, 1]],
+            linkInertialFramePositions=[[0, 0, 0], [0, 0, 0]],
+            linkInertialFrameOrientations=[[0, 0, 0, 1], [0, 0, 0, 1]],
+            linkParentIndices=[0, 0],
+            linkJointTypes=[p.JOINT_PRISMATIC, p.JOINT_PRISMATIC],
+            linkJointAxis=[[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]],  # +q closes both fingers
+        )
+        g = self.gripper
+        for link in (-1, 0, 1):
+            c.changeDynamics(g, link, linearDamping=0.0, angularDamping=0.0, lateralFriction=cfg.tissue.friction_static)
+        self.palm_constraint = c.createConstraint(g, -1, -1, -1, p.JOINT_FIXED, [0, 0, 0], [0, 0, 0],
+                                                  self.start_palm.tolist())  # fmt: skip
+        self.set_palm_target(self.start_palm, yaw=cfg.yaw)
+        self.set_finger_target(0.0)
+
+        # --- what the tissue sees
+        thesis_cores_heavy = False  # cores move inside the solve only in the consistent coupling
+        rigid = [
+            RigidRef(g, 0, gravity=False, in_solve=thesis_cores_heavy, free_base=False),  # left core
+            RigidRef(g, 1, gravity=False, in_solve=thesis_cores_heavy, free_base=False),  # right core
+            RigidRef(self.cylinder, -1, gravity=True, in_solve=True, free_base=True),
+            RigidRef(g, -1, gravity=False, in_solve=False, free_base=False),  # palm, held by the arm
+        ]
+        shapes = [
+            ShapeSpec("plane", (0.0, 0.0, 0.0)),
+            ShapeSpec("cylinder", (r, 0.5 * h, 0.0), rigid=2),
+            ShapeSpec("box", tuple(fh), rigid=0),
+            ShapeSpec("box", tuple(fh), rigid=1),
+            ShapeSpec("box", PALM_HALF_EXTENTS, rigid=3),
+        ]
+        tissue = []
+        if cfg.soft:
+            for link, shape_index in ((0, 2), (1, 3)):
+                core, offset, orn = core_shape_from_bullet(c, g, link)
+                if abs(orn[3]) < 1.0 - 1e-12:
+                    raise ValueError("finger collision shape must be aligned with its link frame")
+                tissue.append(TissueSpec(build_combined_body(core, cfg.tissue, shape_offset=offset), shape_index))
+        self.world = World(c, sim, rigid, shapes, tissue)
+
+    # --- control ---------------------------------------------------------------------------------
+
+    def set_palm_target(self, pos: np.ndarray, *, yaw: float | None = None) -> None:
+        """Where the arm pulls the palm (its centre) with at most ``palm_force``."""
+        yaw = self.start_yaw if yaw is None else yaw
+        self.client.changeConstraint(
+            self.palm_constraint, jointChildPivot=[float(v) for v in pos],
+            jointChildFrameOrientation=self.client.getQuaternionFromEuler([0.0, 0.0, yaw]),
+            maxForce=self.config.palm_force,
+        )  # fmt: skip
+        self.palm_target = np.asarray(pos, dtype=np.float64).copy()
+
+    def set_finger_target(self, closing: float) -> None:
+        """Drive both fingers toward ``closing`` metres of travel from fully open, each with at most
+        ``finger_force`` and ``finger_speed``."""
+        cfg = self.config
+        for j in (0, 1):
+            self.client.setJointMotorControl2(
+                self.gripper, j, p.POSITION_CONTROL, targetPosition=float(closing), force=cfg.finger_force,
+                maxVelocity=cfg.finger_speed,
+            )  # fmt: skip
+        self.finger_target = float(closing)
+
+    # --- queries ---------------------------------------------------------------------------------
+
+    def palm_position(self) -> np.ndarray:
+        return np.asarray(self.client.getBasePositionAndOrientation(self.gripper)[0])
+
+    def cylinder_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        pos, orn = self.client.getBasePositionAndOrientation(self.cylinder)
+        return np.asarray(pos), np.asarray(orn)
+
+    def lift_height(self) -> float:
+        """Height of the cylinder's centre above where it rests on the ground [m]."""
+        return float(self.cylinder_pose()[0][2] - self.cylinder_rest_z)
+
+    def finger_closing(self) -> np.ndarray:
+        """Travel of each finger from fully open [m]."""
+        return np.array([self.client.getJointState(self.gripper, j)[0] for j in (0, 1)])
+
+    def cylinder_tilt(self) -> float:
+        """Angle between the cylinder's axis and the vertical [rad]."""
+        orn = self.cylinder_pose()[1]
+        x, y, z, w = orn
+        axis_z = 1.0 - 2.0 * (x * x + y * y)
+        return float(math.acos(max(-1.0, min(1.0, axis_z))))
+
+    def close(self) -> None:
+        if self.client is not None:
+            try:
+                self.client.disconnect()
+            except p.error:
+                pass
+            self.client = None

@@ -1,0 +1,85 @@
+"""Core <-> tissue coupling on the pybullet side (thesis 5.1.3, 5.2.2).
+
+The solver returns, per rigid slot, the linear impulse P and the angular impulse L (about the
+predicted centre of mass) that the tissue exerted during the step. Here they reach pybullet:
+
+* a free base body (the cylinder) gets them as a velocity change before pybullet's step,
+  dv = P / m, dw = I_w^-1 L, exactly as the solver predicted it (Mueller et al. 2020, eq. 6-9);
+* links and constrained bases (finger cores, palm) get them as an external force P / dt and torque
+  L / dt for the coming step, because pybullet cannot set a link's velocity and clears external
+  forces after every step (DESIGN.md): the joint motors and constraints then act against them.
+
+After pybullet's step the attached particles are set onto their spots on the cores' actual poses
+with the cores' point velocities (:func:`sync_attached`), so the tissue never lags its core.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+import pybullet as p
+from pybullet_utils.bullet_client import BulletClient
+
+from ..tissue.rotation import qmul, qrotate
+from .bullet import RigidRef, world_inverse_inertia
+
+
+def apply_impulses(
+    client: BulletClient,
+    refs: list[RigidRef],
+    x: np.ndarray,
+    q: np.ndarray,
+    v: np.ndarray,
+    w: np.ndarray,
+    inv_mass: np.ndarray,
+    inv_inertia: np.ndarray,
+    impulse: np.ndarray,
+    angular_impulse: np.ndarray,
+    dt: float,
+) -> None:
+    """Hand the tissue's impulses on every rigid slot to pybullet for its next step."""
+    for k, r in enumerate(refs):
+        if inv_mass[k] == 0.0:
+            continue  # static or kinematic: nothing to move
+        imp = impulse[k]
+        ang = angular_impulse[k]
+        if not (imp.any() or ang.any()):
+            continue
+        if r.free_base:
+            dv = inv_mass[k] * imp
+            dw = world_inverse_inertia(q[k], inv_inertia[k]) @ ang
+            client.resetBaseVelocity(r.body, (v[k] + dv).tolist(), (w[k] + dw).tolist())
+        else:
+            client.applyExternalForce(r.body, r.link, (imp / dt).tolist(), x[k].tolist(), p.WORLD_FRAME)
+            client.applyExternalTorque(r.body, r.link, (ang / dt).tolist(), p.WORLD_FRAME)
+
+
+@nb.njit(cache=True)
+def sync_attached(
+    rest_x, rest_q, attached, p_body, body_core_shape, shape_rigid, rig_x, rig_q, rig_v, rig_w, x, v, q, omega
+):  # fmt: skip
+    """Put every attached particle onto its fixed spot on its core's current pose, moving with the
+    core: v = v_c + w_c x r, orientation q_c q_bar, angular velocity w_c (thesis 5.1.1: attached
+    particles are tied to the core)."""
+    for i in range(x.shape[0]):
+        if not attached[i]:
+            continue
+        s = body_core_shape[p_body[i]]
+        if s < 0:
+            continue
+        r = shape_rigid[s]
+        bq = (rig_q[r, 0], rig_q[r, 1], rig_q[r, 2], rig_q[r, 3])
+        arm = qrotate(bq, (rest_x[i, 0], rest_x[i, 1], rest_x[i, 2]))
+        x[i, 0] = rig_x[r, 0] + arm[0]
+        x[i, 1] = rig_x[r, 1] + arm[1]
+        x[i, 2] = rig_x[r, 2] + arm[2]
+        wx, wy, wz = rig_w[r, 0], rig_w[r, 1], rig_w[r, 2]
+        v[i, 0] = rig_v[r, 0] + wy * arm[2] - wz * arm[1]
+        v[i, 1] = rig_v[r, 1] + wz * arm[0] - wx * arm[2]
+        v[i, 2] = rig_v[r, 2] + wx * arm[1] - wy * arm[0]
+        qn = qmul(bq, (rest_q[i, 0], rest_q[i, 1], rest_q[i, 2], rest_q[i, 3]))
+        for a in range(4):
+            q[i, a] = qn[a]
+        omega[i, 0] = wx
+        omega[i, 1] = wy
+        omega[i, 2] = wz

@@ -1,0 +1,163 @@
+"""One step of the whole world, in the order the thesis gives (5.2.2).
+
+    read rigid states from pybullet                    (poses, velocities)
+    tissue step: predict rigid bodies and particles, collide, shape-match, friction,
+                 couple attached particles to the predicted cores -> impulses
+    hand the impulses to pybullet                      (velocity change / external force)
+    pybullet step                                      (gravity, motors, joints, rigid contacts)
+    set attached particles onto the cores' new poses
+
+A world without tissue (rigid-only fingers) is the same recipe with the tissue lines skipped.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from pybullet_utils.bullet_client import BulletClient
+
+from ..config import SimConfig
+from ..tissue.collision import SHAPE_CODES
+from ..tissue.model import TissueModel, concatenate, with_core_shapes
+from ..tissue.solver import Colliders, StepOutput, TissueSolver
+from ..tissue.state import TissueState, state_at_rest
+from .bullet import RigidRef, read_mass_properties, read_states
+from .coupling import apply_impulses, sync_attached
+
+
+@dataclass(frozen=True)
+class ShapeSpec:
+    """A collision shape the tissue can touch: ``kind`` in plane/sphere/box/cylinder/capsule,
+    ``params`` its dimensions (see tissue/collision.py), on rigid slot ``rigid`` (-1 = static
+    world geometry) at ``local_x``/``local_q`` in that slot's centre-of-mass frame."""
+
+    kind: str
+    params: tuple[float, float, float]
+    rigid: int = -1
+    local_x: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    local_q: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
+
+    def __post_init__(self) -> None:
+        if self.kind not in SHAPE_CODES:
+            raise ValueError(f"ShapeSpec.kind must be one of {tuple(SHAPE_CODES)}, got {self.kind!r}")
+
+
+@dataclass(frozen=True)
+class TissueSpec:
+    """Tissue of one combined body: its model (in the core's centre-of-mass frame) and the index
+    of its core among the world's shapes."""
+
+    model: TissueModel
+    core_shape: int
+
+
+class World:
+    """pybullet rigid bodies plus oriented-particle tissue, stepped together."""
+
+    def __init__(
+        self,
+        client: BulletClient,
+        sim: SimConfig,
+        rigid: list[RigidRef],
+        shapes: list[ShapeSpec],
+        tissue: list[TissueSpec],
+    ) -> None:
+        self.client = client
+        self.sim = sim
+        self.rigid = list(rigid)
+        self.shapes = list(shapes)
+        nr = len(self.rigid)
+        for k, s in enumerate(self.shapes):
+            if not -1 <= s.rigid < nr:
+                raise ValueError(f"shape {k} refers to rigid slot {s.rigid}, but there are {nr} slots")
+        inv_m, inv_i = read_mass_properties(client, self.rigid)
+        self.colliders = Colliders(
+            rigid_x=np.zeros((nr, 3)),
+            rigid_q=np.tile([0.0, 0.0, 0.0, 1.0], (nr, 1)),
+            rigid_v=np.zeros((nr, 3)),
+            rigid_w=np.zeros((nr, 3)),
+            rigid_inv_mass=inv_m,
+            rigid_inv_inertia=inv_i,
+            rigid_gravity=np.array([r.gravity for r in self.rigid], dtype=np.bool_),
+            rigid_in_solve=np.array(
+                [r.in_solve or (sim.coupling == "consistent") for r in self.rigid], dtype=np.bool_
+            ),
+            shape_kind=np.array([SHAPE_CODES[s.kind] for s in self.shapes], dtype=np.int32),
+            shape_params=np.array([s.params for s in self.shapes], dtype=np.float64).reshape(-1, 3),
+            shape_rigid=np.array([s.rigid for s in self.shapes], dtype=np.int32),
+            shape_local_x=np.array([s.local_x for s in self.shapes], dtype=np.float64).reshape(-1, 3),
+            shape_local_q=np.array([s.local_q for s in self.shapes], dtype=np.float64).reshape(-1, 4),
+        )
+        self.model: TissueModel | None = None
+        self.solver: TissueSolver | None = None
+        self.state: TissueState | None = None
+        self.last_output: StepOutput | None = None
+        self.refresh()
+        if tissue:
+            for t in tissue:
+                if not 0 <= t.core_shape < len(self.shapes) or self.shapes[t.core_shape].rigid < 0:
+                    raise ValueError(f"tissue core_shape {t.core_shape} must be a shape on a rigid slot")
+            model = concatenate([with_core_shapes(t.model, np.array([t.core_shape])) for t in tissue])
+            self.model = model
+            self.solver = TissueSolver(model, sim)
+            cores = [self.shapes[t.core_shape].rigid for t in tissue]
+            self.state = state_at_rest(model, self.colliders.rigid_x[cores], self.colliders.rigid_q[cores])
+            self._sync()
+        self.step_count = 0
+
+    # --- the step ----------------------------------------------------------------------------------
+
+    def step(self) -> None:
+        """Advance the world by ``sim.dt``."""
+        col = self.colliders
+        if self.solver is not None:
+            out = self.solver.step(self.state, col)
+            self.last_output = out
+            apply_impulses(self.client, self.rigid, col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w,
+                           col.rigid_inv_mass, col.rigid_inv_inertia, out.rigid_impulse, out.rigid_angular_impulse,
+                           self.sim.dt)  # fmt: skip
+        self.client.stepSimulation()
+        self.refresh()
+        if self.solver is not None:
+            self._sync()
+        self.step_count += 1
+
+    def refresh(self) -> None:
+        """Re-read every rigid slot's pose and velocity from pybullet (after a step or a reset)."""
+        c = self.colliders
+        read_states(self.client, self.rigid, c.rigid_x, c.rigid_q, c.rigid_v, c.rigid_w)
+
+    def _sync(self) -> None:
+        m, s, c = self.model, self.state, self.colliders
+        sync_attached(m.particle_rest_x, m.particle_rest_q, m.particle_attached, m.particle_body, m.body_core_shape,
+                      c.shape_rigid, c.rigid_x, c.rigid_q, c.rigid_v, c.rigid_w, s.particle_x, s.particle_v,
+                      s.particle_q, s.particle_omega)  # fmt: skip
+
+    # --- queries ------------------------------------------------------------------------------------
+
+    def penetration(self) -> tuple[float, float]:
+        """(deepest tissue overlap with other rigid shapes, deepest intrusion into own core) [m]."""
+        if self.solver is None:
+            return 0.0, 0.0
+        return self.solver.penetration(self.state, self.colliders)
+
+    def is_finite(self) -> bool:
+        c = self.colliders
+        ok = bool(np.isfinite(c.rigid_x).all() and np.isfinite(c.rigid_v).all())
+        return ok and (self.state is None or self.state.is_finite())
+
+    # --- save / restore -----------------------------------------------------------------------------
+
+    def save(self) -> tuple[int, TissueState | None, int]:
+        """Snapshot of the whole world (pybullet bodies and tissue)."""
+        sid = self.client.saveState()
+        return sid, (None if self.state is None else self.state.copy()), self.step_count
+
+    def restore(self, snap: tuple[int, TissueState | None, int]) -> None:
+        sid, tissue, steps = snap
+        self.client.restoreState(stateId=sid)
+        if tissue is not None:
+            self.state.assign(tissue)
+        self.step_count = steps
+        self.refresh()

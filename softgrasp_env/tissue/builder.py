@@ -1,0 +1,315 @@
+"""Build tissue: sample a core's surface (attached particles), extrude (outer particles), and form
+the implicit shape-matching groups (thesis 5.1.1 and 5.2.1; Mueller & Chentanez 2011 sec. 4).
+
+Everything here runs once per scene and is plain numpy.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from ..config import TissueConfig
+from .model import TissueModel
+
+ShapeKind = Literal["box", "cylinder", "capsule", "sphere"]
+SHAPE_KINDS: tuple[str, ...] = ("box", "cylinder", "capsule", "sphere")
+ExtrudeDirection = Literal["normal", "radial"]
+
+
+@dataclass(frozen=True)
+class CoreShape:
+    """Geometry of a rigid core in its centre-of-mass frame. Cylinders and capsules lie along z
+    (pybullet's convention). Only the fields of the chosen kind are used."""
+
+    kind: ShapeKind
+    half_extents: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    """Box half extents [m]."""
+    radius: float = 0.0
+    """Sphere, cylinder and capsule radius [m]."""
+    half_height: float = 0.0
+    """Half length of a cylinder, or of a capsule's straight part [m]."""
+
+    def __post_init__(self) -> None:
+        if self.kind not in SHAPE_KINDS:
+            raise ValueError(f"CoreShape.kind must be one of {SHAPE_KINDS}, got {self.kind!r}")
+        if self.kind == "box":
+            if len(self.half_extents) != 3 or min(self.half_extents) <= 0.0:
+                raise ValueError(f"CoreShape.half_extents must be 3 positive lengths, got {self.half_extents!r}")
+        else:
+            if not self.radius > 0.0:
+                raise ValueError(f"CoreShape.radius must be > 0 for a {self.kind}, got {self.radius!r}")
+            if self.kind in ("cylinder", "capsule") and not self.half_height > 0.0:
+                raise ValueError(f"CoreShape.half_height must be > 0 for a {self.kind}, got {self.half_height!r}")
+
+    @property
+    def area(self) -> float:
+        """Surface area [m^2]."""
+        if self.kind == "box":
+            a, b, c = self.half_extents
+            return 8.0 * (a * b + b * c + a * c)
+        r, h = self.radius, self.half_height
+        if self.kind == "sphere":
+            return 4.0 * math.pi * r * r
+        if self.kind == "cylinder":
+            return 2.0 * math.pi * r * (2.0 * h) + 2.0 * math.pi * r * r
+        return 2.0 * math.pi * r * (2.0 * h) + 4.0 * math.pi * r * r
+
+
+def core_shape_from_bullet(client, body: int, link: int = -1) -> tuple[CoreShape, np.ndarray, np.ndarray]:
+    """Read a pybullet body's (single) collision shape: returns the shape and its local pose
+    (position, quaternion) relative to the link's centre-of-mass frame."""
+    import pybullet as p
+
+    data = client.getCollisionShapeData(body, link)
+    if len(data) != 1:
+        raise ValueError(f"body {body} link {link} must have exactly one collision shape, has {len(data)}")
+    _, _, geom, dims, _, pos, orn = data[0]
+    if geom == p.GEOM_BOX:
+        shape = CoreShape("box", half_extents=tuple(0.5 * float(d) for d in dims))
+    elif geom == p.GEOM_SPHERE:
+        shape = CoreShape("sphere", radius=float(dims[0]))
+    elif geom == p.GEOM_CYLINDER:
+        shape = CoreShape("cylinder", radius=float(dims[1]), half_height=0.5 * float(dims[0]))
+    elif geom == p.GEOM_CAPSULE:
+        shape = CoreShape("capsule", radius=float(dims[1]), half_height=0.5 * float(dims[0]))
+    else:
+        raise ValueError(f"body {body} link {link}: collision geometry type {geom} is not a supported core")
+    return shape, np.asarray(pos, dtype=np.float64), np.asarray(orn, dtype=np.float64)
+
+
+# --- surface sampling ----------------------------------------------------------------------------
+
+
+def _grid(n_u: int, n_v: int) -> tuple[np.ndarray, np.ndarray]:
+    u = (np.arange(n_u) + 0.5) / n_u * 2.0 - 1.0
+    v = (np.arange(n_v) + 0.5) / n_v * 2.0 - 1.0
+    uu, vv = np.meshgrid(u, v, indexing="ij")
+    return uu.ravel(), vv.ravel()
+
+
+def _count(length: float, spacing: float, minimum: int = 1) -> int:
+    return max(minimum, int(round(length / spacing)))
+
+
+def _fibonacci_sphere(n: int, upper_half_only: bool = False) -> np.ndarray:
+    """n nearly even unit directions (golden-angle spiral); on the z >= 0 half if asked."""
+    i = np.arange(n) + 0.5
+    z = 1.0 - i / n if upper_half_only else 1.0 - 2.0 * i / n
+    rho = np.sqrt(np.maximum(0.0, 1.0 - z * z))
+    phi = math.pi * (3.0 - math.sqrt(5.0)) * i
+    return np.stack([rho * np.cos(phi), rho * np.sin(phi), z], axis=1)
+
+
+def sample_surface(shape: CoreShape, spacing: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Points spread evenly over the surface at about ``spacing``: (points, outward normals, area
+    each point stands for). Areas sum to the surface area exactly."""
+    if not spacing > 0.0:
+        raise ValueError(f"spacing must be > 0, got {spacing!r}")
+    pts, nrm, area = [], [], []
+    if shape.kind == "box":
+        h = np.asarray(shape.half_extents, dtype=np.float64)
+        for axis in range(3):
+            u_ax, v_ax = [a for a in range(3) if a != axis]
+            n_u = _count(2 * h[u_ax], spacing)
+            n_v = _count(2 * h[v_ax], spacing)
+            uu, vv = _grid(n_u, n_v)
+            for sign in (1.0, -1.0):
+                p = np.zeros((uu.size, 3))
+                p[:, axis] = sign * h[axis]
+                p[:, u_ax] = uu * h[u_ax]
+                p[:, v_ax] = vv * h[v_ax]
+                n = np.zeros_like(p)
+                n[:, axis] = sign
+                pts.append(p)
+                nrm.append(n)
+                area.append(np.full(uu.size, 4.0 * h[u_ax] * h[v_ax] / uu.size))
+    elif shape.kind == "sphere":
+        n = _count(shape.area, spacing * spacing, minimum=4)
+        d = _fibonacci_sphere(n)
+        pts.append(d * shape.radius)
+        nrm.append(d)
+        area.append(np.full(n, shape.area / n))
+    else:  # cylinder or capsule: a side wall along z plus caps (flat discs or hemispheres)
+        r, hh = shape.radius, shape.half_height
+        n_z = _count(2 * hh, spacing)
+        n_t = _count(2 * math.pi * r, spacing, minimum=3)
+        theta = (np.arange(n_t) + 0.5) * 2 * math.pi / n_t
+        z = ((np.arange(n_z) + 0.5) / n_z * 2 - 1) * hh
+        tt, zz = np.meshgrid(theta, z, indexing="ij")
+        d = np.stack([np.cos(tt.ravel()), np.sin(tt.ravel()), np.zeros(tt.size)], axis=1)
+        pts.append(d * r + np.stack([np.zeros(tt.size), np.zeros(tt.size), zz.ravel()], axis=1))
+        nrm.append(d)
+        area.append(np.full(tt.size, 2 * math.pi * r * 2 * hh / tt.size))
+        for sign in (1.0, -1.0):
+            if shape.kind == "cylinder":
+                # Concentric rings of equal-area cells: spacing holds along and across the rings.
+                n_r = _count(r, spacing)
+                for k in range(n_r):
+                    r0, r1 = r * k / n_r, r * (k + 1) / n_r
+                    rho = 0.5 * (r0 + r1)
+                    m = _count(2 * math.pi * rho, spacing)
+                    phi = (np.arange(m) + 0.5 * (k % 2)) * 2 * math.pi / m
+                    p = np.stack([rho * np.cos(phi), rho * np.sin(phi), np.full(m, sign * hh)], axis=1)
+                    pts.append(p)
+                    nrm.append(np.tile([0.0, 0.0, sign], (m, 1)))
+                    area.append(np.full(m, math.pi * (r1 * r1 - r0 * r0) / m))
+            else:
+                m = _count(2 * math.pi * r * r, spacing * spacing, minimum=2)
+                d = _fibonacci_sphere(m, upper_half_only=True)
+                d[:, 2] *= sign
+                pts.append(d * r + np.array([0.0, 0.0, sign * hh]))
+                nrm.append(d)
+                area.append(np.full(m, 2 * math.pi * r * r / m))
+    return np.concatenate(pts), np.concatenate(nrm), np.concatenate(area)
+
+
+# --- orientations and groups ----------------------------------------------------------------------
+
+
+def quat_z_to(n: np.ndarray) -> np.ndarray:
+    """(K, 4) shortest-arc quaternions turning +z onto each unit vector of ``n`` (K, 3)."""
+    n = np.asarray(n, dtype=np.float64)
+    out = np.empty((n.shape[0], 4))
+    # q = [z x n, 1 + z . n] normalised; the antipodal case (n = -z) takes a half turn about x.
+    out[:, 0] = -n[:, 1]
+    out[:, 1] = n[:, 0]
+    out[:, 2] = 0.0
+    out[:, 3] = 1.0 + n[:, 2]
+    anti = out[:, 3] < 1e-9
+    out[anti] = [1.0, 0.0, 0.0, 0.0]
+    return out / np.linalg.norm(out, axis=1, keepdims=True)
+
+
+def build_groups(
+    rest_x: np.ndarray, mass: np.ndarray, partner: np.ndarray, group_size: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Implicit groups (thesis 5.2.1): particle i, its partner, and its nearest others by rest
+    distance until the group holds ``group_size`` particles (fewer only if the body is smaller).
+
+    Returns CSR (offsets, members, rest offsets from each group's rest centre of mass).
+    """
+    n = rest_x.shape[0]
+    if n < 2:
+        raise ValueError(f"a tissue body needs at least 2 particles, got {n}")
+    size = min(group_size, n)
+    d2 = ((rest_x[:, None, :] - rest_x[None, :, :]) ** 2).sum(axis=2)
+    np.fill_diagonal(d2, np.inf)
+    members = np.empty((n, size), dtype=np.int32)
+    for i in range(n):
+        chosen = [i]
+        if partner[i] >= 0:
+            chosen.append(int(partner[i]))
+            d2[i, partner[i]] = np.inf
+        need = size - len(chosen)
+        if need > 0:
+            nearest = np.argpartition(d2[i], need - 1)[:need]
+            nearest = nearest[np.argsort(d2[i, nearest], kind="stable")]
+            chosen.extend(int(j) for j in nearest)
+        members[i] = chosen[:size]
+    offsets = np.arange(n + 1, dtype=np.int32) * size
+    flat = members.ravel()
+    m = mass[members]
+    com = (m[:, :, None] * rest_x[members]).sum(axis=1) / m.sum(axis=1)[:, None]
+    rest_offset = (rest_x[members] - com[:, None, :]).reshape(-1, 3)
+    return offsets, flat.astype(np.int32), np.ascontiguousarray(rest_offset)
+
+
+def _single_body_model(
+    rest_x: np.ndarray,
+    rest_q: np.ndarray,
+    radii: np.ndarray,
+    mass: np.ndarray,
+    partner: np.ndarray,
+    attached: np.ndarray,
+    tissue: TissueConfig,
+) -> TissueModel:
+    offsets, members, rest_offset = build_groups(rest_x, mass, partner, tissue.group_size)
+    n = rest_x.shape[0]
+    return TissueModel(
+        particle_rest_x=np.ascontiguousarray(rest_x, dtype=np.float64),
+        particle_rest_q=np.ascontiguousarray(rest_q, dtype=np.float64),
+        particle_radii=np.ascontiguousarray(radii, dtype=np.float64),
+        particle_mass=np.ascontiguousarray(mass, dtype=np.float64),
+        particle_inv_mass=1.0 / np.ascontiguousarray(mass, dtype=np.float64),
+        particle_body=np.zeros(n, dtype=np.int32),
+        particle_partner=partner.astype(np.int32),
+        particle_attached=attached.astype(np.bool_),
+        group_offsets=offsets,
+        group_members=members,
+        group_rest_offset=rest_offset,
+        body_particle_offsets=np.array([0, n], dtype=np.int32),
+        body_core_shape=np.array([-1], dtype=np.int32),
+        body_stiffness=np.array([tissue.stiffness]),
+        body_friction=np.array([[tissue.friction_static, tissue.friction_dynamic]]),
+    )
+
+
+def build_combined_body(
+    shape: CoreShape,
+    tissue: TissueConfig,
+    *,
+    shape_offset: np.ndarray | None = None,
+    extrude_direction: ExtrudeDirection = "normal",
+) -> TissueModel:
+    """Tissue for one combined body (thesis 5.2.1), in the core's centre-of-mass frame.
+
+    Attached particles are spread over the core surface at ``tissue.density`` per m^2; each gets
+    an outer partner ``tissue.extrude`` further out. The thesis pushes outer particles along the
+    direction from the core's centre of mass (``extrude_direction="radial"``). For elongated
+    cores that sends the tissue of a long face sideways (on an 8 x 20 x 30 mm finger the outer
+    particle at a face corner moves 75 % along the face, not away from it), so the default is the
+    surface normal, which equals the radial direction on a sphere.
+    ``shape_offset`` is the shape centre's position in the centre-of-mass frame (pybullet's
+    collision-shape frame); the shape's axes must be those of that frame.
+    """
+    if extrude_direction not in ("normal", "radial"):
+        raise ValueError(f"extrude_direction must be 'normal' or 'radial', got {extrude_direction!r}")
+    offset = np.zeros(3) if shape_offset is None else np.asarray(shape_offset, dtype=np.float64)
+    pts, nrm, area = sample_surface(shape, tissue.spacing)
+    pts = pts + offset
+    if extrude_direction == "radial":
+        d = pts / np.maximum(np.linalg.norm(pts, axis=1, keepdims=True), 1e-12)
+    else:
+        d = nrm
+    k = pts.shape[0]
+    outer = pts + tissue.extrude * d
+    rest_x = np.concatenate([pts, outer])
+    # Each attached/outer pair stands for a prism of tissue (area x extrude); half the mass each.
+    m_pair = tissue.tissue_density * area * tissue.extrude
+    mass = np.concatenate([0.5 * m_pair, 0.5 * m_pair])
+    tangential = tissue.radius_scale * np.sqrt(area)
+    radii = np.stack([tangential, tangential, np.full(k, tissue.normal_radius)], axis=1)
+    radii = np.concatenate([radii, radii])
+    rest_q = np.concatenate([quat_z_to(d), quat_z_to(d)])
+    partner = np.concatenate([np.arange(k, 2 * k), np.arange(k)])
+    attached = np.concatenate([np.ones(k, bool), np.zeros(k, bool)])
+    return _single_body_model(rest_x, rest_q, radii, mass, partner, attached, tissue)
+
+
+def build_free_block(
+    half_extents: tuple[float, float, float],
+    tissue: TissueConfig,
+    *,
+    spacing: float | None = None,
+) -> TissueModel:
+    """A free block of tissue (no core): a lattice of spherical particles filling the box, centred
+    at the origin. Used for the solver's own tests (momentum, rest, recovery, friction ramp)."""
+    h = np.asarray(half_extents, dtype=np.float64)
+    if h.shape != (3,) or (h <= 0).any():
+        raise ValueError(f"half_extents must be 3 positive lengths, got {half_extents!r}")
+    s = tissue.spacing if spacing is None else float(spacing)
+    if not s > 0:
+        raise ValueError(f"spacing must be > 0, got {spacing!r}")
+    axes = [((np.arange(c) + 0.5) / c * 2 - 1) * hh for hh, c in zip(h, [_count(2 * hh, s) for hh in h])]
+    g = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    n = g.shape[0]
+    cell = float(np.prod(2 * h)) / n
+    mass = np.full(n, tissue.tissue_density * cell)
+    radius = 0.5 * cell ** (1.0 / 3.0)
+    radii = np.full((n, 3), radius)
+    rest_q = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+    return _single_body_model(g, rest_q, radii, mass, np.full(n, -1), np.zeros(n, bool), tissue)

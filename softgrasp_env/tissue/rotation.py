@@ -1,0 +1,194 @@
+"""Quaternion maths and rotation extraction, as numba kernels (float64, no object mode).
+
+Quaternions are ``[x, y, z, w]`` like pybullet, so poses pass between the two unchanged. Inside
+the kernels quaternions, vectors and 3x3 matrices travel as tuples (row-major for matrices): numba
+keeps tuples in registers, whereas a small ``np.empty`` per call would allocate on the heap in the
+solver's innermost loops.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+_EPS = 1e-12
+
+jit = nb.njit(cache=True, inline="always")
+
+
+@jit
+def qmul(a, b):
+    """Hamilton product a * b (rotate by b first, then by a)."""
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    )
+
+
+@jit
+def qconj(q):
+    return (-q[0], -q[1], -q[2], q[3])
+
+
+@jit
+def qnormalize(q):
+    n = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
+    if n < _EPS:
+        return (0.0, 0.0, 0.0, 1.0)
+    inv = 1.0 / n
+    return (q[0] * inv, q[1] * inv, q[2] * inv, q[3] * inv)
+
+
+@jit
+def qrotate(q, v):
+    """R(q) v without forming the matrix: v + 2w (u x v) + 2 u x (u x v)."""
+    ux, uy, uz, w = q
+    tx = 2.0 * (uy * v[2] - uz * v[1])
+    ty = 2.0 * (uz * v[0] - ux * v[2])
+    tz = 2.0 * (ux * v[1] - uy * v[0])
+    return (
+        v[0] + w * tx + (uy * tz - uz * ty),
+        v[1] + w * ty + (uz * tx - ux * tz),
+        v[2] + w * tz + (ux * ty - uy * tx),
+    )
+
+
+@jit
+def qmat(q):
+    """Row-major 3x3 rotation matrix of a unit quaternion, as a 9-tuple."""
+    x, y, z, w = q
+    return (
+        1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w),
+        2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w),
+        2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y),
+    )  # fmt: skip
+
+
+@jit
+def qexp(r):
+    """Quaternion of the rotation vector r = axis * angle."""
+    angle = math.sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
+    if angle < 1e-9:
+        # Second-order accurate for tiny angles, and avoids 0/0.
+        return qnormalize((0.5 * r[0], 0.5 * r[1], 0.5 * r[2], 1.0))
+    s = math.sin(0.5 * angle) / angle
+    return (r[0] * s, r[1] * s, r[2] * s, math.cos(0.5 * angle))
+
+
+@jit
+def qlog(q):
+    """Rotation vector (axis * angle) of q on the short arc, angle in [0, pi]."""
+    x, y, z, w = q
+    if w < 0.0:  # q and -q are one rotation; w >= 0 is the short arc
+        x, y, z, w = -x, -y, -z, -w
+    s = math.sqrt(x * x + y * y + z * z)
+    if s < 1e-9:
+        return (2.0 * x, 2.0 * y, 2.0 * z)
+    f = 2.0 * math.atan2(s, w) / s
+    return (x * f, y * f, z * f)
+
+
+@jit
+def mat_to_quat(m):
+    """Unit quaternion of a row-major rotation 9-tuple (Shepperd's method)."""
+    m00, m01, m02, m10, m11, m12, m20, m21, m22 = m
+    tr = m00 + m11 + m22
+    if tr > 0.0:
+        s = math.sqrt(tr + 1.0) * 2.0
+        q = ((m21 - m12) / s, (m02 - m20) / s, (m10 - m01) / s, 0.25 * s)
+    elif m00 > m11 and m00 > m22:
+        s = math.sqrt(1.0 + m00 - m11 - m22) * 2.0
+        q = (0.25 * s, (m01 + m10) / s, (m02 + m20) / s, (m21 - m12) / s)
+    elif m11 > m22:
+        s = math.sqrt(1.0 + m11 - m00 - m22) * 2.0
+        q = ((m01 + m10) / s, 0.25 * s, (m12 + m21) / s, (m02 - m20) / s)
+    else:
+        s = math.sqrt(1.0 + m22 - m00 - m11) * 2.0
+        q = ((m02 + m20) / s, (m12 + m21) / s, 0.25 * s, (m10 - m01) / s)
+    return qnormalize(q)
+
+
+@jit
+def extract_rotation_t(a, q, max_iterations, tolerance):
+    """Rotational part of the row-major 3x3 tuple ``a``, warm-started from quaternion ``q``.
+
+    Mueller, Bender, Chentanez, Macklin 2016, "A Robust Method to Extract the Rotational Part of
+    Deformations", Alg. 1 / eq. (8)-(9): q <- exp(omega) q with
+    omega = sum_i r_i x a_i / (|sum_i r_i . a_i| + eps), r_i and a_i the columns of R(q) and A.
+    Every update is a rotation, so det R = +1 always. The fixed point maximises tr(R^T A) (the
+    polar factor when det A > 0); directions that A leaves undetermined (planar, collinear or zero
+    A) keep the warm start instead of snapping to identity.
+    """
+    a00, a01, a02, a10, a11, a12, a20, a21, a22 = a
+    qq = qnormalize(q)
+    for _ in range(max_iterations):
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = qmat(qq)
+        # sum over columns c of r_c x a_c and r_c . a_c
+        ox = (r10 * a20 - r20 * a10) + (r11 * a21 - r21 * a11) + (r12 * a22 - r22 * a12)
+        oy = (r20 * a00 - r00 * a20) + (r21 * a01 - r01 * a21) + (r22 * a02 - r02 * a22)
+        oz = (r00 * a10 - r10 * a00) + (r01 * a11 - r11 * a01) + (r02 * a12 - r12 * a02)
+        dot = (r00 * a00 + r10 * a10 + r20 * a20) + (r01 * a01 + r11 * a11 + r21 * a21) + (
+            r02 * a02 + r12 * a12 + r22 * a22
+        )
+        inv = 1.0 / (abs(dot) + 1e-9)
+        omega = (ox * inv, oy * inv, oz * inv)
+        w2 = omega[0] * omega[0] + omega[1] * omega[1] + omega[2] * omega[2]
+        if w2 < tolerance * tolerance:
+            break
+        if w2 < 0.25:
+            # normalise([omega / 2, 1]) turns by 2 atan(|omega| / 2) = |omega| (1 - |omega|^2 / 12 ...):
+            # the fixed point (omega = 0) is the same and it needs no sin/cos, which dominate the
+            # cost of this loop in the solver.
+            dq = qnormalize((0.5 * omega[0], 0.5 * omega[1], 0.5 * omega[2], 1.0))
+        else:
+            dq = qexp(omega)
+        qq = qnormalize(qmul(dq, qq))
+    return qq
+
+
+@nb.njit(cache=True)
+def extract_rotation(a: np.ndarray, q: np.ndarray, max_iterations: int, tolerance: float) -> np.ndarray:
+    """Array front end of :func:`extract_rotation_t`: ``a`` (3, 3), ``q`` (4,) -> quaternion (4,)."""
+    t = (a[0, 0], a[0, 1], a[0, 2], a[1, 0], a[1, 1], a[1, 2], a[2, 0], a[2, 1], a[2, 2])
+    r = extract_rotation_t(t, (q[0], q[1], q[2], q[3]), max_iterations, tolerance)
+    out = np.empty(4)
+    out[0] = r[0]
+    out[1] = r[1]
+    out[2] = r[2]
+    out[3] = r[3]
+    return out
+
+
+def polar_rotation_svd(a: np.ndarray) -> np.ndarray:
+    """Reference: the proper rotation nearest to ``a`` via SVD (tests only, not the hot loop)."""
+    u, _, vt = np.linalg.svd(a)
+    d = np.sign(np.linalg.det(u @ vt))
+    return u @ np.diag([1.0, 1.0, d]) @ vt
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """R(q) as a (3, 3) array, for Python-side use."""
+    x, y, z, w = (float(c) for c in q)
+    return np.array(
+        [
+            [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w)],
+            [2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w)],
+            [2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y)],
+        ]
+    )
+
+
+def matrix_to_quat(m: np.ndarray) -> np.ndarray:
+    """Quaternion [x, y, z, w] of a rotation matrix, for Python-side use."""
+    return np.array(_mat_to_quat_py(tuple(float(v) for v in np.asarray(m).ravel())))
+
+
+@nb.njit(cache=True)
+def _mat_to_quat_py(m):
+    return mat_to_quat(m)
