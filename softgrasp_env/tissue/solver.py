@@ -8,8 +8,8 @@ Alg. 1), reads as a recipe (see :func:`_step`):
     for _ in range(iterations):                   # Gauss-Seidel
         shape-match every implicit group          # Mueller & Chentanez 2011 sec. 4
         project contacts (two-way, mass-weighted) # XPBD rigid bodies, Mueller et al. 2020 sec. 3.3
+        friction on every touched contact         # position level, Macklin et al. 2014 eq. 23-24
         [consistent coupling: project anchors]    # generalised inverse mass of the core
-    friction on every touched contact             # position level, Macklin et al. 2014 eq. 23-24
     couple: anchor error -> impulse on the core, snap attached particles back   # thesis 5.1.3
     update velocities from positions, angular velocities from q* q^-1 (short arc)
 
@@ -444,18 +444,20 @@ def _project_pair(k, pair_i, pair_j, pair_lambda, pair_normal, xp, qp, radii, in
 
 
 @nb.njit(cache=True, inline="always")
-def _coulomb(lam_t, lam_n, mu_s, mu_k):
+def _coulomb(lam_t, lam_t_done, lam_n, mu_s, mu_k):
     """Position-level Coulomb friction (Macklin et al. 2014 eq. 23-24; Mueller et al. 2020 sec.
-    3.5): stick - cancel the whole tangential slip - while it needs at most mu_s * lambda_n,
-    otherwise slide, cancelling at most mu_k * lambda_n of it."""
-    if lam_t <= mu_s * lam_n:
+    3.5). ``lam_t`` is the tangential correction that would cancel the slip since the step began,
+    ``lam_t_done`` what this contact already applied this step, ``lam_n`` its normal correction so
+    far. Stick - cancel all the slip - while the total stays within mu_s lam_n; otherwise slide,
+    with the total capped at mu_k lam_n."""
+    if lam_t + lam_t_done <= mu_s * lam_n:
         return lam_t
-    return min(lam_t, mu_k * lam_n)
+    return min(lam_t, max(0.0, mu_k * lam_n - lam_t_done))
 
 
 @nb.njit(cache=True)
 def _friction_shape_contact(
-    c, c_particle, c_shape, c_inner, c_lambda, c_normal, x0, xp, inv_mass, p_body, body_friction, shape_rigid,
+    c, c_particle, c_shape, c_inner, c_lambda, c_lambda_t, c_normal, x0, xp, inv_mass, p_body, body_friction, shape_rigid,
     rig_x0, rig_q0, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt,
 ):  # fmt: skip
     lam_n = c_lambda[c]
@@ -497,7 +499,8 @@ def _friction_shape_contact(
     if r >= 0 and rig_move[r]:
         wb = _generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, rx, ry, rz, tx, ty, tz)
     b = p_body[i]
-    dl = _coulomb(tl / (wp + wb), lam_n, body_friction[b, 0], body_friction[b, 1])
+    dl = _coulomb(tl / (wp + wb), c_lambda_t[c], lam_n, body_friction[b, 0], body_friction[b, 1])
+    c_lambda_t[c] += dl
     xp[i, 0] -= wp * dl * tx
     xp[i, 1] -= wp * dl * ty
     xp[i, 2] -= wp * dl * tz
@@ -507,7 +510,7 @@ def _friction_shape_contact(
 
 
 @nb.njit(cache=True)
-def _friction_pair(k, pair_i, pair_j, pair_lambda, pair_normal, x0, xp, inv_mass, p_body, body_friction):
+def _friction_pair(k, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, x0, xp, inv_mass, p_body, body_friction):
     lam_n = pair_lambda[k]
     if lam_n <= 0.0:
         return
@@ -530,7 +533,8 @@ def _friction_pair(k, pair_i, pair_j, pair_lambda, pair_normal, x0, xp, inv_mass
     bj = p_body[j]
     mu_s = 0.5 * (body_friction[bi, 0] + body_friction[bj, 0])
     mu_k = 0.5 * (body_friction[bi, 1] + body_friction[bj, 1])
-    dl = _coulomb(tl / (wi + wj), lam_n, mu_s, mu_k)
+    dl = _coulomb(tl / (wi + wj), pair_lambda_t[k], lam_n, mu_s, mu_k)
+    pair_lambda_t[k] += dl
     for a in range(3):
         xp[i, a] -= wi * dl * t[a] / tl
         xp[j, a] += wj * dl * t[a] / tl
@@ -702,6 +706,79 @@ def _collect_pairs(xp, x0, radii, body_off, margin, pair_i, pair_j):
 
 
 @nb.njit(cache=True)
+def _damped_velocities(x, v, omega, mass, body_off, c, vd, wd):
+    """Damp each particle's deviation from its body's rigid motion by the fraction c (Mueller et
+    al. 2007 sec. 3.5): v_i += c (v_cm + W x r_i - v_i), w_i += c (W - w_i), with v_cm, W the body's
+    centre-of-mass and angular velocity. Rigid motion, so momentum and angular momentum, are kept:
+    a falling or spinning body is not slowed, unlike damping the absolute velocity."""
+    for b in range(body_off.shape[0] - 1):
+        s = body_off[b]
+        e = body_off[b + 1]
+        if c == 0.0:
+            for i in range(s, e):
+                for a in range(3):
+                    vd[i, a] = v[i, a]
+                    wd[i, a] = omega[i, a]
+            continue
+        msum = 0.0
+        cx = cy = cz = 0.0
+        px = py = pz = 0.0
+        for i in range(s, e):
+            m = mass[i]
+            msum += m
+            cx += m * x[i, 0]
+            cy += m * x[i, 1]
+            cz += m * x[i, 2]
+            px += m * v[i, 0]
+            py += m * v[i, 1]
+            pz += m * v[i, 2]
+        cx /= msum
+        cy /= msum
+        cz /= msum
+        vx = px / msum
+        vy = py / msum
+        vz = pz / msum
+        lx = ly = lz = 0.0
+        i00 = i01 = i02 = i11 = i12 = i22 = 0.0
+        for i in range(s, e):
+            m = mass[i]
+            rx = x[i, 0] - cx
+            ry = x[i, 1] - cy
+            rz = x[i, 2] - cz
+            lx += m * (ry * v[i, 2] - rz * v[i, 1])
+            ly += m * (rz * v[i, 0] - rx * v[i, 2])
+            lz += m * (rx * v[i, 1] - ry * v[i, 0])
+            i00 += m * (ry * ry + rz * rz)
+            i11 += m * (rx * rx + rz * rz)
+            i22 += m * (rx * rx + ry * ry)
+            i01 -= m * rx * ry
+            i02 -= m * rx * rz
+            i12 -= m * ry * rz
+        c00 = i11 * i22 - i12 * i12
+        c01 = i02 * i12 - i01 * i22
+        c02 = i01 * i12 - i02 * i11
+        c11 = i00 * i22 - i02 * i02
+        c12 = i01 * i02 - i00 * i12
+        c22 = i00 * i11 - i01 * i01
+        det = i00 * c00 + i01 * c01 + i02 * c02
+        wx = wy = wz = 0.0
+        if det > 0.0:
+            wx = (c00 * lx + c01 * ly + c02 * lz) / det
+            wy = (c01 * lx + c11 * ly + c12 * lz) / det
+            wz = (c02 * lx + c12 * ly + c22 * lz) / det
+        for i in range(s, e):
+            rx = x[i, 0] - cx
+            ry = x[i, 1] - cy
+            rz = x[i, 2] - cz
+            vd[i, 0] = v[i, 0] + c * (vx + wy * rz - wz * ry - v[i, 0])
+            vd[i, 1] = v[i, 1] + c * (vy + wz * rx - wx * rz - v[i, 1])
+            vd[i, 2] = v[i, 2] + c * (vz + wx * ry - wy * rx - v[i, 2])
+            wd[i, 0] = omega[i, 0] + c * (wx - omega[i, 0])
+            wd[i, 1] = omega[i, 1] + c * (wy - omega[i, 1])
+            wd[i, 2] = omega[i, 2] + c * (wz - omega[i, 2])
+
+
+@nb.njit(cache=True)
 def _step(
     # model
     rest_x, rest_q, rest_moment, inertia, radii, mass, inv_mass, p_body, attached, g_off, g_mem, g_rest, body_off,
@@ -712,7 +789,8 @@ def _step(
     rig_x0, rig_q0, rig_v, rig_w, rig_inv_mass, rig_inv_inertia, rig_gravity, rig_move, shape_kind, shape_params,
     shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, imp_lin, imp_ang, coupling_imp,
     # scratch
-    xp, qp, moment, c_particle, c_shape, c_inner, c_lambda, c_normal, pair_i, pair_j, pair_lambda, pair_normal,
+    xp, qp, vd, wd, moment, c_particle, c_shape, c_inner, c_lambda, c_lambda_t, c_normal, pair_i, pair_j, pair_lambda,
+    pair_lambda_t, pair_normal,
     # parameters
     dt, iterations, rot_iters, gx, gy, gz, damping, coupling, orient_mode, margin, counts,
 ):  # fmt: skip
@@ -739,13 +817,15 @@ def _step(
             imp_ang[r, a] = 0.0
             coupling_imp[r, a] = 0.0
     # --- predict particles (PBD Alg. 1 lines 5-11; Mueller & Chentanez 2011 sec. 3):
-    #     v += g dt; damping; x* = x + v dt; q* = [w_hat sin(|w| dt / 2), cos(|w| dt / 2)] q
+    #     v += g dt; damping of the deviation from each body's rigid motion; x* = x + v dt;
+    #     q* = [w_hat sin(|w| dt / 2), cos(|w| dt / 2)] q
     fd = math.exp(-damping * dt)
+    _damped_velocities(x, v, omega, mass, body_off, 1.0 - fd, vd, wd)
     for i in range(n):
         for a in range(3):
             g = gx if a == 0 else (gy if a == 1 else gz)
-            xp[i, a] = x[i, a] + (v[i, a] + g * dt) * fd * dt
-        dq = qexp((omega[i, 0] * fd * dt, omega[i, 1] * fd * dt, omega[i, 2] * fd * dt))
+            xp[i, a] = x[i, a] + (vd[i, a] + g * dt) * dt
+        dq = qexp((wd[i, 0] * dt, wd[i, 1] * dt, wd[i, 2] * dt))
         qn = qnormalize(qmul(dq, (q[i, 0], q[i, 1], q[i, 2], q[i, 3])))
         for a in range(4):
             qp[i, a] = qn[a]
@@ -765,8 +845,10 @@ def _step(
         return 1
     for c in range(nc):
         c_lambda[c] = 0.0
+        c_lambda_t[c] = 0.0
     for k in range(npairs):
         pair_lambda[k] = 0.0
+        pair_lambda_t[k] = 0.0
     # --- Gauss-Seidel iterations. Stiffness per iteration k' = 1 - (1 - k)^(1/n) makes the
     #     per-step stiffness independent of the iteration count (Mueller et al. 2007 sec. 3.3).
     nbodies = body_off.shape[0] - 1
@@ -782,6 +864,17 @@ def _step(
                                    rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
         for k in range(npairs):
             _project_pair(k, pair_i, pair_j, pair_lambda, pair_normal, xp, qp, radii, inv_mass)
+        # Friction inside the loop, after the normal corrections: static friction is then a
+        # constraint of the same Gauss-Seidel solve as the shape matching. Applied once after the
+        # loop it could only stop the touching particles, and a block on a ramp crept downhill
+        # at a steady ~0.1 m/s below the friction angle.
+        for c in range(nc):
+            _friction_shape_contact(c, c_particle, c_shape, c_inner, c_lambda, c_lambda_t, c_normal, x, xp, inv_mass,
+                                    p_body, body_friction, shape_rigid, rig_x0, rig_q0, rig_x, rig_q, rig_inv_mass,
+                                    rig_inv_inertia, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
+        for k in range(npairs):
+            _friction_pair(k, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, x, xp, inv_mass, p_body,
+                           body_friction)  # fmt: skip
         if coupling == COUPLING_CONSISTENT:
             for i in range(n):
                 if attached[i]:
@@ -789,13 +882,6 @@ def _step(
                     if r >= 0:
                         _project_anchor(i, r, rest_x, xp, inv_mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
                                         rig_move, imp_lin, imp_ang, dt)  # fmt: skip
-    # --- friction, once per touched contact, from the step's total normal correction
-    for c in range(nc):
-        _friction_shape_contact(c, c_particle, c_shape, c_inner, c_lambda, c_normal, x, xp, inv_mass, p_body,
-                                body_friction, shape_rigid, rig_x0, rig_q0, rig_x, rig_q, rig_inv_mass,
-                                rig_inv_inertia, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
-    for k in range(npairs):
-        _friction_pair(k, pair_i, pair_j, pair_lambda, pair_normal, x, xp, inv_mass, p_body, body_friction)
     # --- coupling to the cores (thesis 5.1.3): error -> impulse, snap back
     _snap_attached(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x, rig_q,
                    imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
@@ -848,6 +934,8 @@ class TissueSolver:
         n = model.particle_count
         self._xp = np.zeros((n, 3))
         self._qp = np.zeros((n, 4))
+        self._vd = np.zeros((n, 3))
+        self._wd = np.zeros((n, 3))
         self._moment = np.zeros((n, 9))
         self._rest_moment = rest_moments(model)
         self._inertia = np.ascontiguousarray(model.particle_inertia_local())
@@ -861,12 +949,14 @@ class TissueSolver:
         self._c_shape = np.zeros(cap, dtype=np.int32)
         self._c_inner = np.zeros(cap, dtype=np.bool_)
         self._c_lambda = np.zeros(cap)
+        self._c_lambda_t = np.zeros(cap)
         self._c_normal = np.zeros((cap, 3))
 
     def _alloc_pairs(self, cap: int) -> None:
         self._pair_i = np.zeros(cap, dtype=np.int32)
         self._pair_j = np.zeros(cap, dtype=np.int32)
         self._pair_lambda = np.zeros(cap)
+        self._pair_lambda_t = np.zeros(cap)
         self._pair_normal = np.zeros((cap, 3))
 
     def _rigid_buffers(self, count: int) -> None:
@@ -895,8 +985,9 @@ class TissueSolver:
                 col.rigid_gravity, col.rigid_in_solve, col.shape_kind, col.shape_params, col.shape_rigid,
                 col.shape_local_x, col.shape_local_q, self._rig_x, self._rig_q, self._imp_lin, self._imp_ang,
                 self._coupling_imp,
-                self._xp, self._qp, self._moment, self._c_particle, self._c_shape, self._c_inner, self._c_lambda,
-                self._c_normal, self._pair_i, self._pair_j, self._pair_lambda, self._pair_normal,
+                self._xp, self._qp, self._vd, self._wd, self._moment, self._c_particle, self._c_shape, self._c_inner, self._c_lambda,
+                self._c_lambda_t, self._c_normal, self._pair_i, self._pair_j, self._pair_lambda, self._pair_lambda_t,
+                self._pair_normal,
                 sim.dt, sim.iterations, sim.rotation_iterations, 0.0, 0.0, -sim.gravity, sim.damping, coupling,
                 ORIENT_MODES[sim.orientation], sim.contact_margin, self._counts,
             )  # fmt: skip

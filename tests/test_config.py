@@ -1,0 +1,207 @@
+"""Validation of TissueConfig, SimConfig and SceneConfig."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import pytest
+
+from softgrasp_env.config import COUPLING_MODES, SceneConfig, SimConfig, TissueConfig, field_names, replace
+
+NAN = float("nan")
+INF = float("inf")
+
+
+def test_defaults_construct():
+    t, s, c = TissueConfig(), SimConfig(), SceneConfig()
+    assert isinstance(c.tissue, TissueConfig) and isinstance(c.sim, SimConfig)
+    assert t.friction_dynamic <= t.friction_static
+    assert s.coupling in COUPLING_MODES
+    assert c.soft is True
+
+
+def test_spacing_follows_density():
+    assert TissueConfig().spacing == pytest.approx(0.01)
+    assert TissueConfig(density=40_000.0).spacing == pytest.approx(0.005)
+    assert TissueConfig(density=2_500.0).spacing == pytest.approx(0.02)
+
+
+@pytest.mark.parametrize(
+    "kwargs, field",
+    [
+        (dict(stiffness=0.0), "stiffness"),
+        (dict(stiffness=1.5), "stiffness"),
+        (dict(stiffness=-0.1), "stiffness"),
+        (dict(stiffness=NAN), "stiffness"),
+        (dict(group_size=2), "group_size"),
+        (dict(group_size=65), "group_size"),
+        (dict(group_size=8.0), "group_size"),
+        (dict(group_size=True), "group_size"),
+        (dict(extrude=-1.0), "extrude"),
+        (dict(extrude=0.0), "extrude"),
+        (dict(extrude=NAN), "extrude"),
+        (dict(extrude=INF), "extrude"),
+        (dict(density=50.0), "density"),
+        (dict(density=NAN), "density"),
+        (dict(tissue_density=0.0), "tissue_density"),
+        (dict(radius_scale=0.0), "radius_scale"),
+        (dict(radius_scale=2.5), "radius_scale"),
+        (dict(normal_radius=0.0), "normal_radius"),
+        (dict(friction_static=-0.1, friction_dynamic=0.0), "friction_static"),
+        (dict(friction_static=NAN), "friction_static"),
+        (dict(friction_dynamic=0.95), "friction_dynamic"),
+        (dict(friction_static=0.3, friction_dynamic=0.31), "friction_dynamic"),
+        (dict(stiffness="0.5"), "stiffness"),
+        (dict(stiffness=True), "stiffness"),
+    ],
+)
+def test_tissue_config_rejects(kwargs, field):
+    with pytest.raises(ValueError, match=rf"TissueConfig\.{field}\b"):
+        TissueConfig(**kwargs)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(stiffness=1.0),  # closed upper end
+        dict(stiffness=1),  # int for a float field is fine
+        dict(group_size=4),
+        dict(group_size=64),
+        dict(density=100.0),
+        dict(density=1e7),
+        dict(extrude=0.1),
+        dict(friction_static=0.5, friction_dynamic=0.5),  # equal coefficients allowed
+        dict(friction_static=0.0, friction_dynamic=0.0),
+    ],
+)
+def test_tissue_config_accepts_boundaries(kwargs):
+    cfg = TissueConfig(**kwargs)
+    for k, v in kwargs.items():
+        assert getattr(cfg, k) == v
+
+
+@pytest.mark.parametrize(
+    "kwargs, field",
+    [
+        (dict(dt=0.0), "dt"),
+        (dict(dt=0.1), "dt"),
+        (dict(dt=NAN), "dt"),
+        (dict(iterations=0), "iterations"),
+        (dict(iterations=201), "iterations"),
+        (dict(iterations=4.0), "iterations"),
+        (dict(iterations=True), "iterations"),
+        (dict(rotation_iterations=0), "rotation_iterations"),
+        (dict(rotation_iterations=False), "rotation_iterations"),
+        (dict(gravity=-9.81), "gravity"),
+        (dict(gravity=INF), "gravity"),
+        (dict(damping=-0.1), "damping"),
+        (dict(coupling="x"), "coupling"),
+        (dict(coupling="Thesis"), "coupling"),
+        (dict(orientation="x"), "orientation"),
+        (dict(contact_margin=-0.001), "contact_margin"),
+        (dict(contact_margin=0.2), "contact_margin"),
+    ],
+)
+def test_sim_config_rejects(kwargs, field):
+    with pytest.raises(ValueError, match=rf"SimConfig\.{field}\b"):
+        SimConfig(**kwargs)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(coupling="consistent"),
+        dict(coupling="thesis"),
+        dict(orientation="goal"),
+        dict(iterations=1),
+        dict(iterations=200),
+        dict(gravity=0.0),
+        dict(damping=0.0),
+        dict(dt=0.05),
+        dict(dt=1e-5),
+    ],
+)
+def test_sim_config_accepts(kwargs):
+    cfg = SimConfig(**kwargs)
+    for k, v in kwargs.items():
+        assert getattr(cfg, k) == v
+
+
+@pytest.mark.parametrize(
+    "kwargs, field",
+    [
+        (dict(cylinder_radius=-1.0), "cylinder_radius"),
+        (dict(cylinder_radius=0.001), "cylinder_radius"),
+        (dict(cylinder_radius=NAN), "cylinder_radius"),
+        (dict(cylinder_height=1.0), "cylinder_height"),
+        (dict(cylinder_mass=0.0), "cylinder_mass"),
+        (dict(yaw=2.0), "yaw"),
+        (dict(yaw=-1.0), "yaw"),
+        (dict(lateral_offset=0.5), "lateral_offset"),
+        (dict(finger_force=0.0), "finger_force"),
+        (dict(finger_speed=0.0), "finger_speed"),
+        (dict(palm_force=0.0), "palm_force"),
+        (dict(ground_friction=-0.5), "ground_friction"),
+        (dict(finger_half_extents=(0.008, 0.02)), "finger_half_extents"),
+        (dict(finger_half_extents=(0.008, 0.0, 0.03)), r"finger_half_extents\[1\]"),
+        (dict(finger_half_extents=(0.008, 0.02, NAN)), r"finger_half_extents\[2\]"),
+        (dict(soft=1), "soft"),
+        (dict(soft="yes"), "soft"),
+        (dict(tissue=SimConfig()), "tissue"),
+        (dict(sim=TissueConfig()), "sim"),
+        (dict(sim=None), "sim"),
+    ],
+)
+def test_scene_config_rejects(kwargs, field):
+    with pytest.raises(ValueError, match=rf"SceneConfig\.{field}"):
+        SceneConfig(**kwargs)
+
+
+def test_scene_config_accepts():
+    cfg = SceneConfig(soft=False, yaw=math.pi / 4, lateral_offset=-0.1, tissue=TissueConfig(stiffness=0.2),
+                      sim=SimConfig(coupling="consistent"))  # fmt: skip
+    assert cfg.soft is False
+    assert cfg.yaw == pytest.approx(math.pi / 4)
+    assert cfg.tissue.stiffness == 0.2
+    assert cfg.sim.coupling == "consistent"
+
+
+def test_nested_configs_validate_on_their_own():
+    with pytest.raises(ValueError, match=r"TissueConfig\.stiffness"):
+        SceneConfig(tissue=TissueConfig(stiffness=2.0))
+
+
+def test_error_message_names_the_range_and_the_value():
+    with pytest.raises(ValueError) as info:
+        TissueConfig(stiffness=1.5)
+    msg = str(info.value)
+    assert "(0.0, 1.0]" in msg and "1.5" in msg
+    with pytest.raises(ValueError) as info:
+        SimConfig(iterations=0)
+    assert "[1, 200]" in str(info.value) and "0" in str(info.value)
+
+
+def test_configs_are_frozen_and_replace_revalidates():
+    cfg = TissueConfig()
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        cfg.stiffness = 0.9  # type: ignore[misc]
+    assert replace(cfg, stiffness=0.9).stiffness == 0.9
+    with pytest.raises(ValueError, match=r"TissueConfig\.stiffness"):
+        replace(cfg, stiffness=0.0)
+    with pytest.raises(ValueError, match=r"SimConfig\.dt"):
+        replace(SimConfig(), dt=-1.0)
+
+
+def test_default_factories_give_fresh_equal_configs():
+    a, b = SceneConfig(), SceneConfig()
+    assert a.tissue == b.tissue == TissueConfig()
+    assert a.sim == b.sim == SimConfig()
+
+
+def test_field_names():
+    names = field_names(TissueConfig)
+    assert names[:3] == ("density", "extrude", "group_size")
+    assert set(names) == {f.name for f in dataclasses.fields(TissueConfig)}
+    assert "tissue" in field_names(SceneConfig) and "sim" in field_names(SceneConfig)
+    assert "coupling" in field_names(SimConfig)
