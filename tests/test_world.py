@@ -99,3 +99,26 @@ def test_restore_returns_bodies_and_tissue_to_the_snapshot():
         assert scene.world.step_count == 0
     finally:
         scene.close()
+
+
+@pytest.mark.parametrize("mu", [0.5, 0.9])
+def test_squeezed_cylinder_obeys_coulomb_bound(mu):
+    """Two fingers squeezing with N each hold the cylinder iff 2 mu N >= m g: held at 1.2 times the
+    threshold squeeze, slipping at 0.8 times (the motors' force limit sets N)."""
+    cylinder_mass = 0.1
+    threshold = cylinder_mass * 9.81 / (2.0 * mu)
+    outcome = {}
+    for factor in (1.2, 0.8):
+        cfg = SceneConfig(
+            finger_force=factor * threshold,
+            cylinder_mass=cylinder_mass,
+            tissue=TissueConfig(friction_static=mu, friction_dynamic=mu),
+        )
+        scene = GraspScene(cfg)
+        try:
+            res = run_scripted_grasp(scene, ScriptTimes())
+        finally:
+            scene.close()
+        outcome[factor] = res
+    assert outcome[1.2].held(ScriptTimes())
+    assert outcome[0.8].lift_height < 0.005, f"slipped cylinder rose {outcome[0.8].lift_height:.4f} m"
