@@ -95,7 +95,6 @@ def test_core_shape_rejects_bad_input(kwargs, field):
         CoreShape(**kwargs)
 
 
-@pytest.mark.xfail(strict=True, reason="CoreShape accepts NaN box half extents: min() with NaN is not <= 0")
 @pytest.mark.parametrize("half_extents", [(float("nan"), 1.0, 1.0), (1.0, float("nan"), 1.0)])
 def test_core_shape_rejects_nan_half_extents(half_extents):
     with pytest.raises(ValueError, match="half_extents"):
@@ -208,10 +207,6 @@ def test_quat_z_to_is_the_shortest_arc():
     assert np.abs(angle - np.arccos(np.clip(n[:, 2], -1.0, 1.0))).max() < 1e-9
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="quat_z_to snaps n within ~4.5e-5 rad of -z to exactly -z (threshold 1e-9 on 1 + z.n)",
-)
 def test_quat_z_to_is_accurate_next_to_minus_z():
     s = 1e-5
     n = np.array([[s, 0.0, -math.sqrt(1.0 - s * s)]])

@@ -37,12 +37,12 @@ class CoreShape:
         if self.kind not in SHAPE_KINDS:
             raise ValueError(f"CoreShape.kind must be one of {SHAPE_KINDS}, got {self.kind!r}")
         if self.kind == "box":
-            if len(self.half_extents) != 3 or min(self.half_extents) <= 0.0:
+            if len(self.half_extents) != 3 or not all(math.isfinite(h) and h > 0.0 for h in self.half_extents):
                 raise ValueError(f"CoreShape.half_extents must be 3 positive lengths, got {self.half_extents!r}")
         else:
-            if not self.radius > 0.0:
+            if not (math.isfinite(self.radius) and self.radius > 0.0):
                 raise ValueError(f"CoreShape.radius must be > 0 for a {self.kind}, got {self.radius!r}")
-            if self.kind in ("cylinder", "capsule") and not self.half_height > 0.0:
+            if self.kind in ("cylinder", "capsule") and not (math.isfinite(self.half_height) and self.half_height > 0.0):
                 raise ValueError(f"CoreShape.half_height must be > 0 for a {self.kind}, got {self.half_height!r}")
 
     @property
@@ -179,7 +179,9 @@ def quat_z_to(n: np.ndarray) -> np.ndarray:
     out[:, 1] = n[:, 0]
     out[:, 2] = 0.0
     out[:, 3] = 1.0 + n[:, 2]
-    anti = out[:, 3] < 1e-9
+    # Only an (almost) exact -z lacks a defined shortest arc; test the unnormalised quaternion's
+    # length, not 1 + z.n, so directions a few 1e-5 rad off -z still get their own arc.
+    anti = np.linalg.norm(out, axis=1) < 1e-12
     out[anti] = [1.0, 0.0, 0.0, 0.0]
     return out / np.linalg.norm(out, axis=1, keepdims=True)
 
