@@ -326,6 +326,24 @@ def _shape_match_group(
 
 
 @nb.njit(cache=True, inline="always")
+def _solve_sym3(i00, i01, i02, i11, i12, i22, bx, by, bz):
+    """x with I x = b for a symmetric 3x3 I, by the adjugate; (0, 0, 0) if I is not positive
+    definite (e.g. a degenerate group or body)."""
+    c00 = i11 * i22 - i12 * i12
+    c01 = i02 * i12 - i01 * i22
+    c02 = i01 * i12 - i02 * i11
+    c11 = i00 * i22 - i02 * i02
+    c12 = i01 * i02 - i00 * i12
+    c22 = i00 * i11 - i01 * i01
+    det = i00 * c00 + i01 * c01 + i02 * c02
+    if det <= 0.0:
+        return 0.0, 0.0, 0.0
+    inv = 1.0 / det
+    return (inv * (c00 * bx + c01 * by + c02 * bz), inv * (c01 * bx + c11 * by + c12 * bz),
+            inv * (c02 * bx + c12 * by + c22 * bz))  # fmt: skip
+
+
+@nb.njit(cache=True, inline="always")
 def _spin_reaction(start, end, g_mem, inertia, qp, rest_moment, moment, lx, ly, lz):
     """Turn every member of a group by dtheta = -I^-1 L, I = sum_j R_j diag(I_j) R_j^T (world), so
     that the members' spin takes up the orbital angular momentum change L of the projection."""
@@ -342,20 +360,7 @@ def _spin_reaction(start, end, g_mem, inertia, qp, rest_moment, moment, lx, ly, 
         i11 += d0 * r[3] * r[3] + d1 * r[4] * r[4] + d2 * r[5] * r[5]
         i12 += d0 * r[3] * r[6] + d1 * r[4] * r[7] + d2 * r[5] * r[8]
         i22 += d0 * r[6] * r[6] + d1 * r[7] * r[7] + d2 * r[8] * r[8]
-    # Solve I dtheta = -L by the adjugate (I is symmetric positive definite).
-    c00 = i11 * i22 - i12 * i12
-    c01 = i02 * i12 - i01 * i22
-    c02 = i01 * i12 - i02 * i11
-    c11 = i00 * i22 - i02 * i02
-    c12 = i01 * i02 - i00 * i12
-    c22 = i00 * i11 - i01 * i01
-    det = i00 * c00 + i01 * c01 + i02 * c02
-    if det <= 0.0:
-        return
-    inv = -1.0 / det
-    tx = inv * (c00 * lx + c01 * ly + c02 * lz)
-    ty = inv * (c01 * lx + c11 * ly + c12 * lz)
-    tz = inv * (c02 * lx + c12 * ly + c22 * lz)
+    tx, ty, tz = _solve_sym3(i00, i01, i02, i11, i12, i22, -lx, -ly, -lz)
     for e in range(start, end):
         j = g_mem[e]
         q = (qp[j, 0], qp[j, 1], qp[j, 2], qp[j, 3])
@@ -754,18 +759,7 @@ def _damped_velocities(x, v, omega, mass, body_off, c, vd, wd):
             i01 -= m * rx * ry
             i02 -= m * rx * rz
             i12 -= m * ry * rz
-        c00 = i11 * i22 - i12 * i12
-        c01 = i02 * i12 - i01 * i22
-        c02 = i01 * i12 - i02 * i11
-        c11 = i00 * i22 - i02 * i02
-        c12 = i01 * i02 - i00 * i12
-        c22 = i00 * i11 - i01 * i01
-        det = i00 * c00 + i01 * c01 + i02 * c02
-        wx = wy = wz = 0.0
-        if det > 0.0:
-            wx = (c00 * lx + c01 * ly + c02 * lz) / det
-            wy = (c01 * lx + c11 * ly + c12 * lz) / det
-            wz = (c02 * lx + c12 * ly + c22 * lz) / det
+        wx, wy, wz = _solve_sym3(i00, i01, i02, i11, i12, i22, lx, ly, lz)
         for i in range(s, e):
             rx = x[i, 0] - cx
             ry = x[i, 1] - cy
