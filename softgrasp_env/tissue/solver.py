@@ -189,23 +189,12 @@ def _rigid_apply(r, rx, ry, rz, px, py, pz, move, dt, rig_x, rig_q, rig_inv_mass
     rig_q[r, 3] = qn[3]
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
-def _update_moment(i, q, rest_moment, moment):
-    """Cache A_i = (m_i / 5) R_i diag(a^2, b^2, c^2) R_bar_i^T (Mueller & Chentanez 2011, eq. 9) as
-    R_i B_i with the constant B_i = (m_i / 5) diag(a^2, b^2, c^2) R_bar_i^T (see rest_moments).
-
-    R_i is the current orientation and R_bar_i the rest orientation: the symmetric R D R^T would
-    carry no rotation and pull groups toward 'no rotation'."""
-    r = qmat((q[i, 0], q[i, 1], q[i, 2], q[i, 3]))
-    for a in range(3):
-        for b in range(3):
-            moment[i, 3 * a + b] = (
-                r[3 * a] * rest_moment[i, b] + r[3 * a + 1] * rest_moment[i, 3 + b] + r[3 * a + 2] * rest_moment[i, 6 + b]
-            )
-
-
 def rest_moments(model: TissueModel) -> np.ndarray:
-    """(N, 9) row-major B_i = (m_i / 5) diag(a^2, b^2, c^2) R_bar_i^T of every particle."""
+    """(N, 9) row-major B_i = (m_i / 5) diag(a^2, b^2, c^2) R_bar_i^T of every particle.
+
+    A particle's moment A_i = (m_i / 5) R_i diag(a^2, b^2, c^2) R_bar_i^T (Mueller & Chentanez 2011,
+    eq. 9) is then R_i B_i, R_i the current and R_bar_i the rest orientation (the symmetric
+    R D R^T would carry no rotation and pull groups toward 'no rotation')."""
     from .rotation import quat_to_matrix
 
     n = model.particle_count
@@ -219,8 +208,7 @@ def rest_moments(model: TissueModel) -> np.ndarray:
 
 @nb.njit(cache=True, inline="always", error_model="numpy")
 def _shape_match_group(
-    i, k_iter, rot_iters, g_off, g_mem, g_rest, mass, rest_q, rest_moment, inertia, xs, xp, qp, group_q, moment,
-    orient_mode,
+    i, k_iter, rot_iters, g_off, g_mem, g_rest, mass, rest_q, rest_moment, inertia, xs, xp, qp, group_q, orient_mode,
 ):  # fmt: skip
     """Project implicit group i (centred on particle i) toward its goal shape.
 
@@ -245,6 +233,7 @@ def _shape_match_group(
     cy = 0.0
     cz = 0.0
     a00 = a01 = a02 = a10 = a11 = a12 = a20 = a21 = a22 = 0.0
+    i00 = i01 = i02 = i11 = i12 = i22 = 0.0
     for e in range(start, end):
         j = g_mem[e]
         m = mass[j]
@@ -258,15 +247,39 @@ def _shape_match_group(
         q0 = g_rest[e, 0]
         q1 = g_rest[e, 1]
         q2 = g_rest[e, 2]
-        a00 += moment[j, 0] + m * x0 * q0
-        a01 += moment[j, 1] + m * x0 * q1
-        a02 += moment[j, 2] + m * x0 * q2
-        a10 += moment[j, 3] + m * x1 * q0
-        a11 += moment[j, 4] + m * x1 * q1
-        a12 += moment[j, 5] + m * x1 * q2
-        a20 += moment[j, 6] + m * x2 * q0
-        a21 += moment[j, 7] + m * x2 * q1
-        a22 += moment[j, 8] + m * x2 * q2
+        # R_j once per member gives both its moment A_j = R_j B_j (eq. 9, see rest_moments) and its
+        # world inertia R_j diag(I_j) R_j^T for the spin reaction: the members' orientations do not
+        # change between here and the reaction. Computing A_j here instead of caching it per
+        # particle saves re-forming R_j after every orientation update.
+        r0, r1, r2, r3, r4, r5, r6, r7, r8 = qmat((qp[j, 0], qp[j, 1], qp[j, 2], qp[j, 3]))
+        b0 = rest_moment[j, 0]
+        b1 = rest_moment[j, 1]
+        b2 = rest_moment[j, 2]
+        b3 = rest_moment[j, 3]
+        b4 = rest_moment[j, 4]
+        b5 = rest_moment[j, 5]
+        b6 = rest_moment[j, 6]
+        b7 = rest_moment[j, 7]
+        b8 = rest_moment[j, 8]
+        a00 += (r0 * b0 + r1 * b3 + r2 * b6) + m * x0 * q0
+        a01 += (r0 * b1 + r1 * b4 + r2 * b7) + m * x0 * q1
+        a02 += (r0 * b2 + r1 * b5 + r2 * b8) + m * x0 * q2
+        a10 += (r3 * b0 + r4 * b3 + r5 * b6) + m * x1 * q0
+        a11 += (r3 * b1 + r4 * b4 + r5 * b7) + m * x1 * q1
+        a12 += (r3 * b2 + r4 * b5 + r5 * b8) + m * x1 * q2
+        a20 += (r6 * b0 + r7 * b3 + r8 * b6) + m * x2 * q0
+        a21 += (r6 * b1 + r7 * b4 + r8 * b7) + m * x2 * q1
+        a22 += (r6 * b2 + r7 * b5 + r8 * b8) + m * x2 * q2
+        if orient_mode == ORIENT_REACTION:
+            d0 = inertia[j, 0]
+            d1 = inertia[j, 1]
+            d2 = inertia[j, 2]
+            i00 += d0 * r0 * r0 + d1 * r1 * r1 + d2 * r2 * r2
+            i01 += d0 * r0 * r3 + d1 * r1 * r4 + d2 * r2 * r5
+            i02 += d0 * r0 * r6 + d1 * r1 * r7 + d2 * r2 * r8
+            i11 += d0 * r3 * r3 + d1 * r4 * r4 + d2 * r5 * r5
+            i12 += d0 * r3 * r6 + d1 * r4 * r7 + d2 * r5 * r8
+            i22 += d0 * r6 * r6 + d1 * r7 * r7 + d2 * r8 * r8
     cx /= msum
     cy /= msum
     cz /= msum
@@ -304,7 +317,7 @@ def _shape_match_group(
             ly += m * (az * dx - ax * dz)
             lz += m * (ax * dy - ay * dx)
     if orient_mode == ORIENT_REACTION:
-        _spin_reaction(start, end, g_mem, inertia, qp, rest_moment, moment, lx, ly, lz)
+        _spin_reaction(start, end, g_mem, qp, i00, i01, i02, i11, i12, i22, lx, ly, lz)
         return
     # Centre orientation toward quat(R) q_bar_i by the same stiffness, on the short arc (nlerp: no
     # transcendental functions in the innermost loop).
@@ -322,26 +335,13 @@ def _shape_match_group(
     qp[i, 1] = qn[1]
     qp[i, 2] = qn[2]
     qp[i, 3] = qn[3]
-    _update_moment(i, qp, rest_moment, moment)
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy")
-def _spin_reaction(start, end, g_mem, inertia, qp, rest_moment, moment, lx, ly, lz):
-    """Turn every member of a group by dtheta = -I^-1 L, I = sum_j R_j diag(I_j) R_j^T (world), so
-    that the members' spin takes up the orbital angular momentum change L of the projection."""
-    i00 = i01 = i02 = i11 = i12 = i22 = 0.0
-    for e in range(start, end):
-        j = g_mem[e]
-        r = qmat((qp[j, 0], qp[j, 1], qp[j, 2], qp[j, 3]))
-        d0 = inertia[j, 0]
-        d1 = inertia[j, 1]
-        d2 = inertia[j, 2]
-        i00 += d0 * r[0] * r[0] + d1 * r[1] * r[1] + d2 * r[2] * r[2]
-        i01 += d0 * r[0] * r[3] + d1 * r[1] * r[4] + d2 * r[2] * r[5]
-        i02 += d0 * r[0] * r[6] + d1 * r[1] * r[7] + d2 * r[2] * r[8]
-        i11 += d0 * r[3] * r[3] + d1 * r[4] * r[4] + d2 * r[5] * r[5]
-        i12 += d0 * r[3] * r[6] + d1 * r[4] * r[7] + d2 * r[5] * r[8]
-        i22 += d0 * r[6] * r[6] + d1 * r[7] * r[7] + d2 * r[8] * r[8]
+def _spin_reaction(start, end, g_mem, qp, i00, i01, i02, i11, i12, i22, lx, ly, lz):
+    """Turn every member of a group by dtheta = -I^-1 L, I = sum_j R_j diag(I_j) R_j^T (world, the
+    upper triangle i00..i22 summed by the caller), so that the members' spin takes up the orbital
+    angular momentum change L of the projection."""
     # Solve I dtheta = -L by the adjugate (I is symmetric positive definite).
     c00 = i11 * i22 - i12 * i12
     c01 = i02 * i12 - i01 * i22
@@ -365,7 +365,6 @@ def _spin_reaction(start, end, g_mem, inertia, qp, rest_moment, moment, lx, ly, 
         qp[j, 1] = qn[1]
         qp[j, 2] = qn[2]
         qp[j, 3] = qn[3]
-        _update_moment(j, qp, rest_moment, moment)
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy")
@@ -712,7 +711,7 @@ def _step(
     rig_x0, rig_q0, rig_v, rig_w, rig_inv_mass, rig_inv_inertia, rig_gravity, rig_move, shape_kind, shape_params,
     shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, imp_lin, imp_ang, coupling_imp,
     # scratch
-    xp, qp, moment, c_particle, c_shape, c_inner, c_lambda, c_normal, pair_i, pair_j, pair_lambda, pair_normal,
+    xp, qp, c_particle, c_shape, c_inner, c_lambda, c_normal, pair_i, pair_j, pair_lambda, pair_normal,
     # parameters
     dt, iterations, rot_iters, gx, gy, gz, damping, coupling, orient_mode, margin, counts,
 ):  # fmt: skip
@@ -749,7 +748,6 @@ def _step(
         qn = qnormalize(qmul(dq, (q[i, 0], q[i, 1], q[i, 2], q[i, 3])))
         for a in range(4):
             qp[i, a] = qn[a]
-        _update_moment(i, qp, rest_moment, moment)
         # Warm start of group i's rotation, carried forward by its centre's spin: a stale warm start
         # lags a turning group, and every lagging projection brakes the rotation.
         gq = qnormalize(qmul(dq, (group_q[i, 0], group_q[i, 1], group_q[i, 2], group_q[i, 3])))
@@ -775,7 +773,7 @@ def _step(
             k_it = 1.0 - (1.0 - body_stiffness[b]) ** (1.0 / iterations)
             for i in range(body_off[b], body_off[b + 1]):
                 _shape_match_group(i, k_it, rot_iters, g_off, g_mem, g_rest, mass, rest_q, rest_moment,
-                                   inertia, x, xp, qp, group_q, moment, orient_mode)  # fmt: skip
+                                   inertia, x, xp, qp, group_q, orient_mode)  # fmt: skip
         for c in range(nc):
             _project_shape_contact(c, c_particle, c_shape, c_inner, c_lambda, c_normal, xp, qp, radii, inv_mass,
                                    shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
@@ -848,7 +846,6 @@ class TissueSolver:
         n = model.particle_count
         self._xp = np.zeros((n, 3))
         self._qp = np.zeros((n, 4))
-        self._moment = np.zeros((n, 9))
         self._rest_moment = rest_moments(model)
         self._inertia = np.ascontiguousarray(model.particle_inertia_local())
         self._counts = np.zeros(2, dtype=np.int64)
@@ -895,7 +892,7 @@ class TissueSolver:
                 col.rigid_gravity, col.rigid_in_solve, col.shape_kind, col.shape_params, col.shape_rigid,
                 col.shape_local_x, col.shape_local_q, self._rig_x, self._rig_q, self._imp_lin, self._imp_ang,
                 self._coupling_imp,
-                self._xp, self._qp, self._moment, self._c_particle, self._c_shape, self._c_inner, self._c_lambda,
+                self._xp, self._qp, self._c_particle, self._c_shape, self._c_inner, self._c_lambda,
                 self._c_normal, self._pair_i, self._pair_j, self._pair_lambda, self._pair_normal,
                 sim.dt, sim.iterations, sim.rotation_iterations, 0.0, 0.0, -sim.gravity, sim.damping, coupling,
                 ORIENT_MODES[sim.orientation], sim.contact_margin, self._counts,
