@@ -27,7 +27,7 @@ import numba as nb
 import numpy as np
 
 from ..config import SimConfig
-from .collision import shape_distance, support_radius
+from .collision import SHAPE_BOX, SHAPE_CYLINDER, SHAPE_PLANE, SHAPE_SPHERE, shape_distance, support_radius
 from .model import TissueModel
 from .rotation import extract_rotation_t, qconj, qexp, qlog, qmat, qmul, qnormalize, qrotate
 from .state import TissueState
@@ -134,6 +134,61 @@ def _shape_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q):
 def _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q):
     """Signed distance of world point p from shape s and the world outward normal."""
     sx, sq = _shape_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
+    d = (p[0] - sx[0], p[1] - sx[1], p[2] - sx[2])
+    pl = qrotate(qconj(sq), d)
+    dist, nx, ny, nz = shape_distance(shape_kind[s], (shape_params[s, 0], shape_params[s, 1], shape_params[s, 2]), pl)
+    n = qrotate(sq, (nx, ny, nz))
+    return dist, n
+
+
+# Slack [m] added to bounding radii so that rounding can never reject a true candidate.
+_BOUND_SLACK = 1e-9
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _bounding_radius(kind, p0, p1, p2):
+    """Radius of a sphere about the shape origin that holds the whole shape (inf for the plane)."""
+    if kind == SHAPE_PLANE:
+        return np.inf
+    if kind == SHAPE_SPHERE:
+        return p0
+    if kind == SHAPE_BOX:
+        return math.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+    if kind == SHAPE_CYLINDER:
+        return math.sqrt(p0 * p0 + p1 * p1)
+    return p0 + p1  # capsule
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _shape_poses(shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, pose):
+    """pose[s] = world position (0:3), orientation (3:7) and bounding radius (7) of every shape, once
+    per pass over all particles instead of once per particle (same expressions as _shape_query)."""
+    for s in range(shape_kind.shape[0]):
+        sx, sq = _shape_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
+        for a in range(3):
+            pose[s, a] = sx[a]
+        for a in range(4):
+            pose[s, 3 + a] = sq[a]
+        pose[s, 7] = _bounding_radius(shape_kind[s], shape_params[s, 0], shape_params[s, 1], shape_params[s, 2])
+        pose[s, 7] += _BOUND_SLACK
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _far_from_shape(s, p, reach, pose):
+    """True if point p is certainly farther than ``reach`` from shape s: its signed distance is at
+    least |p - origin| - bounding radius (the shape lies inside its bounding sphere)."""
+    dx = p[0] - pose[s, 0]
+    dy = p[1] - pose[s, 1]
+    dz = p[2] - pose[s, 2]
+    lim = pose[s, 7] + reach
+    return dx * dx + dy * dy + dz * dz > lim * lim
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _shape_query_at(s, p, shape_kind, shape_params, pose):
+    """_shape_query with the shape's world pose taken from ``pose`` (see _shape_poses)."""
+    sx = (pose[s, 0], pose[s, 1], pose[s, 2])
+    sq = (pose[s, 3], pose[s, 4], pose[s, 5], pose[s, 6])
     d = (p[0] - sx[0], p[1] - sx[1], p[2] - sx[2])
     pl = qrotate(qconj(sq), d)
     dist, nx, ny, nz = shape_distance(shape_kind[s], (shape_params[s, 0], shape_params[s, 1], shape_params[s, 2]), pl)
@@ -617,16 +672,18 @@ def _snap_attached(
 @nb.njit(cache=True, error_model="numpy")
 def _collect_contacts(
     xp, x0, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid, shape_local_x,
-    shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner,
+    shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner, pose,
 ):  # fmt: skip
     """Candidate (particle, shape) contacts for this step: within the particle's largest radius plus
     how far it moves plus a margin. A particle meets its own core only as an inner contact (outer
     particles; attached ones are tied to the core anyway). Returns the count (or the number
-    needed, if larger than the buffers)."""
+    needed, if larger than the buffers). Shapes are posed once, and a particle far outside a
+    shape's bounding sphere skips the exact query (the candidates are the same)."""
     n = xp.shape[0]
     ns = shape_kind.shape[0]
     cap = c_particle.shape[0]
     count = 0
+    _shape_poses(shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, pose)
     for i in range(n):
         rmax = max(radii[i, 0], max(radii[i, 1], radii[i, 2]))
         mv = math.sqrt((xp[i, 0] - x0[i, 0]) ** 2 + (xp[i, 1] - x0[i, 1]) ** 2 + (xp[i, 2] - x0[i, 2]) ** 2)
@@ -636,8 +693,10 @@ def _collect_contacts(
             inner = s == own
             if inner and attached[i]:
                 continue
-            dist, _ = _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
             reach = mv + margin if inner else rmax + mv + margin
+            if _far_from_shape(s, p, reach, pose):
+                continue
+            dist, _ = _shape_query_at(s, p, shape_kind, shape_params, pose)
             if dist < reach:
                 if count < cap:
                     c_particle[count] = i
@@ -711,7 +770,7 @@ def _step(
     rig_x0, rig_q0, rig_v, rig_w, rig_inv_mass, rig_inv_inertia, rig_gravity, rig_move, shape_kind, shape_params,
     shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, imp_lin, imp_ang, coupling_imp,
     # scratch
-    xp, qp, c_particle, c_shape, c_inner, c_lambda, c_normal, pair_i, pair_j, pair_lambda, pair_normal,
+    xp, qp, c_particle, c_shape, c_inner, c_lambda, c_normal, pair_i, pair_j, pair_lambda, pair_normal, shape_pose,
     # parameters
     dt, iterations, rot_iters, gx, gy, gz, damping, coupling, orient_mode, margin, counts,
 ):  # fmt: skip
@@ -755,7 +814,8 @@ def _step(
             group_q[i, a] = gq[a]
     # --- contact candidates, against predicted rigid poses
     nc = _collect_contacts(xp, x, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid,
-                           shape_local_x, shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner)  # fmt: skip
+                           shape_local_x, shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner,
+                           shape_pose)  # fmt: skip
     npairs = _collect_pairs(xp, x, radii, body_off, margin, pair_i, pair_j)
     counts[0] = nc
     counts[1] = npairs
@@ -819,15 +879,24 @@ def _max_penetration(x, q, radii, p_body, attached, body_core_shape, shape_kind,
     of an outer particle's centre into its own core (out[1]) [m]."""
     out[0] = 0.0
     out[1] = 0.0
+    pose = np.empty((shape_kind.shape[0], 8))
+    _shape_poses(shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, pose)
     for i in range(x.shape[0]):
         p = (x[i, 0], x[i, 1], x[i, 2])
         own = body_core_shape[p_body[i]]
+        rmax = max(radii[i, 0], max(radii[i, 1], radii[i, 2]))
         for s in range(shape_kind.shape[0]):
-            dist, nrm = _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
+            # Outside the bounding sphere by more than rmax (own core: outside it at all), the
+            # overlap (intrusion) is negative and cannot raise the maximum, which starts at 0.
             if s == own:
-                if not attached[i]:
-                    out[1] = max(out[1], -dist)
+                if attached[i] or _far_from_shape(s, p, 0.0, pose):
+                    continue
+                dist, _ = _shape_query_at(s, p, shape_kind, shape_params, pose)
+                out[1] = max(out[1], -dist)
                 continue
+            if _far_from_shape(s, p, rmax, pose):
+                continue
+            dist, nrm = _shape_query_at(s, p, shape_kind, shape_params, pose)
             rn = support_radius((q[i, 0], q[i, 1], q[i, 2], q[i, 3]), (radii[i, 0], radii[i, 1], radii[i, 2]), nrm)
             out[0] = max(out[0], rn - dist)
 
@@ -852,6 +921,7 @@ class TissueSolver:
         self._alloc_contacts(4 * n + 16)
         self._alloc_pairs(4 * n + 16)
         self._rigid_buffers_for = -1
+        self._shape_pose = np.zeros((0, 8))
 
     def _alloc_contacts(self, cap: int) -> None:
         self._c_particle = np.zeros(cap, dtype=np.int32)
@@ -875,12 +945,18 @@ class TissueSolver:
             self._coupling_imp = np.zeros((count, 3))
             self._rigid_buffers_for = count
 
+    def _shape_buffer(self, count: int) -> np.ndarray:
+        if self._shape_pose.shape[0] != count:
+            self._shape_pose = np.zeros((count, 8))
+        return self._shape_pose
+
     def step(self, state: TissueState, col: Colliders) -> StepOutput:
         """Advance ``state`` by one step of ``sim.dt`` in place; returns predicted rigid poses and
         the impulses the tissue put on each rigid body (to be applied by the rigid simulation)."""
         m = self.model
         sim = self.sim
         self._rigid_buffers(col.rigid_count)
+        shape_pose = self._shape_buffer(col.shape_count)
         coupling = COUPLING_CONSISTENT if sim.coupling == "consistent" else COUPLING_THESIS
         while True:
             code = _step(
@@ -893,7 +969,7 @@ class TissueSolver:
                 col.shape_local_x, col.shape_local_q, self._rig_x, self._rig_q, self._imp_lin, self._imp_ang,
                 self._coupling_imp,
                 self._xp, self._qp, self._c_particle, self._c_shape, self._c_inner, self._c_lambda,
-                self._c_normal, self._pair_i, self._pair_j, self._pair_lambda, self._pair_normal,
+                self._c_normal, self._pair_i, self._pair_j, self._pair_lambda, self._pair_normal, shape_pose,
                 sim.dt, sim.iterations, sim.rotation_iterations, 0.0, 0.0, -sim.gravity, sim.damping, coupling,
                 ORIENT_MODES[sim.orientation], sim.contact_margin, self._counts,
             )  # fmt: skip
