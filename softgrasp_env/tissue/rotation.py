@@ -15,7 +15,7 @@ import numpy as np
 
 _EPS = 1e-12
 
-jit = nb.njit(cache=True, inline="always", error_model="numpy")
+jit = nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 
 
 @jit

@@ -111,13 +111,13 @@ class StepOutput:
 # =================================================================================================
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _rigid_point_world(rx, rq, p_local):
     r = qrotate(rq, p_local)
     return (rx[0] + r[0], rx[1] + r[1], rx[2] + r[2])
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _shape_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q):
     """World pose (x, q) of shape s given the current rigid poses."""
     lx = (shape_local_x[s, 0], shape_local_x[s, 1], shape_local_x[s, 2])
@@ -130,7 +130,7 @@ def _shape_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q):
     return _rigid_point_world(bx, bq, lx), qmul(bq, lq)
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q):
     """Signed distance of world point p from shape s and the world outward normal."""
     sx, sq = _shape_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
@@ -145,7 +145,7 @@ def _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, sha
 _BOUND_SLACK = 1e-9
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _bounding_radius(kind, p0, p1, p2):
     """Radius of a sphere about the shape origin that holds the whole shape (inf for the plane)."""
     if kind == SHAPE_PLANE:
@@ -159,7 +159,7 @@ def _bounding_radius(kind, p0, p1, p2):
     return p0 + p1  # capsule
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _shape_poses(shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, pose):
     """pose[s] = world position (0:3), orientation (3:7) and bounding radius (7) of every shape, once
     per pass over all particles instead of once per particle (same expressions as _shape_query)."""
@@ -173,7 +173,7 @@ def _shape_poses(shape_kind, shape_params, shape_rigid, shape_local_x, shape_loc
         pose[s, 7] += _BOUND_SLACK
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _far_from_shape(s, p, reach, pose):
     """True if point p is certainly farther than ``reach`` from shape s: its signed distance is at
     least |p - origin| - bounding radius (the shape lies inside its bounding sphere)."""
@@ -184,7 +184,7 @@ def _far_from_shape(s, p, reach, pose):
     return dx * dx + dy * dy + dz * dz > lim * lim
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _shape_query_at(s, p, shape_kind, shape_params, pose):
     """_shape_query with the shape's world pose taken from ``pose`` (see _shape_poses)."""
     sx = (pose[s, 0], pose[s, 1], pose[s, 2])
@@ -196,7 +196,7 @@ def _shape_query_at(s, p, shape_kind, shape_params, pose):
     return dist, n
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, rx, ry, rz, nx, ny, nz):
     """w = 1/m + (r x n)^T I_w^-1 (r x n) of rigid body r at lever arm (rx, ry, rz) along n
     (Mueller et al. 2020, eq. 2-3)."""
@@ -213,7 +213,7 @@ def _generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, rx, ry, rz, n
     )
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _rigid_apply(r, rx, ry, rz, px, py, pz, move, dt, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, imp_lin, imp_ang):
     """Apply positional impulse P (kg m) at lever arm r to rigid body r: record P/dt and r x P/dt
     as the impulse on it, and, if it moves inside the solve, update its predicted pose
@@ -261,7 +261,7 @@ def rest_moments(model: TissueModel) -> np.ndarray:
     return out
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _shape_match_group(
     i, k_iter, rot_iters, g_off, g_mem, g_rest, mass, rest_q, rest_moment, inertia, xs, xp, qp, group_q, orient_mode,
 ):  # fmt: skip
@@ -392,7 +392,7 @@ def _shape_match_group(
     qp[i, 3] = qn[3]
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _spin_reaction(start, end, g_mem, qp, i00, i01, i02, i11, i12, i22, lx, ly, lz):
     """Turn every member of a group by dtheta = -I^-1 L, I = sum_j R_j diag(I_j) R_j^T (world, the
     upper triangle i00..i22 summed by the caller), so that the members' spin takes up the orbital
@@ -422,7 +422,7 @@ def _spin_reaction(start, end, g_mem, qp, i00, i01, i02, i11, i12, i22, lx, ly, 
         qp[j, 3] = qn[3]
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _project_shape_contact(
     c, c_particle, c_shape, c_inner, c_lambda, c_normal, xp, qp, radii, inv_mass, shape_kind, shape_params,
     shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin,
@@ -467,7 +467,7 @@ def _project_shape_contact(
                      rig_inv_mass, rig_inv_inertia, imp_lin, imp_ang)  # fmt: skip
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _project_pair(k, pair_i, pair_j, pair_lambda, pair_normal, xp, qp, radii, inv_mass):
     """Two ellipsoids of different bodies, each approximated by its support radius along the line
     of centres (Mueller & Chentanez 2011 sec. 5), separated with inverse-mass weights."""
@@ -497,7 +497,7 @@ def _project_pair(k, pair_i, pair_j, pair_lambda, pair_normal, xp, qp, radii, in
         xp[j, a] -= wj * dl * n[a]
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _coulomb(lam_t, lam_n, mu_s, mu_k):
     """Position-level Coulomb friction (Macklin et al. 2014 eq. 23-24; Mueller et al. 2020 sec.
     3.5): stick - cancel the whole tangential slip - while it needs at most mu_s * lambda_n,
@@ -507,7 +507,7 @@ def _coulomb(lam_t, lam_n, mu_s, mu_k):
     return min(lam_t, mu_k * lam_n)
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _friction_shape_contact(
     c, c_particle, c_shape, c_inner, c_lambda, c_normal, x0, xp, inv_mass, p_body, body_friction, shape_rigid,
     rig_x0, rig_q0, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt,
@@ -560,7 +560,7 @@ def _friction_shape_contact(
                      rig_inv_inertia, imp_lin, imp_ang)  # fmt: skip
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _friction_pair(k, pair_i, pair_j, pair_lambda, pair_normal, x0, xp, inv_mass, p_body, body_friction):
     lam_n = pair_lambda[k]
     if lam_n <= 0.0:
@@ -590,7 +590,7 @@ def _friction_pair(k, pair_i, pair_j, pair_lambda, pair_normal, x0, xp, inv_mass
         xp[j, a] += wj * dl * t[a] / tl
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _core_of_body(b, body_core_shape, shape_rigid):
     s = body_core_shape[b]
     if s < 0:
@@ -598,7 +598,7 @@ def _core_of_body(b, body_core_shape, shape_rigid):
     return shape_rigid[s]
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _project_anchor(i, r, rest_x, xp, inv_mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt):
     """Consistent coupling: the attachment of particle i to its spot on core r as a zero-compliance
     XPBD constraint whose denominator holds the core's generalised inverse mass (Mueller et al.
@@ -625,7 +625,7 @@ def _project_anchor(i, r, rest_x, xp, inv_mass, rig_x, rig_q, rig_inv_mass, rig_
                  rig_inv_mass, rig_inv_inertia, imp_lin, imp_ang)  # fmt: skip
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _snap_attached(
     model_rest_x, model_rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x, rig_q,
     imp_lin, imp_ang, coupling_imp, dt,
@@ -669,7 +669,7 @@ def _snap_attached(
         qp[i, 3] = qn[3]
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _collect_contacts(
     xp, x0, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid, shape_local_x,
     shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner, pose,
@@ -706,7 +706,7 @@ def _collect_contacts(
     return count
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _collect_pairs(xp, x0, radii, body_off, margin, pair_i, pair_j):
     """Candidate particle pairs between different tissue bodies (the two fingers can touch): the
     overlap of the bodies' bounding boxes is searched exhaustively, which is cheap because it is
@@ -759,7 +759,7 @@ def _collect_pairs(xp, x0, radii, body_off, margin, pair_i, pair_j):
     return count
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _step(
     # model
     rest_x, rest_q, rest_moment, inertia, radii, mass, inv_mass, p_body, attached, g_off, g_mem, g_rest, body_off,
@@ -872,7 +872,7 @@ def _step(
     return 0
 
 
-@nb.njit(cache=True, error_model="numpy")
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _max_penetration(x, q, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid,
                      shape_local_x, shape_local_q, rig_x, rig_q, out):  # fmt: skip
     """Deepest overlap of any particle ellipsoid with a rigid shape (out[0]) and deepest intrusion
