@@ -426,7 +426,7 @@ def _spin_reaction(start, end, g_mem, qp, i00, i01, i02, i11, i12, i22, lx, ly, 
 def _project_shape_contact(
     c, c_particle, c_shape, c_inner, c_lambda, c_normal, xp, qp, radii, inv_mass, shape_kind, shape_params,
     shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin,
-    imp_ang, dt,
+    imp_ang, dt, shape_pose,
 ):  # fmt: skip
     """Non-penetration of an ellipsoid particle and a rigid shape (Mueller & Chentanez 2011 sec. 5:
     the ellipsoid is treated as a sphere of its support radius along the contact normal), split by
@@ -435,7 +435,13 @@ def _project_shape_contact(
     i = c_particle[c]
     s = c_shape[c]
     p = (xp[i, 0], xp[i, 1], xp[i, 2])
-    dist, n = _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
+    r = shape_rigid[s]
+    if r >= 0 and rig_move[r]:
+        dist, n = _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
+    else:
+        # Static shapes and bodies that do not move inside the solve keep the pose the contacts were
+        # collected at (_shape_poses): the same numbers without re-posing the shape per contact.
+        dist, n = _shape_query_at(s, p, shape_kind, shape_params, shape_pose)
     if c_inner[c]:
         rn = 0.0
     else:
@@ -447,7 +453,6 @@ def _project_shape_contact(
     c_normal[c, 1] = n[1]
     c_normal[c, 2] = n[2]
     wp = inv_mass[i]
-    r = shape_rigid[s]
     wb = 0.0
     rx = ry = rz = 0.0
     if r >= 0:
@@ -837,7 +842,7 @@ def _step(
         for c in range(nc):
             _project_shape_contact(c, c_particle, c_shape, c_inner, c_lambda, c_normal, xp, qp, radii, inv_mass,
                                    shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
-                                   rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
+                                   rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt, shape_pose)  # fmt: skip
         for k in range(npairs):
             _project_pair(k, pair_i, pair_j, pair_lambda, pair_normal, xp, qp, radii, inv_mass)
         if coupling == COUPLING_CONSISTENT:
