@@ -15,7 +15,7 @@ import numpy as np
 
 _EPS = 1e-12
 
-jit = nb.njit(cache=True, inline="always")
+jit = nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 
 
 @jit
@@ -127,6 +127,7 @@ def extract_rotation_t(a, q, max_iterations, tolerance):
     """
     a00, a01, a02, a10, a11, a12, a20, a21, a22 = a
     qq = qnormalize(q)
+    tol2 = tolerance * tolerance
     for _ in range(max_iterations):
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = qmat(qq)
         # sum over columns c of r_c x a_c and r_c . a_c
@@ -136,19 +137,24 @@ def extract_rotation_t(a, q, max_iterations, tolerance):
         dot = (r00 * a00 + r10 * a10 + r20 * a20) + (r01 * a01 + r11 * a11 + r21 * a21) + (
             r02 * a02 + r12 * a12 + r22 * a22
         )
-        inv = 1.0 / (abs(dot) + 1e-9)
-        omega = (ox * inv, oy * inv, oz * inv)
-        w2 = omega[0] * omega[0] + omega[1] * omega[1] + omega[2] * omega[2]
-        if w2 < tolerance * tolerance:
+        # omega = o / den. The tests on |omega| are made on |o| against den, and the small-angle
+        # update below is scale-free, so the common case needs no division: this loop is one
+        # serial chain per group solve and its latency is the cost.
+        den = abs(dot) + 1e-9
+        o2 = ox * ox + oy * oy + oz * oz
+        den2 = den * den
+        if o2 < tol2 * den2:  # |omega| < tolerance
             break
-        if w2 < 0.25:
+        if o2 < 0.25 * den2:  # |omega| < 1/2
             # normalise([omega / 2, 1]) turns by 2 atan(|omega| / 2) = |omega| (1 - |omega|^2 / 12 ...):
             # the fixed point (omega = 0) is the same and it needs no sin/cos, which dominate the
-            # cost of this loop in the solver.
-            dq = qnormalize((0.5 * omega[0], 0.5 * omega[1], 0.5 * omega[2], 1.0))
+            # cost of this loop in the solver. [omega / 2, 1] = [o / 2, den] / den, and a positive
+            # factor does not survive the normalisation of the product, so neither it nor the
+            # normalisation of the increment itself is applied (same rotation up to round-off).
+            qq = qnormalize(qmul((0.5 * ox, 0.5 * oy, 0.5 * oz, den), qq))
         else:
-            dq = qexp(omega)
-        qq = qnormalize(qmul(dq, qq))
+            inv = 1.0 / den
+            qq = qnormalize(qmul(qexp((ox * inv, oy * inv, oz * inv)), qq))
     return qq
 
 

@@ -27,7 +27,7 @@ import numba as nb
 import numpy as np
 
 from ..config import SimConfig
-from .collision import shape_distance, support_radius
+from .collision import SHAPE_BOX, SHAPE_CYLINDER, SHAPE_PLANE, SHAPE_SPHERE, shape_distance, support_radius
 from .model import TissueModel
 from .rotation import extract_rotation_t, qconj, qexp, qlog, qmat, qmul, qnormalize, qrotate
 from .state import TissueState
@@ -111,13 +111,13 @@ class StepOutput:
 # =================================================================================================
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _rigid_point_world(rx, rq, p_local):
     r = qrotate(rq, p_local)
     return (rx[0] + r[0], rx[1] + r[1], rx[2] + r[2])
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _shape_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q):
     """World pose (x, q) of shape s given the current rigid poses."""
     lx = (shape_local_x[s, 0], shape_local_x[s, 1], shape_local_x[s, 2])
@@ -130,7 +130,7 @@ def _shape_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q):
     return _rigid_point_world(bx, bq, lx), qmul(bq, lq)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q):
     """Signed distance of world point p from shape s and the world outward normal."""
     sx, sq = _shape_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
@@ -141,7 +141,62 @@ def _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, sha
     return dist, n
 
 
-@nb.njit(cache=True, inline="always")
+# Slack [m] added to bounding radii so that rounding can never reject a true candidate.
+_BOUND_SLACK = 1e-9
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _bounding_radius(kind, p0, p1, p2):
+    """Radius of a sphere about the shape origin that holds the whole shape (inf for the plane)."""
+    if kind == SHAPE_PLANE:
+        return np.inf
+    if kind == SHAPE_SPHERE:
+        return p0
+    if kind == SHAPE_BOX:
+        return math.sqrt(p0 * p0 + p1 * p1 + p2 * p2)
+    if kind == SHAPE_CYLINDER:
+        return math.sqrt(p0 * p0 + p1 * p1)
+    return p0 + p1  # capsule
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _shape_poses(shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, pose):
+    """pose[s] = world position (0:3), orientation (3:7) and bounding radius (7) of every shape, once
+    per pass over all particles instead of once per particle (same expressions as _shape_query)."""
+    for s in range(shape_kind.shape[0]):
+        sx, sq = _shape_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
+        for a in range(3):
+            pose[s, a] = sx[a]
+        for a in range(4):
+            pose[s, 3 + a] = sq[a]
+        pose[s, 7] = _bounding_radius(shape_kind[s], shape_params[s, 0], shape_params[s, 1], shape_params[s, 2])
+        pose[s, 7] += _BOUND_SLACK
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _far_from_shape(s, p, reach, pose):
+    """True if point p is certainly farther than ``reach`` from shape s: its signed distance is at
+    least |p - origin| - bounding radius (the shape lies inside its bounding sphere)."""
+    dx = p[0] - pose[s, 0]
+    dy = p[1] - pose[s, 1]
+    dz = p[2] - pose[s, 2]
+    lim = pose[s, 7] + reach
+    return dx * dx + dy * dy + dz * dz > lim * lim
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _shape_query_at(s, p, shape_kind, shape_params, pose):
+    """_shape_query with the shape's world pose taken from ``pose`` (see _shape_poses)."""
+    sx = (pose[s, 0], pose[s, 1], pose[s, 2])
+    sq = (pose[s, 3], pose[s, 4], pose[s, 5], pose[s, 6])
+    d = (p[0] - sx[0], p[1] - sx[1], p[2] - sx[2])
+    pl = qrotate(qconj(sq), d)
+    dist, nx, ny, nz = shape_distance(shape_kind[s], (shape_params[s, 0], shape_params[s, 1], shape_params[s, 2]), pl)
+    n = qrotate(sq, (nx, ny, nz))
+    return dist, n
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, rx, ry, rz, nx, ny, nz):
     """w = 1/m + (r x n)^T I_w^-1 (r x n) of rigid body r at lever arm (rx, ry, rz) along n
     (Mueller et al. 2020, eq. 2-3)."""
@@ -158,7 +213,7 @@ def _generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, rx, ry, rz, n
     )
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _rigid_apply(r, rx, ry, rz, px, py, pz, move, dt, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, imp_lin, imp_ang):
     """Apply positional impulse P (kg m) at lever arm r to rigid body r: record P/dt and r x P/dt
     as the impulse on it, and, if it moves inside the solve, update its predicted pose
@@ -189,23 +244,12 @@ def _rigid_apply(r, rx, ry, rz, px, py, pz, move, dt, rig_x, rig_q, rig_inv_mass
     rig_q[r, 3] = qn[3]
 
 
-@nb.njit(cache=True, inline="always")
-def _update_moment(i, q, rest_moment, moment):
-    """Cache A_i = (m_i / 5) R_i diag(a^2, b^2, c^2) R_bar_i^T (Mueller & Chentanez 2011, eq. 9) as
-    R_i B_i with the constant B_i = (m_i / 5) diag(a^2, b^2, c^2) R_bar_i^T (see rest_moments).
-
-    R_i is the current orientation and R_bar_i the rest orientation: the symmetric R D R^T would
-    carry no rotation and pull groups toward 'no rotation'."""
-    r = qmat((q[i, 0], q[i, 1], q[i, 2], q[i, 3]))
-    for a in range(3):
-        for b in range(3):
-            moment[i, 3 * a + b] = (
-                r[3 * a] * rest_moment[i, b] + r[3 * a + 1] * rest_moment[i, 3 + b] + r[3 * a + 2] * rest_moment[i, 6 + b]
-            )
-
-
 def rest_moments(model: TissueModel) -> np.ndarray:
-    """(N, 9) row-major B_i = (m_i / 5) diag(a^2, b^2, c^2) R_bar_i^T of every particle."""
+    """(N, 9) row-major B_i = (m_i / 5) diag(a^2, b^2, c^2) R_bar_i^T of every particle.
+
+    A particle's moment A_i = (m_i / 5) R_i diag(a^2, b^2, c^2) R_bar_i^T (Mueller & Chentanez 2011,
+    eq. 9) is then R_i B_i, R_i the current and R_bar_i the rest orientation (the symmetric
+    R D R^T would carry no rotation and pull groups toward 'no rotation')."""
     from .rotation import quat_to_matrix
 
     n = model.particle_count
@@ -217,10 +261,9 @@ def rest_moments(model: TissueModel) -> np.ndarray:
     return out
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _shape_match_group(
-    i, k_iter, rot_iters, g_off, g_mem, g_rest, mass, rest_q, rest_moment, inertia, xs, xp, qp, group_q, moment,
-    orient_mode,
+    i, k_iter, rot_iters, g_off, g_mem, g_rest, mass, rest_q, rest_moment, inertia, xs, xp, qp, group_q, orient_mode,
 ):  # fmt: skip
     """Project implicit group i (centred on particle i) toward its goal shape.
 
@@ -245,6 +288,7 @@ def _shape_match_group(
     cy = 0.0
     cz = 0.0
     a00 = a01 = a02 = a10 = a11 = a12 = a20 = a21 = a22 = 0.0
+    i00 = i01 = i02 = i11 = i12 = i22 = 0.0
     for e in range(start, end):
         j = g_mem[e]
         m = mass[j]
@@ -258,15 +302,39 @@ def _shape_match_group(
         q0 = g_rest[e, 0]
         q1 = g_rest[e, 1]
         q2 = g_rest[e, 2]
-        a00 += moment[j, 0] + m * x0 * q0
-        a01 += moment[j, 1] + m * x0 * q1
-        a02 += moment[j, 2] + m * x0 * q2
-        a10 += moment[j, 3] + m * x1 * q0
-        a11 += moment[j, 4] + m * x1 * q1
-        a12 += moment[j, 5] + m * x1 * q2
-        a20 += moment[j, 6] + m * x2 * q0
-        a21 += moment[j, 7] + m * x2 * q1
-        a22 += moment[j, 8] + m * x2 * q2
+        # R_j once per member gives both its moment A_j = R_j B_j (eq. 9, see rest_moments) and its
+        # world inertia R_j diag(I_j) R_j^T for the spin reaction: the members' orientations do not
+        # change between here and the reaction. Computing A_j here instead of caching it per
+        # particle saves re-forming R_j after every orientation update.
+        r0, r1, r2, r3, r4, r5, r6, r7, r8 = qmat((qp[j, 0], qp[j, 1], qp[j, 2], qp[j, 3]))
+        b0 = rest_moment[j, 0]
+        b1 = rest_moment[j, 1]
+        b2 = rest_moment[j, 2]
+        b3 = rest_moment[j, 3]
+        b4 = rest_moment[j, 4]
+        b5 = rest_moment[j, 5]
+        b6 = rest_moment[j, 6]
+        b7 = rest_moment[j, 7]
+        b8 = rest_moment[j, 8]
+        a00 += (r0 * b0 + r1 * b3 + r2 * b6) + m * x0 * q0
+        a01 += (r0 * b1 + r1 * b4 + r2 * b7) + m * x0 * q1
+        a02 += (r0 * b2 + r1 * b5 + r2 * b8) + m * x0 * q2
+        a10 += (r3 * b0 + r4 * b3 + r5 * b6) + m * x1 * q0
+        a11 += (r3 * b1 + r4 * b4 + r5 * b7) + m * x1 * q1
+        a12 += (r3 * b2 + r4 * b5 + r5 * b8) + m * x1 * q2
+        a20 += (r6 * b0 + r7 * b3 + r8 * b6) + m * x2 * q0
+        a21 += (r6 * b1 + r7 * b4 + r8 * b7) + m * x2 * q1
+        a22 += (r6 * b2 + r7 * b5 + r8 * b8) + m * x2 * q2
+        if orient_mode == ORIENT_REACTION:
+            d0 = inertia[j, 0]
+            d1 = inertia[j, 1]
+            d2 = inertia[j, 2]
+            i00 += d0 * r0 * r0 + d1 * r1 * r1 + d2 * r2 * r2
+            i01 += d0 * r0 * r3 + d1 * r1 * r4 + d2 * r2 * r5
+            i02 += d0 * r0 * r6 + d1 * r1 * r7 + d2 * r2 * r8
+            i11 += d0 * r3 * r3 + d1 * r4 * r4 + d2 * r5 * r5
+            i12 += d0 * r3 * r6 + d1 * r4 * r7 + d2 * r5 * r8
+            i22 += d0 * r6 * r6 + d1 * r7 * r7 + d2 * r8 * r8
     cx /= msum
     cy /= msum
     cz /= msum
@@ -304,7 +372,7 @@ def _shape_match_group(
             ly += m * (az * dx - ax * dz)
             lz += m * (ax * dy - ay * dx)
     if orient_mode == ORIENT_REACTION:
-        _spin_reaction(start, end, g_mem, inertia, qp, rest_moment, moment, lx, ly, lz)
+        _spin_reaction(start, end, g_mem, qp, i00, i01, i02, i11, i12, i22, lx, ly, lz)
         return
     # Centre orientation toward quat(R) q_bar_i by the same stiffness, on the short arc (nlerp: no
     # transcendental functions in the innermost loop).
@@ -322,10 +390,9 @@ def _shape_match_group(
     qp[i, 1] = qn[1]
     qp[i, 2] = qn[2]
     qp[i, 3] = qn[3]
-    _update_moment(i, qp, rest_moment, moment)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _solve_sym3(i00, i01, i02, i11, i12, i22, bx, by, bz):
     """x with I x = b for a symmetric 3x3 I, by the adjugate; (0, 0, 0) if I is not positive
     definite (e.g. a degenerate group or body)."""
@@ -343,23 +410,11 @@ def _solve_sym3(i00, i01, i02, i11, i12, i22, bx, by, bz):
             inv * (c02 * bx + c12 * by + c22 * bz))  # fmt: skip
 
 
-@nb.njit(cache=True, inline="always")
-def _spin_reaction(start, end, g_mem, inertia, qp, rest_moment, moment, lx, ly, lz):
-    """Turn every member of a group by dtheta = -I^-1 L, I = sum_j R_j diag(I_j) R_j^T (world), so
-    that the members' spin takes up the orbital angular momentum change L of the projection."""
-    i00 = i01 = i02 = i11 = i12 = i22 = 0.0
-    for e in range(start, end):
-        j = g_mem[e]
-        r = qmat((qp[j, 0], qp[j, 1], qp[j, 2], qp[j, 3]))
-        d0 = inertia[j, 0]
-        d1 = inertia[j, 1]
-        d2 = inertia[j, 2]
-        i00 += d0 * r[0] * r[0] + d1 * r[1] * r[1] + d2 * r[2] * r[2]
-        i01 += d0 * r[0] * r[3] + d1 * r[1] * r[4] + d2 * r[2] * r[5]
-        i02 += d0 * r[0] * r[6] + d1 * r[1] * r[7] + d2 * r[2] * r[8]
-        i11 += d0 * r[3] * r[3] + d1 * r[4] * r[4] + d2 * r[5] * r[5]
-        i12 += d0 * r[3] * r[6] + d1 * r[4] * r[7] + d2 * r[5] * r[8]
-        i22 += d0 * r[6] * r[6] + d1 * r[7] * r[7] + d2 * r[8] * r[8]
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _spin_reaction(start, end, g_mem, qp, i00, i01, i02, i11, i12, i22, lx, ly, lz):
+    """Turn every member of a group by dtheta = -I^-1 L, I = sum_j R_j diag(I_j) R_j^T (world, the
+    upper triangle i00..i22 summed by the caller), so that the members' spin takes up the orbital
+    angular momentum change L of the projection."""
     tx, ty, tz = _solve_sym3(i00, i01, i02, i11, i12, i22, -lx, -ly, -lz)
     for e in range(start, end):
         j = g_mem[e]
@@ -370,14 +425,13 @@ def _spin_reaction(start, end, g_mem, inertia, qp, rest_moment, moment, lx, ly, 
         qp[j, 1] = qn[1]
         qp[j, 2] = qn[2]
         qp[j, 3] = qn[3]
-        _update_moment(j, qp, rest_moment, moment)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _project_shape_contact(
     c, c_particle, c_shape, c_inner, c_lambda, c_normal, xp, qp, radii, inv_mass, shape_kind, shape_params,
     shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin,
-    imp_ang, dt,
+    imp_ang, dt, shape_pose,
 ):  # fmt: skip
     """Non-penetration of an ellipsoid particle and a rigid shape (Mueller & Chentanez 2011 sec. 5:
     the ellipsoid is treated as a sphere of its support radius along the contact normal), split by
@@ -386,7 +440,13 @@ def _project_shape_contact(
     i = c_particle[c]
     s = c_shape[c]
     p = (xp[i, 0], xp[i, 1], xp[i, 2])
-    dist, n = _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
+    r = shape_rigid[s]
+    if r >= 0 and rig_move[r]:
+        dist, n = _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
+    else:
+        # Static shapes and bodies that do not move inside the solve keep the pose the contacts were
+        # collected at (_shape_poses): the same numbers without re-posing the shape per contact.
+        dist, n = _shape_query_at(s, p, shape_kind, shape_params, shape_pose)
     if c_inner[c]:
         rn = 0.0
     else:
@@ -398,7 +458,6 @@ def _project_shape_contact(
     c_normal[c, 1] = n[1]
     c_normal[c, 2] = n[2]
     wp = inv_mass[i]
-    r = shape_rigid[s]
     wb = 0.0
     rx = ry = rz = 0.0
     if r >= 0:
@@ -418,7 +477,7 @@ def _project_shape_contact(
                      rig_inv_mass, rig_inv_inertia, imp_lin, imp_ang)  # fmt: skip
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _project_pair(k, pair_i, pair_j, pair_lambda, pair_normal, xp, qp, radii, inv_mass):
     """Two ellipsoids of different bodies, each approximated by its support radius along the line
     of centres (Mueller & Chentanez 2011 sec. 5), separated with inverse-mass weights."""
@@ -448,7 +507,7 @@ def _project_pair(k, pair_i, pair_j, pair_lambda, pair_normal, xp, qp, radii, in
         xp[j, a] -= wj * dl * n[a]
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _coulomb(lam_t, lam_t_done, lam_n, mu_s, mu_k):
     """Position-level Coulomb friction (Macklin et al. 2014 eq. 23-24; Mueller et al. 2020 sec.
     3.5). ``lam_t`` is the tangential correction that would cancel the slip since the step began,
@@ -460,7 +519,7 @@ def _coulomb(lam_t, lam_t_done, lam_n, mu_s, mu_k):
     return min(lam_t, max(0.0, mu_k * lam_n - lam_t_done))
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _friction_shape_contact(
     c, c_particle, c_shape, c_inner, c_lambda, c_lambda_t, c_normal, x0, xp, inv_mass, p_body, body_friction, shape_rigid,
     rig_x0, rig_q0, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt,
@@ -514,7 +573,7 @@ def _friction_shape_contact(
                      rig_inv_inertia, imp_lin, imp_ang)  # fmt: skip
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _friction_pair(k, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, x0, xp, inv_mass, p_body, body_friction):
     lam_n = pair_lambda[k]
     if lam_n <= 0.0:
@@ -545,7 +604,7 @@ def _friction_pair(k, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, x
         xp[j, a] += wj * dl * t[a] / tl
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _core_of_body(b, body_core_shape, shape_rigid):
     s = body_core_shape[b]
     if s < 0:
@@ -553,7 +612,7 @@ def _core_of_body(b, body_core_shape, shape_rigid):
     return shape_rigid[s]
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _project_anchor(i, r, rest_x, xp, inv_mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt):
     """Consistent coupling: the attachment of particle i to its spot on core r as a zero-compliance
     XPBD constraint whose denominator holds the core's generalised inverse mass (Mueller et al.
@@ -580,7 +639,7 @@ def _project_anchor(i, r, rest_x, xp, inv_mass, rig_x, rig_q, rig_inv_mass, rig_
                  rig_inv_mass, rig_inv_inertia, imp_lin, imp_ang)  # fmt: skip
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _snap_attached(
     model_rest_x, model_rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x, rig_q,
     imp_lin, imp_ang, coupling_imp, dt,
@@ -624,19 +683,21 @@ def _snap_attached(
         qp[i, 3] = qn[3]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _collect_contacts(
     xp, x0, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid, shape_local_x,
-    shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner,
+    shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner, pose,
 ):  # fmt: skip
     """Candidate (particle, shape) contacts for this step: within the particle's largest radius plus
     how far it moves plus a margin. A particle meets its own core only as an inner contact (outer
     particles; attached ones are tied to the core anyway). Returns the count (or the number
-    needed, if larger than the buffers)."""
+    needed, if larger than the buffers). Shapes are posed once, and a particle far outside a
+    shape's bounding sphere skips the exact query (the candidates are the same)."""
     n = xp.shape[0]
     ns = shape_kind.shape[0]
     cap = c_particle.shape[0]
     count = 0
+    _shape_poses(shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, pose)
     for i in range(n):
         rmax = max(radii[i, 0], max(radii[i, 1], radii[i, 2]))
         mv = math.sqrt((xp[i, 0] - x0[i, 0]) ** 2 + (xp[i, 1] - x0[i, 1]) ** 2 + (xp[i, 2] - x0[i, 2]) ** 2)
@@ -646,8 +707,10 @@ def _collect_contacts(
             inner = s == own
             if inner and attached[i]:
                 continue
-            dist, _ = _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
             reach = mv + margin if inner else rmax + mv + margin
+            if _far_from_shape(s, p, reach, pose):
+                continue
+            dist, _ = _shape_query_at(s, p, shape_kind, shape_params, pose)
             if dist < reach:
                 if count < cap:
                     c_particle[count] = i
@@ -657,7 +720,7 @@ def _collect_contacts(
     return count
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _collect_pairs(xp, x0, radii, body_off, margin, pair_i, pair_j):
     """Candidate particle pairs between different tissue bodies (the two fingers can touch): the
     overlap of the bodies' bounding boxes is searched exhaustively, which is cheap because it is
@@ -710,7 +773,7 @@ def _collect_pairs(xp, x0, radii, body_off, margin, pair_i, pair_j):
     return count
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _damped_velocities(x, v, omega, mass, body_off, c, vd, wd):
     """Damp each particle's deviation from its body's rigid motion by the fraction c (Mueller et
     al. 2007 sec. 3.5): v_i += c (v_cm + W x r_i - v_i), w_i += c (W - w_i), with v_cm, W the body's
@@ -772,7 +835,7 @@ def _damped_velocities(x, v, omega, mass, body_off, c, vd, wd):
             wd[i, 2] = omega[i, 2] + c * (wz - omega[i, 2])
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _step(
     # model
     rest_x, rest_q, rest_moment, inertia, radii, mass, inv_mass, p_body, attached, g_off, g_mem, g_rest, body_off,
@@ -783,8 +846,8 @@ def _step(
     rig_x0, rig_q0, rig_v, rig_w, rig_inv_mass, rig_inv_inertia, rig_gravity, rig_move, shape_kind, shape_params,
     shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, imp_lin, imp_ang, coupling_imp,
     # scratch
-    xp, qp, vd, wd, moment, c_particle, c_shape, c_inner, c_lambda, c_lambda_t, c_normal, pair_i, pair_j, pair_lambda,
-    pair_lambda_t, pair_normal,
+    xp, qp, vd, wd, c_particle, c_shape, c_inner, c_lambda, c_lambda_t, c_normal, pair_i, pair_j, pair_lambda,
+    pair_lambda_t, pair_normal, shape_pose,
     # parameters
     dt, iterations, rot_iters, gx, gy, gz, damping, coupling, orient_mode, margin, counts,
 ):  # fmt: skip
@@ -823,7 +886,6 @@ def _step(
         qn = qnormalize(qmul(dq, (q[i, 0], q[i, 1], q[i, 2], q[i, 3])))
         for a in range(4):
             qp[i, a] = qn[a]
-        _update_moment(i, qp, rest_moment, moment)
         # Warm start of group i's rotation, carried forward by its centre's spin: a stale warm start
         # lags a turning group, and every lagging projection brakes the rotation.
         gq = qnormalize(qmul(dq, (group_q[i, 0], group_q[i, 1], group_q[i, 2], group_q[i, 3])))
@@ -831,7 +893,8 @@ def _step(
             group_q[i, a] = gq[a]
     # --- contact candidates, against predicted rigid poses
     nc = _collect_contacts(xp, x, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid,
-                           shape_local_x, shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner)  # fmt: skip
+                           shape_local_x, shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner,
+                           shape_pose)  # fmt: skip
     npairs = _collect_pairs(xp, x, radii, body_off, margin, pair_i, pair_j)
     counts[0] = nc
     counts[1] = npairs
@@ -851,11 +914,11 @@ def _step(
             k_it = 1.0 - (1.0 - body_stiffness[b]) ** (1.0 / iterations)
             for i in range(body_off[b], body_off[b + 1]):
                 _shape_match_group(i, k_it, rot_iters, g_off, g_mem, g_rest, mass, rest_q, rest_moment,
-                                   inertia, x, xp, qp, group_q, moment, orient_mode)  # fmt: skip
+                                   inertia, x, xp, qp, group_q, orient_mode)  # fmt: skip
         for c in range(nc):
             _project_shape_contact(c, c_particle, c_shape, c_inner, c_lambda, c_normal, xp, qp, radii, inv_mass,
                                    shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
-                                   rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
+                                   rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt, shape_pose)  # fmt: skip
         for k in range(npairs):
             _project_pair(k, pair_i, pair_j, pair_lambda, pair_normal, xp, qp, radii, inv_mass)
         # Friction inside the loop, after the normal corrections: static friction is then a
@@ -894,22 +957,31 @@ def _step(
     return 0
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _max_penetration(x, q, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid,
                      shape_local_x, shape_local_q, rig_x, rig_q, out):  # fmt: skip
     """Deepest overlap of any particle ellipsoid with a rigid shape (out[0]) and deepest intrusion
     of an outer particle's centre into its own core (out[1]) [m]."""
     out[0] = 0.0
     out[1] = 0.0
+    pose = np.empty((shape_kind.shape[0], 8))
+    _shape_poses(shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, pose)
     for i in range(x.shape[0]):
         p = (x[i, 0], x[i, 1], x[i, 2])
         own = body_core_shape[p_body[i]]
+        rmax = max(radii[i, 0], max(radii[i, 1], radii[i, 2]))
         for s in range(shape_kind.shape[0]):
-            dist, nrm = _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
+            # Outside the bounding sphere by more than rmax (own core: outside it at all), the
+            # overlap (intrusion) is negative and cannot raise the maximum, which starts at 0.
             if s == own:
-                if not attached[i]:
-                    out[1] = max(out[1], -dist)
+                if attached[i] or _far_from_shape(s, p, 0.0, pose):
+                    continue
+                dist, _ = _shape_query_at(s, p, shape_kind, shape_params, pose)
+                out[1] = max(out[1], -dist)
                 continue
+            if _far_from_shape(s, p, rmax, pose):
+                continue
+            dist, nrm = _shape_query_at(s, p, shape_kind, shape_params, pose)
             rn = support_radius((q[i, 0], q[i, 1], q[i, 2], q[i, 3]), (radii[i, 0], radii[i, 1], radii[i, 2]), nrm)
             out[0] = max(out[0], rn - dist)
 
@@ -930,13 +1002,13 @@ class TissueSolver:
         self._qp = np.zeros((n, 4))
         self._vd = np.zeros((n, 3))
         self._wd = np.zeros((n, 3))
-        self._moment = np.zeros((n, 9))
         self._rest_moment = rest_moments(model)
         self._inertia = np.ascontiguousarray(model.particle_inertia_local())
         self._counts = np.zeros(2, dtype=np.int64)
         self._alloc_contacts(4 * n + 16)
         self._alloc_pairs(4 * n + 16)
         self._rigid_buffers_for = -1
+        self._shape_pose = np.zeros((0, 8))
 
     def _alloc_contacts(self, cap: int) -> None:
         self._c_particle = np.zeros(cap, dtype=np.int32)
@@ -962,12 +1034,18 @@ class TissueSolver:
             self._coupling_imp = np.zeros((count, 3))
             self._rigid_buffers_for = count
 
+    def _shape_buffer(self, count: int) -> np.ndarray:
+        if self._shape_pose.shape[0] != count:
+            self._shape_pose = np.zeros((count, 8))
+        return self._shape_pose
+
     def step(self, state: TissueState, col: Colliders) -> StepOutput:
         """Advance ``state`` by one step of ``sim.dt`` in place; returns predicted rigid poses and
         the impulses the tissue put on each rigid body (to be applied by the rigid simulation)."""
         m = self.model
         sim = self.sim
         self._rigid_buffers(col.rigid_count)
+        shape_pose = self._shape_buffer(col.shape_count)
         coupling = COUPLING_CONSISTENT if sim.coupling == "consistent" else COUPLING_THESIS
         while True:
             code = _step(
@@ -979,9 +1057,9 @@ class TissueSolver:
                 col.rigid_gravity, col.rigid_in_solve, col.shape_kind, col.shape_params, col.shape_rigid,
                 col.shape_local_x, col.shape_local_q, self._rig_x, self._rig_q, self._imp_lin, self._imp_ang,
                 self._coupling_imp,
-                self._xp, self._qp, self._vd, self._wd, self._moment, self._c_particle, self._c_shape, self._c_inner, self._c_lambda,
-                self._c_lambda_t, self._c_normal, self._pair_i, self._pair_j, self._pair_lambda, self._pair_lambda_t,
-                self._pair_normal,
+                self._xp, self._qp, self._vd, self._wd, self._c_particle, self._c_shape, self._c_inner,
+                self._c_lambda, self._c_lambda_t, self._c_normal, self._pair_i, self._pair_j, self._pair_lambda,
+                self._pair_lambda_t, self._pair_normal, shape_pose,
                 sim.dt, sim.iterations, sim.rotation_iterations, 0.0, 0.0, -sim.gravity, sim.damping, coupling,
                 ORIENT_MODES[sim.orientation], sim.contact_margin, self._counts,
             )  # fmt: skip

@@ -1,0 +1,270 @@
+"""Speed and sameness checks of the tissue kernel (softgrasp_env/tissue/solver.py::_step).
+
+    python benchmarks/solver_kernel.py block        # us/step of a free 125-particle block
+    python benchmarks/solver_kernel.py dispatch     # us/step of a 1-particle model (call overhead)
+    python benchmarks/solver_kernel.py conserve     # momentum drift, zero gravity, damping 0
+    python benchmarks/solver_kernel.py scene        # us/step of the grasp scene's tissue (352 p.)
+    python benchmarks/solver_kernel.py demo         # whole scripted grasp: steps/s, tissue share
+    python benchmarks/solver_kernel.py record DIR   # save reference outputs (run on the old code)
+    python benchmarks/solver_kernel.py compare DIR  # max |difference| against the saved reference
+
+Timings are best-of-N over repeated runs (the machine is shared and noisy).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from softgrasp_env.config import SceneConfig, SimConfig, TissueConfig
+from softgrasp_env.tissue.builder import build_free_block
+from softgrasp_env.tissue.solver import Colliders, TissueSolver, empty_colliders
+from softgrasp_env.tissue.state import TissueState, state_at_rest
+
+# Grasp-scene steps whose solver inputs are captured for replay: approach, squeeze, lift, hold.
+SNAP_STEPS = (100, 200, 300, 450, 700, 950)
+
+
+def free_block(spacing: float = 0.008, half: float = 0.02, seed: int = 0, sim: SimConfig | None = None):
+    model = build_free_block((half, half, half), TissueConfig(), spacing=spacing)
+    sim = sim or SimConfig(gravity=0.0, damping=0.0)
+    state = state_at_rest(model, np.zeros((1, 3)), np.array([[0.0, 0.0, 0.0, 1.0]]))
+    rng = np.random.default_rng(seed)
+    state.particle_v[:] = rng.normal(scale=0.01, size=state.particle_v.shape)
+    return model, sim, state
+
+
+def time_steps(solver: TissueSolver, state: TissueState, col: Colliders, steps: int, repeats: int) -> float:
+    """Best-of-``repeats`` mean seconds per step over ``steps`` steps from a copy of ``state``."""
+    solver.step(state.copy(), col)  # compile / load the cache
+    best = np.inf
+    for _ in range(repeats):
+        s = state.copy()
+        tic = time.perf_counter()
+        for _ in range(steps):
+            solver.step(s, col)
+        best = min(best, (time.perf_counter() - tic) / steps)
+    return best
+
+
+def bench_block(repeats: int = 7) -> None:
+    model, sim, state = free_block()
+    solver = TissueSolver(model, sim)
+    t = time_steps(solver, state, empty_colliders(), 300, repeats)
+    print(f"block {model.particle_count} particles: {t * 1e6:.1f} us/step (best of {repeats})")
+
+
+def bench_dispatch(repeats: int = 7) -> None:
+    model, sim, state = free_block(spacing=0.008, half=0.008)
+    solver = TissueSolver(model, sim)
+    t = time_steps(solver, state, empty_colliders(), 3000, repeats)
+    print(f"dispatch {model.particle_count} particle(s): {t * 1e6:.2f} us/step (best of {repeats})")
+
+
+def angular_momentum(model, state) -> np.ndarray:
+    from softgrasp_env.tissue.rotation import quat_to_matrix
+
+    m = model.particle_mass
+    orbital = np.sum(m[:, None] * np.cross(state.particle_x, state.particle_v), axis=0)
+    inertia = model.particle_inertia_local()
+    spin = np.zeros(3)
+    for i in range(model.particle_count):
+        r = quat_to_matrix(state.particle_q[i])
+        spin += r @ (inertia[i] * (r.T @ state.particle_omega[i]))
+    return orbital + spin
+
+
+def conserve(steps: int = 1000) -> tuple[float, float]:
+    model, sim, state = free_block()
+    solver = TissueSolver(model, sim)
+    m = model.particle_mass
+    p0 = np.sum(m[:, None] * state.particle_v, axis=0)
+    l0 = angular_momentum(model, state)
+    col = empty_colliders()
+    for _ in range(steps):
+        solver.step(state, col)
+    p1 = np.sum(m[:, None] * state.particle_v, axis=0)
+    l1 = angular_momentum(model, state)
+    dp = np.linalg.norm(p1 - p0) / np.linalg.norm(p0)
+    dl = np.linalg.norm(l1 - l0) / np.linalg.norm(l0)
+    print(f"conserve {steps} steps: linear drift {dp:.3e} (< 1e-9), angular drift {dl:.3e} (< 1e-3)"
+          f" -> {'OK' if dp < 1e-9 and dl < 1e-3 else 'FAIL'}")  # fmt: skip
+    return dp, dl
+
+
+def _copy_colliders(col: Colliders) -> Colliders:
+    from dataclasses import fields
+
+    return Colliders(**{f.name: getattr(col, f.name).copy() for f in fields(col)})
+
+
+def capture_scene() -> tuple[TissueSolver, list[tuple[TissueState, Colliders]], dict]:
+    """Run the scripted grasp once; return the solver and the inputs of the steps in SNAP_STEPS,
+    plus the demo's result and its time inside the tissue solver."""
+    from softgrasp_env.demo import ScriptTimes, run_scripted_grasp
+    from softgrasp_env.scene import GraspScene
+
+    scene = GraspScene(SceneConfig())
+    solver = scene.world.solver
+    snaps: list[tuple[TissueState, Colliders]] = []
+    inner = solver.step
+    tissue_time = [0.0]
+    calls = [0]
+
+    def step(state, col):
+        if calls[0] in SNAP_STEPS:
+            snaps.append((state.copy(), _copy_colliders(col)))
+        calls[0] += 1
+        tic = time.perf_counter()
+        out = inner(state, col)
+        tissue_time[0] += time.perf_counter() - tic
+        return out
+
+    solver.step = step
+    try:
+        res = run_scripted_grasp(scene, ScriptTimes())
+        final = scene.world.state.copy()
+    finally:
+        scene.close()
+    solver.step = inner
+    info = dict(result=res, tissue_seconds=tissue_time[0], final=final, held=res.held(ScriptTimes()))
+    return solver, snaps, info
+
+
+def bench_scene(repeats: int = 7) -> None:
+    solver, snaps, _ = capture_scene()
+    total = 0.0
+    for k, (state, col) in zip(SNAP_STEPS, snaps):
+        t = time_steps(solver, state, col, 1, 1)  # warm
+        best = np.inf
+        for _ in range(repeats):
+            s = state.copy()
+            tic = time.perf_counter()
+            for _ in range(20):
+                solver.step(s.copy(), col)
+            best = min(best, (time.perf_counter() - tic) / 20)
+        out = solver.step(state.copy(), col)
+        total += best
+        print(f"scene step {k:4d}: {best * 1e6:7.1f} us  ({out.contact_count} contacts, {out.pair_count} pairs)")
+    print(f"scene mean over snapshots: {total / len(snaps) * 1e6:.1f} us/step")
+
+
+def bench_demo(repeats: int = 3) -> None:
+    best = None
+    for _ in range(repeats):
+        _, _, info = capture_scene()
+        res = info["result"]
+        if best is None or res.seconds < best[0].seconds:
+            best = (res, info)
+    res, info = best
+    print(f"demo: {res.steps_per_second:.0f} steps/s, tissue {info['tissue_seconds'] / res.steps * 1e6:.1f} us/step,"
+          f" rest {(res.seconds - info['tissue_seconds']) / res.steps * 1e6:.1f} us/step;"
+          f" lift {res.lift_height * 100:.3f} cm (min {res.min_lift_during_hold * 100:.3f}),"
+          f" pen {res.max_penetration * 1000:.3f} mm, intr {res.max_core_intrusion * 1000:.3f} mm,"
+          f" {'HELD' if info['held'] else 'NOT HELD'}")  # fmt: skip
+
+
+STATE_FIELDS = ("particle_x", "particle_v", "particle_q", "particle_omega", "group_q")
+OUTPUT_FIELDS = ("rigid_pred_x", "rigid_pred_q", "rigid_impulse", "rigid_angular_impulse", "coupling_impulse")
+
+
+def _block_outputs(out: dict[str, np.ndarray]) -> None:
+    model, sim, state = free_block()
+    solver = TissueSolver(model, sim)
+    for _ in range(200):
+        solver.step(state, empty_colliders())
+    for name in STATE_FIELDS:
+        out[f"block.{name}"] = getattr(state, name)
+
+
+def _step_outputs(solver, state, col, key: str, out: dict[str, np.ndarray]) -> None:
+    o = solver.step(state, col)
+    for name in STATE_FIELDS:
+        out[f"{key}.{name}"] = getattr(state, name).copy()
+    for name in OUTPUT_FIELDS:
+        out[f"{key}.{name}"] = getattr(o, name).copy()
+
+
+def record(path: Path) -> None:
+    """Reference: the block after 200 steps; the inputs of the grasp's SNAP_STEPS and the outputs
+    of one step from each; the final tissue state and the result of the whole scripted grasp."""
+    from dataclasses import fields
+
+    out: dict[str, np.ndarray] = {}
+    _block_outputs(out)
+    solver, snaps, info = capture_scene()
+    for k, (state, col) in zip(SNAP_STEPS, snaps):
+        for f in fields(state):
+            out[f"in{k}.state.{f.name}"] = getattr(state, f.name)
+        for f in fields(col):
+            out[f"in{k}.col.{f.name}"] = getattr(col, f.name)
+        _step_outputs(solver, state.copy(), _copy_colliders(col), f"snap{k}", out)
+    for name in ("particle_x", "particle_q"):
+        out[f"demo.{name}"] = getattr(info["final"], name)
+    r = info["result"]
+    out["demo.result"] = np.array([r.lift_height, r.min_lift_during_hold, r.max_penetration, r.max_core_intrusion])
+    path.mkdir(parents=True, exist_ok=True)
+    np.savez(path / "reference.npz", **out)
+    print(f"saved {path / 'reference.npz'}")
+
+
+def compare(path: Path) -> None:
+    """Replay the reference inputs with the current code; max |difference| per output. The
+    single-step and block rows measure round-off; the whole grasp (demo.*) is chaotic, so any
+    round-off change there grows to a visible but physically equivalent difference."""
+    from dataclasses import fields
+
+    ref = np.load(path / "reference.npz")
+    new: dict[str, np.ndarray] = {}
+    _block_outputs(new)
+    solver, _, info = capture_scene()
+    for k in SNAP_STEPS:
+        state = TissueState(**{f.name: ref[f"in{k}.state.{f.name}"].copy() for f in fields(TissueState)})
+        col = Colliders(**{f.name: ref[f"in{k}.col.{f.name}"].copy() for f in fields(Colliders)})
+        _step_outputs(solver, state, col, f"snap{k}", new)
+    for name in ("particle_x", "particle_q"):
+        new[f"demo.{name}"] = getattr(info["final"], name)
+    r = info["result"]
+    new["demo.result"] = np.array([r.lift_height, r.min_lift_during_hold, r.max_penetration, r.max_core_intrusion])
+    worst = 0.0
+    for key in new:
+        d = float(np.max(np.abs(ref[key] - new[key]))) if ref[key].size else 0.0
+        if key.startswith("snap") and key.endswith(("particle_q", "group_q")):
+            # q and -q are one rotation
+            d = float(np.max(np.minimum(np.abs(ref[key] - new[key]), np.abs(ref[key] + new[key]))))
+        if not key.startswith("demo"):
+            worst = max(worst, d)
+        print(f"{key:32s} max|diff| {d:.3e}{'' if d == 0.0 else '  <-- differs'}")
+    print(f"demo result old: lift {ref['demo.result'][0] * 100:.3f} cm (min {ref['demo.result'][1] * 100:.3f}),"
+          f" pen {ref['demo.result'][2] * 1000:.3f} mm, intr {ref['demo.result'][3] * 1000:.3f} mm")  # fmt: skip
+    print(f"demo result new: lift {r.lift_height * 100:.3f} cm (min {r.min_lift_during_hold * 100:.3f}),"
+          f" pen {r.max_penetration * 1000:.3f} mm, intr {r.max_core_intrusion * 1000:.3f} mm,"
+          f" {'HELD' if info['held'] else 'NOT HELD'}")  # fmt: skip
+    print(f"worst single-step/block difference: {worst:.3e}")
+
+
+def main(argv: list[str]) -> None:
+    what = argv[0] if argv else "block"
+    if what == "block":
+        bench_block()
+    elif what == "dispatch":
+        bench_dispatch()
+    elif what == "conserve":
+        conserve()
+    elif what == "scene":
+        bench_scene()
+    elif what == "demo":
+        bench_demo()
+    elif what == "record":
+        record(Path(argv[1]))
+    elif what == "compare":
+        compare(Path(argv[1]))
+    else:
+        raise SystemExit(__doc__)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
