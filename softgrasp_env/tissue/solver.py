@@ -264,6 +264,7 @@ def rest_moments(model: TissueModel) -> np.ndarray:
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _shape_match_group(
     i, k_iter, rot_iters, g_off, g_mem, g_rest, mass, rest_q, rest_moment, inertia, xs, xp, qp, group_q, orient_mode,
+    moment,
 ):  # fmt: skip
     """Project implicit group i (centred on particle i) toward its goal shape.
 
@@ -302,10 +303,23 @@ def _shape_match_group(
         q0 = g_rest[e, 0]
         q1 = g_rest[e, 1]
         q2 = g_rest[e, 2]
-        # R_j once per member gives both its moment A_j = R_j B_j (eq. 9, see rest_moments) and its
-        # world inertia R_j diag(I_j) R_j^T for the spin reaction: the members' orientations do not
-        # change between here and the reaction. Computing A_j here instead of caching it per
-        # particle saves re-forming R_j after every orientation update.
+        if orient_mode == ORIENT_GOAL:
+            # Only centres turn in this mode, so each particle's moment A_j = R_j B_j (eq. 9) is
+            # cached and refreshed when it turns: forming it here would redo it in all of the
+            # ~group_size groups the particle belongs to.
+            a00 += moment[j, 0] + m * x0 * q0
+            a01 += moment[j, 1] + m * x0 * q1
+            a02 += moment[j, 2] + m * x0 * q2
+            a10 += moment[j, 3] + m * x1 * q0
+            a11 += moment[j, 4] + m * x1 * q1
+            a12 += moment[j, 5] + m * x1 * q2
+            a20 += moment[j, 6] + m * x2 * q0
+            a21 += moment[j, 7] + m * x2 * q1
+            a22 += moment[j, 8] + m * x2 * q2
+            continue
+        # Reaction mode turns every member, so a cache would be refreshed as often as it is read:
+        # R_j once per member gives both A_j = R_j B_j and the world inertia R_j diag(I_j) R_j^T
+        # of the spin reaction (orientations do not change between here and the reaction).
         r0, r1, r2, r3, r4, r5, r6, r7, r8 = qmat((qp[j, 0], qp[j, 1], qp[j, 2], qp[j, 3]))
         b0 = rest_moment[j, 0]
         b1 = rest_moment[j, 1]
@@ -325,16 +339,15 @@ def _shape_match_group(
         a20 += (r6 * b0 + r7 * b3 + r8 * b6) + m * x2 * q0
         a21 += (r6 * b1 + r7 * b4 + r8 * b7) + m * x2 * q1
         a22 += (r6 * b2 + r7 * b5 + r8 * b8) + m * x2 * q2
-        if orient_mode == ORIENT_REACTION:
-            d0 = inertia[j, 0]
-            d1 = inertia[j, 1]
-            d2 = inertia[j, 2]
-            i00 += d0 * r0 * r0 + d1 * r1 * r1 + d2 * r2 * r2
-            i01 += d0 * r0 * r3 + d1 * r1 * r4 + d2 * r2 * r5
-            i02 += d0 * r0 * r6 + d1 * r1 * r7 + d2 * r2 * r8
-            i11 += d0 * r3 * r3 + d1 * r4 * r4 + d2 * r5 * r5
-            i12 += d0 * r3 * r6 + d1 * r4 * r7 + d2 * r5 * r8
-            i22 += d0 * r6 * r6 + d1 * r7 * r7 + d2 * r8 * r8
+        d0 = inertia[j, 0]
+        d1 = inertia[j, 1]
+        d2 = inertia[j, 2]
+        i00 += d0 * r0 * r0 + d1 * r1 * r1 + d2 * r2 * r2
+        i01 += d0 * r0 * r3 + d1 * r1 * r4 + d2 * r2 * r5
+        i02 += d0 * r0 * r6 + d1 * r1 * r7 + d2 * r2 * r8
+        i11 += d0 * r3 * r3 + d1 * r4 * r4 + d2 * r5 * r5
+        i12 += d0 * r3 * r6 + d1 * r4 * r7 + d2 * r5 * r8
+        i22 += d0 * r6 * r6 + d1 * r7 * r7 + d2 * r8 * r8
     cx /= msum
     cy /= msum
     cz /= msum
@@ -390,6 +403,18 @@ def _shape_match_group(
     qp[i, 1] = qn[1]
     qp[i, 2] = qn[2]
     qp[i, 3] = qn[3]
+    _refresh_moment(i, qn, rest_moment, moment)
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _refresh_moment(i, q, rest_moment, moment):
+    """moment[i] = R(q) B_i: particle i's A_i (Mueller & Chentanez 2011 eq. 9), row-major."""
+    r = qmat(q)
+    for a in range(3):
+        for b in range(3):
+            moment[i, 3 * a + b] = (
+                r[3 * a] * rest_moment[i, b] + r[3 * a + 1] * rest_moment[i, 3 + b] + r[3 * a + 2] * rest_moment[i, 6 + b]
+            )
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
@@ -846,7 +871,7 @@ def _step(
     rig_x0, rig_q0, rig_v, rig_w, rig_inv_mass, rig_inv_inertia, rig_gravity, rig_move, shape_kind, shape_params,
     shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, imp_lin, imp_ang, coupling_imp,
     # scratch
-    xp, qp, vd, wd, c_particle, c_shape, c_inner, c_lambda, c_lambda_t, c_normal, pair_i, pair_j, pair_lambda,
+    xp, qp, vd, wd, moment, c_particle, c_shape, c_inner, c_lambda, c_lambda_t, c_normal, pair_i, pair_j, pair_lambda,
     pair_lambda_t, pair_normal, shape_pose,
     # parameters
     dt, iterations, rot_iters, gx, gy, gz, damping, coupling, orient_mode, margin, counts,
@@ -886,6 +911,8 @@ def _step(
         qn = qnormalize(qmul(dq, (q[i, 0], q[i, 1], q[i, 2], q[i, 3])))
         for a in range(4):
             qp[i, a] = qn[a]
+        if orient_mode == ORIENT_GOAL:
+            _refresh_moment(i, qn, rest_moment, moment)
         # Warm start of group i's rotation, carried forward by its centre's spin: a stale warm start
         # lags a turning group, and every lagging projection brakes the rotation.
         gq = qnormalize(qmul(dq, (group_q[i, 0], group_q[i, 1], group_q[i, 2], group_q[i, 3])))
@@ -914,7 +941,7 @@ def _step(
             k_it = 1.0 - (1.0 - body_stiffness[b]) ** (1.0 / iterations)
             for i in range(body_off[b], body_off[b + 1]):
                 _shape_match_group(i, k_it, rot_iters, g_off, g_mem, g_rest, mass, rest_q, rest_moment,
-                                   inertia, x, xp, qp, group_q, orient_mode)  # fmt: skip
+                                   inertia, x, xp, qp, group_q, orient_mode, moment)  # fmt: skip
         for c in range(nc):
             _project_shape_contact(c, c_particle, c_shape, c_inner, c_lambda, c_normal, xp, qp, radii, inv_mass,
                                    shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
@@ -1002,6 +1029,7 @@ class TissueSolver:
         self._qp = np.zeros((n, 4))
         self._vd = np.zeros((n, 3))
         self._wd = np.zeros((n, 3))
+        self._moment = np.zeros((n, 9))
         self._rest_moment = rest_moments(model)
         self._inertia = np.ascontiguousarray(model.particle_inertia_local())
         self._counts = np.zeros(2, dtype=np.int64)
@@ -1057,7 +1085,7 @@ class TissueSolver:
                 col.rigid_gravity, col.rigid_in_solve, col.shape_kind, col.shape_params, col.shape_rigid,
                 col.shape_local_x, col.shape_local_q, self._rig_x, self._rig_q, self._imp_lin, self._imp_ang,
                 self._coupling_imp,
-                self._xp, self._qp, self._vd, self._wd, self._c_particle, self._c_shape, self._c_inner,
+                self._xp, self._qp, self._vd, self._wd, self._moment, self._c_particle, self._c_shape, self._c_inner,
                 self._c_lambda, self._c_lambda_t, self._c_normal, self._pair_i, self._pair_j, self._pair_lambda,
                 self._pair_lambda_t, self._pair_normal, shape_pose,
                 sim.dt, sim.iterations, sim.rotation_iterations, 0.0, 0.0, -sim.gravity, sim.damping, coupling,
