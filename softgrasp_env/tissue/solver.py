@@ -282,8 +282,9 @@ def _shape_match_group(
       the positions the velocity update differences against). Orbital plus spin angular momentum
       is then conserved to first order, and the mismatch between particle and group rotation
       decays at rate k per projection (the two are coupled like the ends of one spring)."""
-    start = g_off[i]
-    end = g_off[i + 1]
+    i = np.uint64(i)
+    start = np.uint64(g_off[i])
+    end = np.uint64(g_off[i + 1])
     msum = 0.0
     cx = 0.0
     cy = 0.0
@@ -291,7 +292,7 @@ def _shape_match_group(
     a00 = a01 = a02 = a10 = a11 = a12 = a20 = a21 = a22 = 0.0
     i00 = i01 = i02 = i11 = i12 = i22 = 0.0
     for e in range(start, end):
-        j = g_mem[e]
+        j = np.uint64(g_mem[e])
         m = mass[j]
         x0 = xp[j, 0]
         x1 = xp[j, 1]
@@ -364,7 +365,7 @@ def _shape_match_group(
     r00, r01, r02, r10, r11, r12, r20, r21, r22 = qmat(qr)
     lx = ly = lz = 0.0
     for e in range(start, end):
-        j = g_mem[e]
+        j = np.uint64(g_mem[e])
         q0 = g_rest[e, 0]
         q1 = g_rest[e, 1]
         q2 = g_rest[e, 2]
