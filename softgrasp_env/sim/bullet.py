@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 import pybullet as p
 from pybullet_utils.bullet_client import BulletClient
@@ -54,31 +55,49 @@ def read_mass_properties(client: BulletClient, refs: list[RigidRef]) -> tuple[np
     return inv_m, inv_i
 
 
-def read_states(
-    client: BulletClient,
-    refs: list[RigidRef],
-    x: np.ndarray,
-    q: np.ndarray,
-    v: np.ndarray,
-    w: np.ndarray,
-) -> None:
-    """Fill centre-of-mass pose and velocity of every slot into the given (R, ...) arrays."""
-    for k, r in enumerate(refs):
-        if r.link < 0:
-            pos, orn = client.getBasePositionAndOrientation(r.body)
-            lin, ang = client.getBaseVelocity(r.body)
-        else:
-            s = client.getLinkState(r.body, r.link, computeLinkVelocity=1)
-            pos, orn, lin, ang = s[0], s[1], s[6], s[7]
-        x[k] = pos
-        q[k] = orn
-        v[k] = lin
-        w[k] = ang
+class StateReader:
+    """Reads centre-of-mass pose and velocity of every slot, in as few pybullet calls as it can:
+    all links of one body come from one ``getLinkStates``. It calls pybullet's functions with the
+    world's own ``physicsClientId`` directly; BulletClient's per-call wrapper costs ~1.3 us a call,
+    a noticeable share of a 300 us step."""
+
+    def __init__(self, client: BulletClient, refs: list[RigidRef]) -> None:
+        self._cid = client._client
+        self._bases: list[tuple[int, int]] = []  # (slot, body)
+        links: dict[int, list[tuple[int, int]]] = {}
+        for k, r in enumerate(refs):
+            if r.link < 0:
+                self._bases.append((k, r.body))
+            else:
+                links.setdefault(r.body, []).append((k, r.link))
+        self._links = [(body, [k for k, _ in kl], [link for _, link in kl]) for body, kl in links.items()]
+        self._order = np.array([k for k, _ in self._bases] + [k for _, ks, _ in self._links for k in ks], dtype=np.intp)
+        self._count = len(refs)
+
+    def read(self, x: np.ndarray, q: np.ndarray, v: np.ndarray, w: np.ndarray) -> None:
+        if self._count == 0:
+            return
+        cid = self._cid
+        rows = []
+        for _, body in self._bases:
+            pos, orn = p.getBasePositionAndOrientation(body, physicsClientId=cid)
+            lin, ang = p.getBaseVelocity(body, physicsClientId=cid)
+            rows.append(pos + orn + lin + ang)
+        for body, _, link_ids in self._links:
+            for s in p.getLinkStates(body, link_ids, computeLinkVelocity=1, physicsClientId=cid):
+                rows.append(s[0] + s[1] + s[6] + s[7])
+        # One conversion and one compiled scatter for all slots: numpy slice assignments per field
+        # cost more than the pybullet reads themselves.
+        _scatter(np.array(rows), self._order, x, q, v, w)
 
 
-def world_inverse_inertia(q: np.ndarray, inv_inertia_local: np.ndarray) -> np.ndarray:
-    """R diag(I^-1) R^T for one body."""
-    from ..tissue.rotation import quat_to_matrix
-
-    rot = quat_to_matrix(q)
-    return (rot * inv_inertia_local) @ rot.T
+@nb.njit(cache=True)
+def _scatter(a, order, x, q, v, w):
+    for r in range(a.shape[0]):
+        k = order[r]
+        for c in range(3):
+            x[k, c] = a[r, c]
+            v[k, c] = a[r, 7 + c]
+            w[k, c] = a[r, 10 + c]
+        for c in range(4):
+            q[k, c] = a[r, 3 + c]

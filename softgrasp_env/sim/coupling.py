@@ -20,8 +20,8 @@ import numpy as np
 import pybullet as p
 from pybullet_utils.bullet_client import BulletClient
 
-from ..tissue.rotation import qmul, qrotate
-from .bullet import RigidRef, world_inverse_inertia
+from ..tissue.rotation import qconj, qmul, qrotate
+from .bullet import RigidRef
 
 
 def apply_impulses(
@@ -36,22 +36,60 @@ def apply_impulses(
     impulse: np.ndarray,
     angular_impulse: np.ndarray,
     dt: float,
+    free: np.ndarray,
 ) -> None:
-    """Hand the tissue's impulses on every rigid slot to pybullet for its next step."""
-    for k, r in enumerate(refs):
-        if inv_mass[k] == 0.0:
-            continue  # static or kinematic: nothing to move
-        imp = impulse[k]
-        ang = angular_impulse[k]
-        if not (imp.any() or ang.any()):
-            continue
+    """Hand the tissue's impulses on every rigid slot to pybullet for its next step. ``free`` (R,)
+    marks the slots that are free base bodies."""
+    out = np.empty((len(refs), 6))
+    active = _impulse_commands(x, q, v, w, inv_mass, inv_inertia, impulse, angular_impulse, free, dt, out)
+    if not active.any():
+        return
+    rows = out.tolist()
+    pos = x.tolist()
+    cid = client._client  # pybullet's functions on our own client, without BulletClient's wrapper
+    for k in np.flatnonzero(active).tolist():
+        r = refs[k]
+        row = rows[k]
         if r.free_base:
-            dv = inv_mass[k] * imp
-            dw = world_inverse_inertia(q[k], inv_inertia[k]) @ ang
-            client.resetBaseVelocity(r.body, (v[k] + dv).tolist(), (w[k] + dw).tolist())
+            p.resetBaseVelocity(r.body, row[:3], row[3:], physicsClientId=cid)
         else:
-            client.applyExternalForce(r.body, r.link, (imp / dt).tolist(), x[k].tolist(), p.WORLD_FRAME)
-            client.applyExternalTorque(r.body, r.link, (ang / dt).tolist(), p.WORLD_FRAME)
+            p.applyExternalForce(r.body, r.link, row[:3], pos[k], p.WORLD_FRAME, physicsClientId=cid)
+            p.applyExternalTorque(r.body, r.link, row[3:], p.WORLD_FRAME, physicsClientId=cid)
+
+
+@nb.njit(cache=True)
+def _impulse_commands(x, q, v, w, inv_mass, inv_inertia, impulse, angular_impulse, free, dt, out):
+    """Per slot, what pybullet is told: a free base's new velocities v + P/m, w + I_w^-1 L; anything
+    else the force P/dt and torque L/dt. Returns which slots have anything to apply (static and
+    kinematic slots, 1/m = 0, never do)."""
+    n = x.shape[0]
+    active = np.zeros(n, dtype=np.bool_)
+    for k in range(n):
+        if inv_mass[k] == 0.0:
+            continue
+        px, py, pz = impulse[k, 0], impulse[k, 1], impulse[k, 2]
+        lx, ly, lz = angular_impulse[k, 0], angular_impulse[k, 1], angular_impulse[k, 2]
+        if px == 0.0 and py == 0.0 and pz == 0.0 and lx == 0.0 and ly == 0.0 and lz == 0.0:
+            continue
+        active[k] = True
+        if free[k]:
+            qk = (q[k, 0], q[k, 1], q[k, 2], q[k, 3])
+            ll = qrotate(qconj(qk), (lx, ly, lz))
+            dw = qrotate(qk, (inv_inertia[k, 0] * ll[0], inv_inertia[k, 1] * ll[1], inv_inertia[k, 2] * ll[2]))
+            out[k, 0] = v[k, 0] + inv_mass[k] * px
+            out[k, 1] = v[k, 1] + inv_mass[k] * py
+            out[k, 2] = v[k, 2] + inv_mass[k] * pz
+            out[k, 3] = w[k, 0] + dw[0]
+            out[k, 4] = w[k, 1] + dw[1]
+            out[k, 5] = w[k, 2] + dw[2]
+        else:
+            out[k, 0] = px / dt
+            out[k, 1] = py / dt
+            out[k, 2] = pz / dt
+            out[k, 3] = lx / dt
+            out[k, 4] = ly / dt
+            out[k, 5] = lz / dt
+    return active
 
 
 @nb.njit(cache=True)

@@ -22,7 +22,7 @@ from ..tissue.collision import SHAPE_CODES
 from ..tissue.model import TissueModel, concatenate, with_core_shapes
 from ..tissue.solver import Colliders, StepOutput, TissueSolver
 from ..tissue.state import TissueState, state_at_rest
-from .bullet import RigidRef, read_mass_properties, read_states
+from .bullet import RigidRef, StateReader, read_mass_properties
 from .coupling import apply_impulses, sync_attached
 
 
@@ -72,6 +72,8 @@ class World:
             if not -1 <= s.rigid < nr:
                 raise ValueError(f"shape {k} refers to rigid slot {s.rigid}, but there are {nr} slots")
         inv_m, inv_i = read_mass_properties(client, self.rigid)
+        self._free_base = np.array([r.free_base for r in self.rigid], dtype=np.bool_)
+        self._reader = StateReader(client, self.rigid)
         self.colliders = Colliders(
             rigid_x=np.zeros((nr, 3)),
             rigid_q=np.tile([0.0, 0.0, 0.0, 1.0], (nr, 1)),
@@ -116,7 +118,7 @@ class World:
             self.last_output = out
             apply_impulses(self.client, self.rigid, col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w,
                            col.rigid_inv_mass, col.rigid_inv_inertia, out.rigid_impulse, out.rigid_angular_impulse,
-                           self.sim.dt)  # fmt: skip
+                           self.sim.dt, self._free_base)  # fmt: skip
         self.client.stepSimulation()
         self.refresh()
         if self.solver is not None:
@@ -126,7 +128,7 @@ class World:
     def refresh(self) -> None:
         """Re-read every rigid slot's pose and velocity from pybullet (after a step or a reset)."""
         c = self.colliders
-        read_states(self.client, self.rigid, c.rigid_x, c.rigid_q, c.rigid_v, c.rigid_w)
+        self._reader.read(c.rigid_x, c.rigid_q, c.rigid_v, c.rigid_w)
 
     def _sync(self) -> None:
         m, s, c = self.model, self.state, self.colliders
