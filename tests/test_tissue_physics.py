@@ -227,3 +227,34 @@ def test_friction_on_ramp_sticks_below_and_slides_above_mu(mu):
     assert abs(stick) < 1e-3, f"pad crept {stick * 1000:.2f} mm in 1 s below the friction angle"
     # a = g (sin - mu_k cos) > 0: after 1 s it has slid tens of centimetres
     assert slide > 0.1, f"pad slid only {slide * 1000:.2f} mm above the friction angle"
+
+
+def test_two_tissue_bodies_collide_without_interpenetrating():
+    """Particle-particle contacts between bodies (the two fingers can touch): two blocks thrown at
+    each other stop interpenetrating, and the pair conserves linear momentum (no gravity)."""
+    from softgrasp_env.tissue.model import concatenate
+
+    tissue = TissueConfig()
+    block = build_free_block((0.012, 0.012, 0.012), tissue, spacing=0.008)
+    model = concatenate([block, block])
+    gap = 0.012 * 2 + 0.002  # block centres 26 mm apart: their particle surfaces start 2 mm apart
+    state = state_at_rest(model, np.array([[-gap / 2, 0, 0], [gap / 2, 0, 0]]), np.tile(IDENTITY, (2, 1)))
+    a, b = model.body_slice(0), model.body_slice(1)
+    state.particle_v[a, 0] = 0.2
+    state.particle_v[b, 0] = -0.1
+    solver = TissueSolver(model, SimConfig(gravity=0.0, damping=0.0))
+    p0 = (model.particle_mass[:, None] * state.particle_v).sum(axis=0)
+    touched = 0
+    for _ in range(240):
+        out = solver.step(state, empty_colliders())
+        touched += out.pair_count > 0
+        d = np.linalg.norm(state.particle_x[a][:, None, :] - state.particle_x[b][None, :, :], axis=2)
+        r = model.particle_radii[a][:, None, 0] + model.particle_radii[b][None, :, 0]
+        assert (r - d).max() < 0.25 * tissue.spacing  # spheres: support radius = radius
+    p1 = (model.particle_mass[:, None] * state.particle_v).sum(axis=0)
+    assert touched > 10
+    np.testing.assert_allclose(p1, p0, rtol=1e-9, atol=1e-15)
+    # they pushed each other: the faster block was slowed, the other turned around
+    va = state.particle_v[a, 0].mean()
+    vb = state.particle_v[b, 0].mean()
+    assert va < 0.2 - 0.05 and vb > -0.1 + 0.05

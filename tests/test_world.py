@@ -60,6 +60,8 @@ def test_scripted_lift_with_soft_fingers():
     assert res.finite
     assert res.held(ScriptTimes()), f"lift {res.lift_height:.4f} m, min during hold {res.min_lift_during_hold:.4f} m"
     assert res.max_penetration < 0.002, f"max penetration {res.max_penetration * 1000:.2f} mm"
+    # inner collisions: outer particles stay outside their own core
+    assert res.max_core_intrusion < 5e-4, f"core intrusion {res.max_core_intrusion * 1000:.2f} mm"
 
 
 def test_world_is_deterministic():
