@@ -91,10 +91,11 @@ class GraspScene:
         self.set_finger_target(0.0)
 
         # --- what the tissue sees
-        thesis_cores_heavy = False  # cores move inside the solve only in the consistent coupling
+        # Cores are infinitely heavy inside the solve in the thesis coupling; World turns in_solve on
+        # for every slot when SimConfig.coupling is "consistent".
         rigid = [
-            RigidRef(g, 0, gravity=False, in_solve=thesis_cores_heavy, free_base=False),  # left core
-            RigidRef(g, 1, gravity=False, in_solve=thesis_cores_heavy, free_base=False),  # right core
+            RigidRef(g, 0, gravity=False, in_solve=False, free_base=False),  # left core
+            RigidRef(g, 1, gravity=False, in_solve=False, free_base=False),  # right core
             RigidRef(self.cylinder, -1, gravity=True, in_solve=True, free_base=True),
             RigidRef(g, -1, gravity=False, in_solve=False, free_base=False),  # palm, held by the arm
         ]

@@ -6,6 +6,10 @@ connection, so several envs live in one process without sharing state.
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
+
 from dataclasses import dataclass
 
 import numba as nb
@@ -15,8 +19,36 @@ from pybullet_utils.bullet_client import BulletClient
 
 
 def connect(*, gui: bool = False) -> BulletClient:
-    """A new physics server of our own (DIRECT unless a GUI is asked for)."""
-    return BulletClient(connection_mode=p.GUI if gui else p.DIRECT)
+    """A new physics server of our own (DIRECT unless a GUI is asked for).
+
+    pybullet's C code prints "argv[0]=" to the process's stdout on every connect; with one client
+    per env that line would interleave with a user's own output, so it is swallowed here (only the
+    connect call's C-level stdout, and only in DIRECT mode)."""
+    mode = p.GUI if gui else p.DIRECT
+    if gui:
+        return BulletClient(connection_mode=mode)
+    with _quiet_c_stdout():
+        return BulletClient(connection_mode=mode)
+
+
+@contextlib.contextmanager
+def _quiet_c_stdout():
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):  # no real stdout (e.g. captured): nothing to hide
+        yield
+        return
+    sys.stdout.flush()
+    saved = os.dup(fd)
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), fd)
+            try:
+                yield
+            finally:
+                os.dup2(saved, fd)
+    finally:
+        os.close(saved)
 
 
 @dataclass(frozen=True)
