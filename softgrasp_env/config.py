@@ -172,6 +172,12 @@ class SceneConfig:
     """Misalignment: gripper offset along y (the finger face's long direction) [m]."""
     yaw: float = 0.0
     """Misalignment: gripper yaw about z [rad]."""
+    jaw_wedge: float = 0.0
+    """Misalignment: angle between the two finger faces [rad]. Each finger is tilted by half of it
+    about its face's long (y) axis, the gap wider at the top for a positive wedge, so a rigid
+    face meets the cylinder along a short edge instead of a line."""
+    cylinder_xy: tuple[float, float] = (0.0, 0.0)
+    """Where the cylinder stands on the ground [m]; the gripper starts above the origin."""
     tissue: TissueConfig = field(default_factory=TissueConfig)
     sim: SimConfig = field(default_factory=SimConfig)
 
@@ -196,6 +202,11 @@ class SceneConfig:
         _check_range(o, "ground_friction", self.ground_friction, 0.0, 10.0)
         _check_range(o, "lateral_offset", self.lateral_offset, -0.1, 0.1)
         _check_range(o, "yaw", self.yaw, -math.pi / 4, math.pi / 4)
+        _check_range(o, "jaw_wedge", self.jaw_wedge, -math.pi / 6, math.pi / 6)
+        if len(self.cylinder_xy) != 2:
+            raise ValueError(f"SceneConfig.cylinder_xy must have 2 entries, got {self.cylinder_xy!r}")
+        for i, v in enumerate(self.cylinder_xy):
+            _check_range(o, f"cylinder_xy[{i}]", v, -0.1, 0.1)
         if not isinstance(self.tissue, TissueConfig):
             raise ValueError(f"SceneConfig.tissue must be a TissueConfig, got {type(self.tissue).__name__}")
         if not isinstance(self.sim, SimConfig):

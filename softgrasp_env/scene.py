@@ -16,6 +16,8 @@ import numpy as np
 import pybullet as p
 
 from .config import SceneConfig
+from pybullet_utils.bullet_client import BulletClient
+
 from .sim.bullet import RigidRef, connect
 from .sim.world import ShapeSpec, TissueSpec, World
 from .tissue.builder import build_combined_body, core_shape_from_bullet
@@ -29,9 +31,16 @@ not modelled: only the fingertip segment touches anything)."""
 class GraspScene:
     """Builds and drives the scene; ``world.step()`` advances it."""
 
-    def __init__(self, config: SceneConfig | None = None, *, gui: bool = False) -> None:
+    def __init__(self, config: SceneConfig | None = None, *, gui: bool = False, client: BulletClient | None = None) -> None:
+        """Build the scene in a new physics server, or in ``client`` after emptying it
+        (``resetSimulation``): an env's reset rebuilds rather than restores, because pybullet's
+        ``restoreState`` is not bit-exact (it drifted 2.3 mm in 120 steps) and a rebuild is."""
         self.config = cfg = config if config is not None else SceneConfig()
-        self.client = c = connect(gui=gui)
+        if client is None:
+            client = connect(gui=gui)
+        else:
+            client.resetSimulation()
+        self.client = c = client
         sim = cfg.sim
         c.setGravity(0.0, 0.0, -sim.gravity)
         # One pybullet step per world step, no substeps: the tissue and the rigid bodies share dt.
@@ -48,7 +57,7 @@ class GraspScene:
         cyl_vis = c.createVisualShape(p.GEOM_CYLINDER, radius=r, length=h, rgbaColor=[0.9, 0.6, 0.2, 1.0])
         self.cylinder = c.createMultiBody(
             baseMass=cfg.cylinder_mass, baseCollisionShapeIndex=cyl_col, baseVisualShapeIndex=cyl_vis,
-            basePosition=[0.0, 0.0, 0.5 * h],
+            basePosition=[cfg.cylinder_xy[0], cfg.cylinder_xy[1], 0.5 * h],
         )  # fmt: skip
         c.changeDynamics(self.cylinder, -1, lateralFriction=cfg.cylinder_friction, linearDamping=0.0,
                          angularDamping=0.0)  # fmt: skip
@@ -63,6 +72,15 @@ class GraspScene:
         fin_col = c.createCollisionShape(p.GEOM_BOX, halfExtents=fh)
         fin_vis = c.createVisualShape(p.GEOM_BOX, halfExtents=fh, rgbaColor=[0.3, 0.3, 0.8, 1.0])
         open_x = cfg.finger_max_opening + fh[0]  # finger centre when fully open
+        # Jaw wedge: each finger tilted by half the wedge about y, the left (-x) one by -w/2 and the
+        # right one by +w/2 (faces open downward for w > 0). A prismatic joint's axis is given in
+        # the link frame, so it is turned back by the tilt to keep both fingers closing along the
+        # palm's x axis.
+        half = 0.5 * cfg.jaw_wedge
+        tilt_left = c.getQuaternionFromEuler([0.0, -half, 0.0])
+        tilt_right = c.getQuaternionFromEuler([0.0, half, 0.0])
+        axis_left = [math.cos(half), 0.0, -math.sin(half)]  # R_y(-half)^T (+x)
+        axis_right = [-math.cos(half), 0.0, -math.sin(half)]  # R_y(+half)^T (-x)
         self.start_palm = np.array([0.0, cfg.lateral_offset, self.grasp_height + self.palm_offset + 0.05])
         self.start_yaw = cfg.yaw
         self.gripper = c.createMultiBody(
@@ -75,12 +93,12 @@ class GraspScene:
             linkCollisionShapeIndices=[fin_col, fin_col],
             linkVisualShapeIndices=[fin_vis, fin_vis],
             linkPositions=[[-open_x, 0.0, -self.palm_offset], [open_x, 0.0, -self.palm_offset]],
-            linkOrientations=[[0, 0, 0, 1], [0, 0, 0, 1]],
+            linkOrientations=[tilt_left, tilt_right],
             linkInertialFramePositions=[[0, 0, 0], [0, 0, 0]],
             linkInertialFrameOrientations=[[0, 0, 0, 1], [0, 0, 0, 1]],
             linkParentIndices=[0, 0],
             linkJointTypes=[p.JOINT_PRISMATIC, p.JOINT_PRISMATIC],
-            linkJointAxis=[[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]],  # +q closes both fingers
+            linkJointAxis=[axis_left, axis_right],  # +q closes both fingers
         )
         g = self.gripper
         for link in (-1, 0, 1):

@@ -26,6 +26,10 @@ from .bullet import RigidRef, StateReader, read_mass_properties
 from .coupling import apply_impulses, sync_attached
 
 
+class SimulationDiverged(RuntimeError):
+    """The tissue solve produced non-finite numbers; they were not handed to pybullet."""
+
+
 @dataclass(frozen=True)
 class ShapeSpec:
     """A collision shape the tissue can touch: ``kind`` in plane/sphere/box/cylinder/capsule,
@@ -116,6 +120,10 @@ class World:
         if self.solver is not None:
             out = self.solver.step(self.state, col)
             self.last_output = out
+            # A NaN impulse would poison pybullet's bodies (and its broadphase) for good: stop here,
+            # so the caller can end the episode and rebuild.
+            if not (np.isfinite(out.rigid_impulse).all() and np.isfinite(out.rigid_angular_impulse).all()):
+                raise SimulationDiverged(f"non-finite tissue impulse at step {self.step_count}")
             apply_impulses(self.client, self.rigid, col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w,
                            col.rigid_inv_mass, col.rigid_inv_inertia, out.rigid_impulse, out.rigid_angular_impulse,
                            self.sim.dt, self._free_base)  # fmt: skip
@@ -143,6 +151,29 @@ class World:
         if self.solver is None:
             return 0.0, 0.0
         return self.solver.penetration(self.state, self.colliders)
+
+    def tissue_deviation(self) -> float:
+        """Largest distance of a particle from its rest spot carried rigidly by its core [m]: how far
+        the tissue is deformed (or torn away) anywhere; 0 without tissue."""
+        if self.state is None:
+            return 0.0
+        m, c = self.model, self.colliders
+        worst = 0.0
+        for b in range(m.body_count):
+            sl = m.body_slice(b)
+            r = self.shapes[int(m.body_core_shape[b])].rigid
+            x, y, z, w = c.rigid_q[r]
+            rot = np.array([
+                [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+            ])  # fmt: skip
+            rest = m.particle_rest_x[sl] @ rot.T + c.rigid_x[r]
+            d = float(np.sqrt(((self.state.particle_x[sl] - rest) ** 2).sum(axis=1)).max(initial=0.0))
+            if not np.isfinite(d):  # NaN would slip through max()
+                return float("inf")
+            worst = max(worst, d)
+        return worst
 
     def is_finite(self) -> bool:
         c = self.colliders

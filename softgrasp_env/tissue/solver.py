@@ -1114,6 +1114,20 @@ class TissueSolver:
             pair_count=int(self._counts[1]),
         )
 
+    def contact_normal_force(self, shape: int) -> np.ndarray:
+        """Normal force each tissue body pressed on shape ``shape`` with during the last step [N],
+        shape (bodies,). A contact's accumulated normal multiplier lambda is a positional impulse
+        [kg m] (Mueller et al. 2020, eq. 6), so its force over the step is lambda / dt^2."""
+        m = self.model
+        out = np.zeros(m.body_count)
+        nc = int(self._counts[0])
+        if nc == 0:
+            return out
+        sel = (self._c_shape[:nc] == shape) & ~self._c_inner[:nc]
+        bodies = m.particle_body[self._c_particle[:nc][sel]]
+        np.add.at(out, bodies, self._c_lambda[:nc][sel])
+        return out / (self.sim.dt * self.sim.dt)
+
     def penetration(self, state: TissueState, col: Colliders) -> tuple[float, float]:
         """(deepest particle overlap with any other rigid shape, deepest outer-particle intrusion into
         its own core) at the colliders' current poses [m]."""

@@ -1,0 +1,589 @@
+"""Gymnasium environments: two fingers pick up a cylinder, with soft tissue or rigid-only.
+
+The class docstrings are the env cards (the user manual); ``softgrasp_env/registration.py`` lists
+the registered ids.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from dataclasses import replace
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from .config import SceneConfig, SimConfig, TissueConfig
+from .scene import GraspScene
+from .sim.world import SimulationDiverged
+
+# Slots of GraspScene's rigid list and shapes (see scene.py).
+_LEFT, _RIGHT, _CYL, _PALM = 0, 1, 2, 3
+_CYL_SHAPE = 1
+
+OBS_NAMES: tuple[str, ...] = (
+    "grip_x", "grip_y", "grip_z",
+    "grip_vx", "grip_vy", "grip_vz",
+    "finger_gap",
+    "cyl_rel_x", "cyl_rel_y", "cyl_rel_z",
+    "cyl_axis_x", "cyl_axis_y", "cyl_axis_z",
+    "cyl_vx", "cyl_vy", "cyl_vz",
+    "cyl_wx", "cyl_wy", "cyl_wz",
+    "force_left", "force_right",
+    "lift",
+    "gripper_yaw",
+)  # fmt: skip
+"""Names of the observation entries, in order (the env card documents each)."""
+
+RESET_OPTIONS = ("cylinder_xy", "lateral_offset", "yaw", "jaw_wedge", "friction_scale", "cylinder_radius",
+                 "cylinder_mass")  # fmt: skip
+"""Keys ``reset(options=...)`` accepts: each fixes a quantity that is otherwise randomised."""
+
+
+def _display_available() -> bool:
+    if sys.platform.startswith("linux"):
+        return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+    return True
+
+
+class SoftGraspEnv(gym.Env):
+    """Two fingers pick up a cylinder; with ``soft=True`` each finger is a rigid core wrapped in
+    oriented-particle tissue (``SoftGrasp-v0``), with ``soft=False`` the same cores touch the
+    cylinder through pybullet's rigid contacts (``SoftGraspRigid-v0``).
+
+    ## Description
+    A gripper hangs above a cylinder (radius 3 cm, height 10 cm, 0.1 kg) standing on the ground.
+    The gripper is a palm pulled by a force-limited arm (200 N) and two finger cores that close
+    along the palm's x axis, each driven by a force-limited motor (3 N): squeezing is a force, not a
+    teleport. The task is to lift the cylinder at least 5 cm and hold it. The gripper is placed
+    only approximately: a few millimetres of lateral offset and a few degrees of yaw (thesis: "only
+    approximate orientation of the fingers relative to the object"), and the cylinder stands up to
+    1 cm from the origin. Physics runs at 240 Hz; one env step holds the action for
+    ``240 / control_frequency`` physics steps.
+
+    ## Action space
+    ``Box(-1, 1, (4,), float32)``:
+
+    | index | meaning | scaling |
+    |---|---|---|
+    | 0, 1, 2 | gripper displacement x, y, z (world frame) | ``a * gripper_speed / control_frequency`` m added to the arm's target |
+    | 3 | finger closing | target travel ``(a + 1) / 2 * finger_max_opening`` from fully open: -1 fully open, +1 fingers meet (the force limit sets the squeeze) |
+
+    The arm's target is kept inside the workspace (x, y within ±10 cm of the origin, fingertip
+    height between just above the ground and 20 cm) and at most 2 cm from where the palm is, as a
+    real arm's reach and tracking limit would. Out-of-range actions are clipped to [-1, 1] and
+    ``info["action_clipped"]`` says so; a NaN/inf action or one of the wrong shape raises
+    ``ValueError``.
+
+    ## Observation space
+    ``Box(-inf, inf, (23,), float32)``, SI units, world frame (z up):
+
+    | index | name | meaning |
+    |---|---|---|
+    | 0-2 | grip_x/y/z | grip point (midpoint of the two finger cores) [m] |
+    | 3-5 | grip_vx/vy/vz | palm linear velocity [m/s] |
+    | 6 | finger_gap | distance between the finger cores' inner faces [m] |
+    | 7-9 | cyl_rel_x/y/z | cylinder centre minus grip point [m] |
+    | 10-12 | cyl_axis_x/y/z | cylinder axis (unit vector; the orientation up to the cylinder's symmetry) |
+    | 13-15 | cyl_vx/vy/vz | cylinder linear velocity [m/s] |
+    | 16-18 | cyl_wx/wy/wz | cylinder angular velocity [rad/s] |
+    | 19, 20 | force_left/right | normal force each finger presses on the cylinder with, tissue plus core contacts, mean over the env step [N] |
+    | 21 | lift | cylinder centre above its resting height [m] |
+    | 22 | gripper_yaw | palm yaw (the misalignment the agent cannot command) [rad] |
+
+    ## Rewards
+    ``reward_type="dense"`` (default): ``lift + reach`` where
+    ``lift = clip(lift_height / success_height, 0, 1)`` (the task: 1 once the cylinder is 5 cm up)
+    and ``reach = -reach_weight * min(d, 0.1 m) / 0.1 m`` with ``d`` the grip point's distance to the
+    cylinder centre (small shaping, default weight 0.1). Both terms are in ``info["reward_terms"]``.
+    ``reward_type="sparse"`` (``SoftGraspSparse-v0``): 1 on steps where ``is_success``, else 0.
+
+    ## Starting state
+    Fingers fully open, grip point 5 cm above the cylinder's mid height over the origin, palm
+    offset laterally by U(±lateral_offset_range) along y and turned by U(±yaw_range) about z,
+    fingers tilted by U(±jaw_wedge_range) against each other; cylinder upright at rest at
+    U(±cylinder_position_range) in x and y. Friction (scaled by U(1 ± friction_range)), cylinder
+    radius (± cylinder_radius_range) and mass (× U(1 ± cylinder_mass_range)) are randomised too if
+    their ranges are non-zero. All draws come from the env's ``np_random``; ``reset(options=...)``
+    may fix any of them (keys in ``RESET_OPTIONS``).
+
+    ## Episode end
+    - ``info["is_success"]`` (every step): lifted ≥ ``success_height`` and both fingers press on it
+      (≥ 0.05 N each).
+    - Terminated: the cylinder tilts more than ``max_tilt`` (knocked over), leaves the workspace
+      (more than 15 cm from the origin horizontally, below the ground or above 50 cm), or the
+      simulation diverges (non-finite numbers, a body faster than 20 m/s, tissue torn more than
+      3 cm from its core): then ``info["diverged"] = True``, the reward is 0 and the observation is
+      the last finite one, never a NaN.
+    - Truncated: by the registered time limit (100 steps = 5 s at 20 Hz).
+
+    ## Arguments
+    ``gym.make("SoftGrasp-v0", **kwargs)``; all keyword-only except ``render_mode``:
+
+    - ``soft`` (True): tissue on the fingers, or rigid-only fingers.
+    - ``reward_type`` ("dense" | "sparse").
+    - ``control_frequency`` (20 Hz): must divide the physics rate ``1 / sim.dt`` (240 Hz).
+    - ``gripper_speed`` (0.15 m/s): arm displacement per step at full action, times the step time.
+    - ``tissue_density`` (particles per m² of core surface), ``friction_static``,
+      ``friction_dynamic``: tissue settings (also the rigid fingers' pybullet friction);
+      ``tissue`` / ``sim``: whole ``TissueConfig`` / ``SimConfig`` objects to start from.
+    - ``cylinder_radius``, ``cylinder_height``, ``cylinder_mass``, ``finger_force``.
+    - ``success_height`` (0.05 m), ``reach_weight`` (0.1), ``max_tilt`` (π/4 rad).
+    - randomisation ranges: ``cylinder_position_range`` (0.01 m), ``lateral_offset_range``
+      (0.005 m), ``yaw_range`` (5° in rad), ``jaw_wedge_range`` (0), ``friction_range`` (0),
+      ``cylinder_radius_range`` (0 m), ``cylinder_mass_range`` (0).
+    - ``render_width``, ``render_height`` (480 × 360 px).
+
+    Out-of-range arguments raise ``ValueError`` naming the argument.
+
+    ## Rendering
+    ``render_mode="rgb_array"`` draws the scene with pybullet's CPU renderer in a separate viewer
+    (tissue particles as ellipsoids, cores, cylinder), headless. ``render_mode="human"`` runs the
+    simulation in the pybullet GUI (needs a display) with the particles shown; on a machine without
+    one, asking for it raises ``ValueError`` and an instance's ``metadata["render_modes"]`` lists
+    only ``rgb_array``.
+
+    ## Determinism and copies
+    Reset rebuilds the simulation (pybullet's restoreState is not bit-exact), so two envs with the
+    same seed and actions give bit-identical trajectories. Pickling or deep-copying an env records
+    its reset draw and the actions since, and the copy replays them: an exact copy, at the cost of
+    re-simulating the episode so far.
+
+    ## Version history
+    - v0: initial release.
+    """
+
+    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 20}
+
+    def __init__(
+        self,
+        render_mode: str | None = None,
+        *,
+        soft: bool = True,
+        reward_type: str = "dense",
+        control_frequency: float = 20.0,
+        gripper_speed: float = 0.15,
+        tissue_density: float | None = None,
+        friction_static: float | None = None,
+        friction_dynamic: float | None = None,
+        tissue: TissueConfig | None = None,
+        sim: SimConfig | None = None,
+        cylinder_radius: float = 0.03,
+        cylinder_height: float = 0.10,
+        cylinder_mass: float = 0.1,
+        finger_force: float = 3.0,
+        success_height: float = 0.05,
+        reach_weight: float = 0.1,
+        max_tilt: float = math.pi / 4,
+        cylinder_position_range: float = 0.01,
+        lateral_offset_range: float = 0.005,
+        yaw_range: float = math.radians(5.0),
+        jaw_wedge_range: float = 0.0,
+        friction_range: float = 0.0,
+        cylinder_radius_range: float = 0.0,
+        cylinder_mass_range: float = 0.0,
+        render_width: int = 480,
+        render_height: int = 360,
+    ) -> None:
+        self._init_kwargs = {k: v for k, v in locals().items() if k not in ("self", "__class__")}
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}")
+        if render_mode == "human" and not _display_available():
+            raise ValueError("render_mode='human' opens the pybullet GUI and needs a display (DISPLAY is not set); "
+                             "use render_mode='rgb_array' headless")  # fmt: skip
+        if not isinstance(soft, bool):
+            raise ValueError(f"soft must be a bool, got {soft!r}")
+        if reward_type not in ("dense", "sparse"):
+            raise ValueError(f"reward_type must be 'dense' or 'sparse', got {reward_type!r}")
+        _check("control_frequency", control_frequency, 0.5, 240.0)
+        _check("gripper_speed", gripper_speed, 0.0, 2.0, lo_open=True)
+        _check("success_height", success_height, 0.0, 0.15, lo_open=True)
+        _check("reach_weight", reach_weight, 0.0, 10.0)
+        _check("max_tilt", max_tilt, 0.0, math.pi, lo_open=True)
+        _check("cylinder_position_range", cylinder_position_range, 0.0, 0.05)
+        _check("lateral_offset_range", lateral_offset_range, 0.0, 0.05)
+        _check("yaw_range", yaw_range, 0.0, math.pi / 4)
+        _check("jaw_wedge_range", jaw_wedge_range, 0.0, math.pi / 6)
+        _check("friction_range", friction_range, 0.0, 0.9)
+        _check("cylinder_radius_range", cylinder_radius_range, 0.0, 0.02)
+        _check("cylinder_mass_range", cylinder_mass_range, 0.0, 0.9)
+        for name, val in (("render_width", render_width), ("render_height", render_height)):
+            if isinstance(val, bool) or not isinstance(val, (int, np.integer)) or not 16 <= val <= 4096:
+                raise ValueError(f"{name} must be an integer in [16, 4096], got {val!r}")
+
+        tissue = tissue if tissue is not None else TissueConfig()
+        if not isinstance(tissue, TissueConfig):
+            raise ValueError(f"tissue must be a TissueConfig, got {type(tissue).__name__}")
+        overrides = {k: v for k, v in (("density", tissue_density), ("friction_static", friction_static),
+                                       ("friction_dynamic", friction_dynamic)) if v is not None}  # fmt: skip
+        tissue = replace(tissue, **overrides)  # validated by TissueConfig
+        sim = sim if sim is not None else SimConfig()
+        if not isinstance(sim, SimConfig):
+            raise ValueError(f"sim must be a SimConfig, got {type(sim).__name__}")
+        ratio = 1.0 / (sim.dt * control_frequency)
+        self._substeps = int(round(ratio))
+        if abs(ratio - self._substeps) > 1e-9 * ratio or self._substeps < 1:
+            raise ValueError(f"control_frequency must divide the physics rate 1/sim.dt = {1.0 / sim.dt:g} Hz, "
+                             f"got {control_frequency!r}")  # fmt: skip
+        # The base scene, validated now so that bad sizes fail at construction, not at reset.
+        self._base = SceneConfig(soft=soft, cylinder_radius=cylinder_radius, cylinder_height=cylinder_height,
+                                 cylinder_mass=cylinder_mass, finger_force=finger_force, tissue=tissue, sim=sim)  # fmt: skip
+        if cylinder_radius - cylinder_radius_range < 0.005:
+            raise ValueError(f"cylinder_radius - cylinder_radius_range must be >= 0.005 m, got "
+                             f"{cylinder_radius} - {cylinder_radius_range}")  # fmt: skip
+
+        self.render_mode = render_mode
+        self.soft = soft
+        self.reward_type = reward_type
+        self.control_frequency = float(control_frequency)
+        self.gripper_speed = float(gripper_speed)
+        self.success_height = float(success_height)
+        self.reach_weight = float(reach_weight)
+        self.max_tilt = float(max_tilt)
+        self.ranges = {
+            "cylinder_position": float(cylinder_position_range),
+            "lateral_offset": float(lateral_offset_range),
+            "yaw": float(yaw_range),
+            "jaw_wedge": float(jaw_wedge_range),
+            "friction": float(friction_range),
+            "cylinder_radius": float(cylinder_radius_range),
+            "cylinder_mass": float(cylinder_mass_range),
+        }
+        self.render_width = int(render_width)
+        self.render_height = int(render_height)
+        # The instance lists the render modes that work on this machine: without a display the GUI
+        # cannot open (pybullet would end the process), so checkers must not try "human" there.
+        modes = [m for m in type(self).metadata["render_modes"] if m != "human" or _display_available()]
+        self.metadata = {**type(self).metadata, "render_modes": modes, "render_fps": self.control_frequency}
+
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(4,), dtype=np.float32)
+        self.observation_space = spaces.Box(-np.inf, np.inf, shape=(len(OBS_NAMES),), dtype=np.float32)
+
+        fh = self._base.finger_half_extents
+        # Workspace of the grip point: the fingertips may come down to 3 mm above the ground
+        # (the tissue's depth included, for both twins alike) and up to 20 cm.
+        self._grip_low = np.array([-0.1, -0.1, fh[2] + tissue.extrude + 0.003])
+        self._grip_high = np.array([0.1, 0.1, 0.20])
+        self._max_lead = 0.02
+        self.scene: GraspScene | None = None
+        self._renderer = None
+        self._last_obs: np.ndarray | None = None
+        self._forces = np.zeros(2)
+        self._reset_record: tuple[dict, dict] | None = None
+        self._actions: list[np.ndarray] = []
+        self._episode_over = False
+
+    # --- gym API -----------------------------------------------------------------------------------
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        super().reset(seed=seed)
+        options = dict(options or {})
+        unknown = set(options) - set(RESET_OPTIONS)
+        if unknown:
+            raise ValueError(f"unknown reset option(s) {sorted(unknown)}; allowed: {RESET_OPTIONS}")
+        # What a copy needs to rebuild this episode exactly: the generator before the draws.
+        self._reset_record = (self.np_random.bit_generator.state, options)
+        self._actions = []
+        self._build(options)
+        obs = self._observe()
+        self._last_obs = obs
+        self._episode_over = False
+        if self.render_mode == "human":
+            self.render()
+        return self._format_obs(obs), self._info(obs, diverged=False, clipped=False)
+
+    def step(self, action):
+        if self.scene is None:
+            raise RuntimeError("call reset() before step()")
+        act = np.asarray(action, dtype=np.float64)
+        if act.shape != (4,):
+            raise ValueError(f"action must have shape (4,), got {act.shape}")
+        if not np.isfinite(act).all():
+            raise ValueError(f"action must be finite, got {act.tolist()}")
+        clipped = bool((act < -1.0).any() or (act > 1.0).any())
+        act = np.clip(act, -1.0, 1.0)
+        self._actions.append(act.copy())
+        diverged = self._apply_and_simulate(act)
+        if diverged:
+            obs = self._last_obs
+            reward, terms = 0.0, {"lift": 0.0, "reach": 0.0}
+            terminated = True
+        else:
+            obs = self._observe()
+            self._last_obs = obs
+            reward, terms = self._reward(obs)
+            terminated = self._knocked_over_or_gone(obs)
+        info = self._info(obs, diverged=diverged, clipped=clipped)
+        info["reward_terms"] = terms
+        if self.render_mode == "human":
+            self.render()
+        return self._format_obs(obs), self._final_reward(obs, info, reward), terminated, False, info
+
+    def render(self):
+        if self.render_mode is None:
+            gym.logger.warn("render() called with render_mode=None; pass render_mode='rgb_array' or 'human' to make")
+            return None
+        if self.scene is None:
+            raise RuntimeError("call reset() before render()")
+        from .render import SceneRenderer
+
+        if self._renderer is None:
+            self._renderer = SceneRenderer(self.render_width, self.render_height, human=self.render_mode == "human")
+        return self._renderer.render(self.scene)
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+        if self.scene is not None:
+            self.scene.close()
+            self.scene = None
+
+    # --- copies: replay the episode (bit-exact; see the env card) ----------------------------------
+
+    def __getstate__(self) -> dict:
+        return {"kwargs": self._init_kwargs, "reset_record": self._reset_record, "actions": list(self._actions),
+                "np_random": None if self._np_random is None else self.np_random.bit_generator.state,
+                "np_random_seed": self._np_random_seed}  # fmt: skip
+
+    def __setstate__(self, state: dict) -> None:
+        self.__init__(**state["kwargs"])
+        if state["reset_record"] is not None:
+            rng_state, options = state["reset_record"]
+            self._np_random = np.random.Generator(np.random.PCG64())
+            self._np_random.bit_generator.state = rng_state
+            self._reset_record = (rng_state, options)
+            self._build(options)
+            self._last_obs = self._observe()
+            for a in state["actions"]:
+                self._actions.append(a.copy())
+                if self._apply_and_simulate(a):
+                    break
+                self._last_obs = self._observe()
+        if state["np_random"] is not None:
+            self._np_random = np.random.Generator(np.random.PCG64())
+            self._np_random.bit_generator.state = state["np_random"]
+        self._np_random_seed = state["np_random_seed"]
+
+    # --- internals ---------------------------------------------------------------------------------
+
+    def _draw(self, options: dict[str, Any]) -> SceneConfig:
+        """The episode's scene: fixed options, else draws from np_random (always the same number
+        of draws in the same order, so options do not shift the other quantities' draws)."""
+        rng = self.np_random
+        rg = self.ranges
+        b = self._base
+        u = rng.uniform(-1.0, 1.0, size=8)
+        vals = {
+            "cylinder_xy": (float(u[0] * rg["cylinder_position"]), float(u[1] * rg["cylinder_position"])),
+            "lateral_offset": float(u[2] * rg["lateral_offset"]),
+            "yaw": float(u[3] * rg["yaw"]),
+            "jaw_wedge": float(u[4] * rg["jaw_wedge"]),
+            "friction_scale": float(1.0 + u[5] * rg["friction"]),
+            "cylinder_radius": float(b.cylinder_radius + u[6] * rg["cylinder_radius"]),
+            "cylinder_mass": float(b.cylinder_mass * (1.0 + u[7] * rg["cylinder_mass"])),
+        }
+        for k, v in options.items():
+            vals[k] = tuple(float(x) for x in v) if k == "cylinder_xy" else float(v)
+        fs = vals.pop("friction_scale")
+        if not 0.0 < fs <= 10.0:
+            raise ValueError(f"friction_scale must be in (0, 10], got {fs!r}")
+        tissue = replace(b.tissue, friction_static=b.tissue.friction_static * fs,
+                         friction_dynamic=b.tissue.friction_dynamic * fs)  # fmt: skip
+        return replace(b, tissue=tissue, ground_friction=b.ground_friction * fs, **vals)
+
+    def _build(self, options: dict[str, Any]) -> None:
+        cfg = self._draw(options)
+        client = None if self.scene is None else self.scene.client
+        self.scene = GraspScene(cfg, gui=self.render_mode == "human", client=client)
+        if self._renderer is not None:
+            self._renderer.invalidate()
+        self._forces = np.zeros(2)
+
+    def _apply_and_simulate(self, act: np.ndarray) -> bool:
+        """Set the arm and finger targets from ``act`` and run one control interval; True if the
+        simulation diverged."""
+        sc = self.scene
+        if self._episode_over:
+            # Stepping on after a divergence: the bodies are poisoned; nothing more is simulated.
+            return True
+        col = sc.world.colliders
+        palm = col.rigid_x[_PALM]
+        grip_to_palm = palm - 0.5 * (col.rigid_x[_LEFT] + col.rigid_x[_RIGHT])
+        target_grip = (sc.palm_target - grip_to_palm) + act[:3] * (self.gripper_speed / self.control_frequency)
+        target_grip = np.clip(target_grip, self._grip_low, self._grip_high)
+        target = np.clip(target_grip + grip_to_palm, palm - self._max_lead, palm + self._max_lead)
+        sc.set_palm_target(target)
+        sc.set_finger_target(0.5 * (float(act[3]) + 1.0) * sc.config.finger_max_opening)
+        forces = np.zeros(2)
+        world = sc.world
+        try:
+            for _ in range(self._substeps):
+                world.step()
+                forces += self._finger_forces()
+        except SimulationDiverged:
+            self._episode_over = True
+            return True
+        self._forces = forces / self._substeps
+        if self._diverged():
+            self._episode_over = True
+            return True
+        return False
+
+    def _finger_forces(self) -> np.ndarray:
+        """Normal force of each finger on the cylinder in the last physics step: the tissue's
+        contacts (soft) plus pybullet's core contacts (the core can meet the cylinder too) [N]."""
+        sc = self.scene
+        c = sc.client
+        f = np.zeros(2)
+        for k, link in enumerate((0, 1)):
+            for pt in c.getContactPoints(bodyA=sc.cylinder, bodyB=sc.gripper, linkIndexA=-1, linkIndexB=link):
+                f[k] += pt[9]
+        if sc.world.solver is not None:
+            f += sc.world.solver.contact_normal_force(_CYL_SHAPE)
+        return f
+
+    def _diverged(self) -> bool:
+        w = self.scene.world
+        if not w.is_finite():
+            return True
+        col = w.colliders
+        if np.abs(col.rigid_v).max() > 20.0 or np.abs(col.rigid_w).max() > 500.0:
+            return True
+        if w.state is not None:
+            if np.abs(w.state.particle_v).max() > 20.0:
+                return True
+            if w.tissue_deviation() > 0.03:
+                return True
+        return False
+
+    def _observe(self) -> np.ndarray:
+        sc = self.scene
+        col = sc.world.colliders
+        grip = 0.5 * (col.rigid_x[_LEFT] + col.rigid_x[_RIGHT])
+        x, y, z, w = col.rigid_q[_CYL]
+        axis = np.array([2.0 * (x * z + y * w), 2.0 * (y * z - x * w), 1.0 - 2.0 * (x * x + y * y)])
+        px, py, pz, pw = col.rigid_q[_PALM]
+        yaw = math.atan2(2.0 * (pw * pz + px * py), 1.0 - 2.0 * (py * py + pz * pz))
+        closing = sc.finger_closing()
+        gap = 2.0 * sc.config.finger_max_opening - float(closing.sum())
+        obs = np.concatenate([
+            grip, col.rigid_v[_PALM], [gap], col.rigid_x[_CYL] - grip, axis, col.rigid_v[_CYL], col.rigid_w[_CYL],
+            self._forces, [col.rigid_x[_CYL, 2] - sc.cylinder_rest_z], [yaw],
+        ])  # fmt: skip
+        return obs
+
+    def _reward(self, obs: np.ndarray) -> tuple[float, dict[str, float]]:
+        lift = float(np.clip(obs[21] / self.success_height, 0.0, 1.0))
+        d = float(np.linalg.norm(obs[7:10]))
+        reach = -self.reach_weight * min(d, 0.1) / 0.1
+        terms = {"lift": lift, "reach": reach}
+        if self.reward_type == "sparse":
+            return float(self._success(obs)), terms
+        return lift + reach, terms
+
+    def _success(self, obs: np.ndarray) -> bool:
+        return bool(obs[21] >= self.success_height and obs[19] >= 0.05 and obs[20] >= 0.05)
+
+    def _knocked_over_or_gone(self, obs: np.ndarray) -> bool:
+        sc = self.scene
+        cyl = sc.world.colliders.rigid_x[_CYL]
+        if math.hypot(cyl[0], cyl[1]) > 0.15 or cyl[2] < -0.01 or cyl[2] > 0.5:
+            return True
+        tilt = math.acos(float(np.clip(obs[12], -1.0, 1.0)))
+        return tilt > self.max_tilt
+
+    def _info(self, obs: np.ndarray, *, diverged: bool, clipped: bool) -> dict[str, Any]:
+        return {
+            "is_success": (not diverged) and self._success(obs),
+            "lift_height": float(obs[21]),
+            "diverged": diverged,
+            "action_clipped": clipped,
+        }
+
+    def _format_obs(self, obs: np.ndarray):
+        return obs.astype(np.float32)
+
+    def _final_reward(self, obs: np.ndarray, info: dict[str, Any], reward: float) -> float:
+        return float(reward)
+
+
+class SoftGraspGoalEnv(SoftGraspEnv):
+    """Goal-conditioned SoftGrasp (``SoftGraspGoal-v0``) for hindsight experience replay.
+
+    As :class:`SoftGraspEnv` (same actions, physics, starting state and episode end), with:
+
+    - Observation: ``Dict(observation=Box(23), achieved_goal=Box(3), desired_goal=Box(3))``:
+      ``observation`` is SoftGraspEnv's vector, ``achieved_goal`` the cylinder centre [m],
+      ``desired_goal`` the target for it: above the cylinder's start, at its resting height plus
+      U(goal_height_range) (default 5-8 cm).
+    - Reward: ``compute_reward(achieved_goal, desired_goal, info)`` = -1 while the cylinder centre
+      is farther than ``distance_threshold`` (2 cm) from the goal, else 0 (vectorised over leading
+      batch dimensions, as HER needs); -1 on a diverged step. ``info["is_success"]`` is exactly
+      ``compute_reward(...) == 0``.
+
+    Extra arguments: ``distance_threshold`` (0.02 m), ``goal_height_range`` ((0.05, 0.08) m).
+    """
+
+    def __init__(self, render_mode: str | None = None, *, distance_threshold: float = 0.02,
+                 goal_height_range: tuple[float, float] = (0.05, 0.08), **kwargs: Any) -> None:  # fmt: skip
+        if "reward_type" in kwargs:
+            raise ValueError("SoftGraspGoalEnv's reward is the goal reward (compute_reward); do not pass reward_type")
+        super().__init__(render_mode, reward_type="sparse", **kwargs)
+        del self._init_kwargs["reward_type"]
+        _check("distance_threshold", distance_threshold, 0.0, 0.1, lo_open=True)
+        if len(goal_height_range) != 2 or not 0.0 <= goal_height_range[0] <= goal_height_range[1] <= 0.15:
+            raise ValueError(f"goal_height_range must be (lo, hi) with 0 <= lo <= hi <= 0.15 m, got {goal_height_range!r}")
+        self._init_kwargs.update(distance_threshold=distance_threshold, goal_height_range=tuple(goal_height_range))
+        self.distance_threshold = float(distance_threshold)
+        self.goal_height_range = (float(goal_height_range[0]), float(goal_height_range[1]))
+        self._goal = np.zeros(3)
+        box = spaces.Box(-np.inf, np.inf, shape=(3,), dtype=np.float32)
+        self.observation_space = spaces.Dict({
+            "observation": spaces.Box(-np.inf, np.inf, shape=(len(OBS_NAMES),), dtype=np.float32),
+            "achieved_goal": box,
+            "desired_goal": box,
+        })  # fmt: skip
+
+    def _build(self, options: dict[str, Any]) -> None:
+        super()._build(options)
+        sc = self.scene
+        h = float(self.np_random.uniform(*self.goal_height_range))
+        self._goal = np.array([sc.config.cylinder_xy[0], sc.config.cylinder_xy[1], sc.cylinder_rest_z + h])
+
+    def compute_reward(self, achieved_goal, desired_goal, info) -> np.ndarray | float:
+        d = np.linalg.norm(np.asarray(achieved_goal, dtype=np.float64) - np.asarray(desired_goal, dtype=np.float64),
+                           axis=-1)  # fmt: skip
+        r = -(d > self.distance_threshold).astype(np.float32)
+        return float(r) if np.ndim(r) == 0 else r
+
+    def _format_obs(self, obs: np.ndarray):
+        return {
+            "observation": obs.astype(np.float32),
+            "achieved_goal": (obs[7:10] + obs[0:3]).astype(np.float32),
+            "desired_goal": self._goal.astype(np.float32),
+        }
+
+    def _info(self, obs: np.ndarray, *, diverged: bool, clipped: bool) -> dict[str, Any]:
+        info = super()._info(obs, diverged=diverged, clipped=clipped)
+        # Success is exactly "compute_reward gives 0" on the goals the agent sees, so relabelled
+        # (HER) and online rewards agree.
+        fo = self._format_obs(obs)
+        info["is_success"] = (not diverged) and self.compute_reward(fo["achieved_goal"], fo["desired_goal"], info) == 0.0
+        return info
+
+    def _final_reward(self, obs: np.ndarray, info: dict[str, Any], reward: float) -> float:
+        if info["diverged"]:
+            return -1.0
+        fo = self._format_obs(obs)
+        return float(self.compute_reward(fo["achieved_goal"], fo["desired_goal"], info))
+
+
+def _check(name: str, value: float, lo: float, hi: float, *, lo_open: bool = False) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)) or not math.isfinite(value):
+        raise ValueError(f"{name} must be a finite number, got {value!r}")
+    if (value <= lo if lo_open else value < lo) or value > hi:
+        raise ValueError(f"{name} must be in {'(' if lo_open else '['}{lo}, {hi}], got {value!r}")

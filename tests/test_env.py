@@ -1,0 +1,465 @@
+"""The Gymnasium environments: API contracts, determinism, robustness, rendering, copies, and the
+physics the observation reports."""
+
+from __future__ import annotations
+
+import copy
+import math
+import pickle
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pybullet as p
+import pytest
+from gymnasium.utils.env_checker import check_env as gym_check_env
+from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+import softgrasp_env
+from agents.scripted import ScriptedGraspPolicy
+from softgrasp_env import ENV_IDS
+from softgrasp_env.env import OBS_NAMES, SoftGraspEnv
+
+# Gymnasium's checker notes unbounded observation boxes; like its MuJoCo envs, ours are unbounded.
+_INF_BOUND = "observation space m"
+
+
+def _obs_vec(obs) -> np.ndarray:
+    return obs["observation"] if isinstance(obs, dict) else obs
+
+
+def _assert_same(a, b) -> None:
+    """Bit-identical (arrays, dicts, scalars)."""
+    if isinstance(a, (tuple, list)):
+        assert len(a) == len(b)
+        for x, y in zip(a, b):
+            _assert_same(x, y)
+    elif isinstance(a, dict):
+        assert a.keys() == b.keys()
+        for k in a:
+            _assert_same(a[k], b[k])
+    elif isinstance(a, np.ndarray):
+        assert a.dtype == b.dtype and a.shape == b.shape
+        assert a.tobytes() == b.tobytes()
+    else:
+        assert a == b
+
+
+def _rollout(env, seed: int, steps: int, action_seed: int) -> list:
+    out = [env.reset(seed=seed)]
+    rng = np.random.default_rng(action_seed)
+    for _ in range(steps):
+        a = rng.uniform(-1.0, 1.0, size=4).astype(np.float32)
+        res = env.step(a)
+        out.append(res)
+        if res[2] or res[3]:
+            out.append(env.reset())
+    return out
+
+
+# --- registration ---------------------------------------------------------------------------------
+
+
+def test_ids_are_registered_with_time_limits():
+    assert len(ENV_IDS) == 4
+    gym.register_envs(softgrasp_env)  # the documented idiom is accepted
+    for env_id in ENV_IDS:
+        spec = gym.spec(env_id)
+        assert spec.max_episode_steps == 100
+    assert gym.spec("SoftGrasp-v0").kwargs["soft"] is True
+    assert gym.spec("SoftGraspRigid-v0").kwargs["soft"] is False
+
+
+def test_register_envs_is_idempotent():
+    before = {i: gym.spec(i) for i in ENV_IDS}
+    softgrasp_env.register_envs()
+    assert all(gym.spec(i) is before[i] for i in ENV_IDS)
+
+
+# --- checkers -------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_gymnasium_check_env(env_id):
+    env = gym.make(env_id, render_mode="rgb_array")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        gym_check_env(env.unwrapped)
+    env.close()
+    unexpected = [str(w.message) for w in caught if _INF_BOUND not in str(w.message)]
+    assert unexpected == []
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_sb3_check_env(env_id):
+    env = gym.make(env_id)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sb3_check_env(env.unwrapped, warn=True)
+    env.close()
+    assert [str(w.message) for w in caught] == []
+
+
+# --- determinism and reset ------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_same_seed_bit_identical_and_reset_restores_everything(env_id):
+    a = gym.make(env_id)
+    b = gym.make(env_id)
+    run_a = _rollout(a, seed=11, steps=200, action_seed=5)
+    # b first lives through another episode; its reset must leave no trace of it.
+    _rollout(b, seed=3, steps=40, action_seed=9)
+    run_b = _rollout(b, seed=11, steps=200, action_seed=5)
+    assert len(run_a) == len(run_b)
+    for ra, rb in zip(run_a, run_b):
+        assert len(ra) == len(rb)
+        for xa, xb in zip(ra, rb):
+            _assert_same(xa, xb)
+    a.close()
+    b.close()
+
+
+def test_different_seeds_give_different_starts():
+    env = gym.make("SoftGraspRigid-v0")
+    o1, _ = env.reset(seed=1)
+    o2, _ = env.reset(seed=2)
+    assert not np.array_equal(o1, o2)
+    env.close()
+
+
+# --- robustness -----------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_thousand_random_steps_stay_finite(env_id):
+    env = gym.make(env_id)
+    env.action_space.seed(0)
+    obs, _ = env.reset(seed=0)
+    for _ in range(1000):
+        obs, r, term, trunc, info = env.step(env.action_space.sample())
+        assert env.observation_space.contains(obs)
+        assert np.isfinite(_obs_vec(obs)).all()
+        assert math.isfinite(r)
+        assert info["diverged"] is False
+        if term or trunc:
+            obs, _ = env.reset()
+    env.close()
+
+
+def test_action_validation():
+    env = gym.make("SoftGraspRigid-v0").unwrapped
+    with pytest.raises(RuntimeError, match="reset"):
+        env.step(np.zeros(4, dtype=np.float32))
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="shape"):
+        env.step(np.zeros(3))
+    with pytest.raises(ValueError, match="shape"):
+        env.step(np.zeros((1, 4)))
+    with pytest.raises(ValueError, match="finite"):
+        env.step(np.array([0.0, np.nan, 0.0, 0.0]))
+    with pytest.raises(ValueError, match="finite"):
+        env.step(np.array([0.0, 0.0, np.inf, 0.0]))
+    env.close()
+
+
+def test_out_of_range_actions_are_clipped_and_reported():
+    big = np.array([5.0, -3.0, 2.0, 9.0])
+    a = gym.make("SoftGrasp-v0")
+    b = gym.make("SoftGrasp-v0")
+    a.reset(seed=4)
+    b.reset(seed=4)
+    for _ in range(5):
+        ra = a.step(big)
+        rb = b.step(np.clip(big, -1, 1).astype(np.float32))
+        assert ra[4]["action_clipped"] is True and rb[4]["action_clipped"] is False
+        _assert_same(ra[0], rb[0])
+        assert ra[1] == rb[1]
+    a.close()
+    b.close()
+
+
+def test_bad_arguments_raise_naming_the_argument():
+    with pytest.raises(ValueError, match="control_frequency"):
+        SoftGraspEnv(control_frequency=7.0)  # 240 / 7 is not an integer
+    with pytest.raises(ValueError, match="reward_type"):
+        SoftGraspEnv(reward_type="shaped")
+    with pytest.raises(ValueError, match="yaw_range"):
+        SoftGraspEnv(yaw_range=-0.1)
+    with pytest.raises(ValueError, match="density"):
+        SoftGraspEnv(tissue_density=-5.0)
+    with pytest.raises(ValueError, match="cylinder_mass"):
+        SoftGraspEnv(cylinder_mass=0.0)
+    with pytest.raises(ValueError, match="render_mode"):
+        SoftGraspEnv(render_mode="ascii")
+    with pytest.raises(ValueError, match="render_width"):
+        SoftGraspEnv(render_width=3)
+    env = SoftGraspEnv(soft=False)
+    with pytest.raises(ValueError, match="unknown reset option"):
+        env.reset(seed=0, options={"yaww": 0.1})
+    env.close()
+
+
+def test_reset_options_fix_the_randomised_quantities():
+    env = gym.make("SoftGraspRigid-v0").unwrapped
+    env.reset(seed=0, options={"cylinder_xy": (0.004, -0.003), "yaw": 0.05, "lateral_offset": 0.002,
+                               "jaw_wedge": 0.02, "cylinder_mass": 0.2, "cylinder_radius": 0.025})  # fmt: skip
+    cfg = env.scene.config
+    assert cfg.cylinder_xy == (0.004, -0.003) and cfg.yaw == 0.05 and cfg.lateral_offset == 0.002
+    assert cfg.jaw_wedge == 0.02 and cfg.cylinder_mass == 0.2 and cfg.cylinder_radius == 0.025
+    env.close()
+
+
+# --- divergence -----------------------------------------------------------------------------------
+
+
+def test_nan_in_the_tissue_ends_the_episode_with_a_finite_observation():
+    env = gym.make("SoftGrasp-v0")
+    obs0, _ = env.reset(seed=0)
+    obs1, *_ = env.step(np.zeros(4, dtype=np.float32))
+    env.unwrapped.scene.world.state.particle_x[7, 0] = np.nan
+    obs, r, term, trunc, info = env.step(np.zeros(4, dtype=np.float32))
+    assert term and info["diverged"] and not info["is_success"]
+    assert np.isfinite(obs).all() and r == 0.0
+    _assert_same(obs, obs1)  # the last finite observation
+    # Stepping on does not touch the poisoned simulation and stays finite.
+    obs, r, term, *_ = env.step(np.zeros(4, dtype=np.float32))
+    assert term and np.isfinite(obs).all()
+    # reset rebuilds a healthy world
+    obs, info = env.reset(seed=0)
+    _assert_same(obs, obs0)
+    env.close()
+
+
+def test_runaway_velocity_is_divergence():
+    env = gym.make("SoftGraspRigid-v0")
+    env.reset(seed=0)
+    sc = env.unwrapped.scene
+    sc.client.resetBaseVelocity(sc.cylinder, [0.0, 0.0, 300.0], [0.0, 0.0, 0.0])
+    obs, r, term, trunc, info = env.step(np.zeros(4, dtype=np.float32))
+    assert term and info["diverged"] and np.isfinite(obs).all()
+    env.close()
+
+
+def test_knocked_over_cylinder_terminates():
+    env = gym.make("SoftGraspRigid-v0")
+    env.reset(seed=0)
+    sc = env.unwrapped.scene
+    sc.client.resetBasePositionAndOrientation(sc.cylinder, [0.03, 0.0, 0.03], p.getQuaternionFromEuler([1.5, 0, 0]))
+    obs, r, term, trunc, info = env.step(np.zeros(4, dtype=np.float32))
+    assert term and not info["diverged"]
+    env.close()
+
+
+# --- physics seen through the env -----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("env_id", ["SoftGrasp-v0", "SoftGraspRigid-v0"])
+def test_scripted_policy_lifts_and_fingers_press_with_the_motor_force(env_id):
+    """With the default misalignment the scripted grasp lifts the cylinder 5 cm in every seed, and
+    in the held state each finger's normal force equals its motor's force limit (3 N): the motor
+    pushes, the tissue (or the rigid contact) pushes back, and nothing else acts along the
+    closing axis."""
+    env = gym.make(env_id)
+    policy = ScriptedGraspPolicy()
+    for seed in range(4):
+        obs, _ = env.reset(seed=seed)
+        successes = 0
+        for _ in range(100):
+            obs, r, term, trunc, info = env.step(policy(obs))
+            successes += info["is_success"]
+            assert not term
+        assert info["is_success"] and successes >= 50
+        f = obs[OBS_NAMES.index("force_left") : OBS_NAMES.index("force_right") + 1]
+        np.testing.assert_allclose(f, 3.0, rtol=0.05)
+        assert r == pytest.approx(1.0 + info["reward_terms"]["reach"])
+    env.close()
+
+
+def test_dense_and_sparse_rewards_follow_their_definitions():
+    dense = gym.make("SoftGrasp-v0")
+    sparse = gym.make("SoftGraspSparse-v0")
+    policy = ScriptedGraspPolicy()
+    od, _ = dense.reset(seed=2)
+    os_, _ = sparse.reset(seed=2)
+    seen_success = False
+    for _ in range(60):
+        od, rd, *_, infd = dense.step(policy(od))
+        os_, rs, *_, infs = sparse.step(policy(os_))
+        _assert_same(od, os_)  # the reward type changes nothing else
+        terms = infd["reward_terms"]
+        assert rd == pytest.approx(terms["lift"] + terms["reach"])
+        assert 0.0 <= terms["lift"] <= 1.0 and -0.1 <= terms["reach"] <= 0.0
+        assert terms["lift"] == pytest.approx(min(max(infd["lift_height"] / 0.05, 0.0), 1.0))
+        assert rs == float(infs["is_success"])
+        seen_success |= infs["is_success"]
+    assert seen_success
+    dense.close()
+    sparse.close()
+
+
+def test_goal_env_compute_reward_is_vectorised_and_matches_step():
+    env = gym.make("SoftGraspGoal-v0")
+    obs, _ = env.reset(seed=0)
+    u = env.unwrapped
+    policy = ScriptedGraspPolicy(lift_to=obs["desired_goal"][2] - 0.05)
+    rewards = []
+    for _ in range(60):
+        obs, r, term, trunc, info = env.step(policy(obs))
+        assert r == u.compute_reward(obs["achieved_goal"], obs["desired_goal"], info)
+        assert info["is_success"] == (r == 0.0)
+        rewards.append(r)
+    assert rewards[0] == -1.0 and rewards[-1] == 0.0
+    ag = np.zeros((5, 3), dtype=np.float32)
+    dg = np.zeros((5, 3), dtype=np.float32)
+    dg[:, 2] = [0.0, 0.01, 0.019, 0.021, 0.5]
+    np.testing.assert_array_equal(u.compute_reward(ag, dg, [{}] * 5), [0, 0, 0, -1, -1])
+    env.close()
+
+
+def test_her_trains_on_the_goal_env():
+    from stable_baselines3 import SAC, HerReplayBuffer
+
+    env = gym.make("SoftGraspGoal-v0", max_episode_steps=20)
+    model = SAC("MultiInputPolicy", env, replay_buffer_class=HerReplayBuffer,
+                replay_buffer_kwargs={"n_sampled_goal": 2, "goal_selection_strategy": "future"},
+                learning_starts=40, batch_size=32, seed=0, device="cpu")  # fmt: skip
+    model.learn(total_timesteps=80)
+    assert model.replay_buffer.size() == 80
+    # relabelled samples carry the env's own reward for their (achieved, desired) pair
+    batch = model.replay_buffer.sample(64)
+    want = env.unwrapped.compute_reward(batch.next_observations["achieved_goal"].numpy(),
+                                        batch.next_observations["desired_goal"].numpy(), [{}] * 64)  # fmt: skip
+    np.testing.assert_array_equal(batch.rewards.numpy().ravel(), want)
+    env.close()
+
+
+# --- rendering ------------------------------------------------------------------------------------
+
+
+def _tissue_pixels(img: np.ndarray) -> int:
+    r, g, b = (img[..., k].astype(int) for k in range(3))
+    return int(((r > 150) & (r - g > 40) & (b - g > 5) & (abs(r - 2 * b + g) < 200)).sum())
+
+
+def test_rgb_array_shows_the_tissue():
+    soft = gym.make("SoftGrasp-v0", render_mode="rgb_array", render_width=160, render_height=120)
+    rigid = gym.make("SoftGraspRigid-v0", render_mode="rgb_array", render_width=160, render_height=120)
+    soft.reset(seed=0)
+    rigid.reset(seed=0)
+    img_s = soft.render()
+    img_r = rigid.render()
+    assert img_s.shape == (120, 160, 3) and img_s.dtype == np.uint8
+    assert img_r.shape == (120, 160, 3)
+    assert _tissue_pixels(img_s) > 100  # the pink particles are drawn
+    assert _tissue_pixels(img_r) == 0
+    # the picture follows the simulation
+    for _ in range(5):
+        soft.step(np.array([0.0, 0.0, -1.0, 0.0], dtype=np.float32))
+    assert not np.array_equal(soft.render(), img_s)
+    soft.close()
+    rigid.close()
+
+
+def test_rendering_does_not_change_the_trajectory():
+    a = gym.make("SoftGrasp-v0", render_mode="rgb_array", render_width=64, render_height=48)
+    b = gym.make("SoftGrasp-v0")
+    ra = [a.reset(seed=1)]
+    rb = [b.reset(seed=1)]
+    rng = np.random.default_rng(0)
+    for _ in range(10):
+        act = rng.uniform(-1, 1, 4).astype(np.float32)
+        ra.append(a.step(act)[:3])
+        a.render()
+        rb.append(b.step(act)[:3])
+    for x, y in zip(ra, rb):
+        for u, v in zip(x, y):
+            _assert_same(u, v)
+    a.close()
+    b.close()
+
+
+def test_human_mode_without_display_is_a_clear_error(monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    with pytest.raises(ValueError, match="display"):
+        SoftGraspEnv(render_mode="human")
+    assert "human" not in SoftGraspEnv().metadata["render_modes"]
+
+
+def test_render_without_mode_warns_and_returns_none():
+    env = gym.make("SoftGraspRigid-v0")
+    env.reset(seed=0)
+    with pytest.warns(UserWarning, match="render_mode"):
+        assert env.unwrapped.render() is None
+    env.close()
+
+
+def test_record_video_writes_an_episode(tmp_path):
+    pytest.importorskip("moviepy")
+    env = gym.make("SoftGrasp-v0", render_mode="rgb_array", render_width=96, render_height=64, max_episode_steps=8)
+    env = gym.wrappers.RecordVideo(env, str(tmp_path), episode_trigger=lambda e: True, disable_logger=True)
+    env.reset(seed=0)
+    done = False
+    while not done:
+        _, _, term, trunc, _ = env.step(env.action_space.sample())
+        done = term or trunc
+    env.close()
+    videos = list(tmp_path.glob("*.mp4"))
+    assert len(videos) == 1 and videos[0].stat().st_size > 1000
+
+
+# --- copies and clients ---------------------------------------------------------------------------
+
+
+def test_pickled_fresh_env_behaves_like_the_original():
+    env = gym.make("SoftGrasp-v0")
+    twin = pickle.loads(pickle.dumps(env))
+    _assert_same(env.reset(seed=0), twin.reset(seed=0))
+    act = np.array([0.3, -0.2, -0.5, 0.1], dtype=np.float32)
+    for x, y in zip(env.step(act), twin.step(act)):
+        _assert_same(x, y)
+    env.close()
+    twin.close()
+
+
+@pytest.mark.parametrize("env_id", ["SoftGrasp-v0", "SoftGraspGoal-v0"])
+def test_deepcopy_mid_episode_is_exact(env_id):
+    env = gym.make(env_id)
+    env.reset(seed=5)
+    rng = np.random.default_rng(1)
+    for _ in range(15):
+        env.step(rng.uniform(-1, 1, 4).astype(np.float32))
+    twin = copy.deepcopy(env)
+    assert twin.unwrapped.scene.client._client != env.unwrapped.scene.client._client
+    for _ in range(10):
+        act = rng.uniform(-1, 1, 4).astype(np.float32)
+        for x, y in zip(env.step(act), twin.step(act)):
+            _assert_same(x, y)
+    # the generator state travelled too: the next random reset is the same
+    _assert_same(env.reset()[0], twin.reset()[0])
+    env.close()
+    twin.close()
+
+
+def _connected_clients() -> set[int]:
+    return {cid for cid in range(256) if p.getConnectionInfo(physicsClientId=cid)["isConnected"]}
+
+
+def test_create_and_close_100_envs_leaves_no_client_connected():
+    before = _connected_clients()
+    ids = []
+    for k in range(100):
+        env = gym.make("SoftGrasp-v0", render_mode="rgb_array", render_width=32, render_height=24)
+        env.reset(seed=k)
+        if k % 10 == 0:
+            env.render()
+            ids.append(env.unwrapped._renderer._client._client)
+        ids.append(env.unwrapped.scene.client._client)
+        env.close()
+    assert _connected_clients() == before
+    assert not set(ids) & before
+    # an env closed before any reset, and closed twice
+    env = gym.make("SoftGrasp-v0")
+    env.close()
+    env.close()
