@@ -111,8 +111,8 @@ class SoftGraspEnv(gym.Env):
     may fix any of them (keys in ``RESET_OPTIONS``).
 
     ## Episode end
-    - ``info["is_success"]`` (every step): lifted ≥ ``success_height`` and both fingers press on it
-      (≥ 0.05 N each).
+    - ``info["is_success"]`` (every step): lifted ≥ ``success_height``, both fingers press on it
+      (≥ 0.05 N each) and it is not tilted more than ``max_tilt``.
     - Terminated: the cylinder tilts more than ``max_tilt`` (knocked over), leaves the workspace
       (more than 15 cm from the origin horizontally, below the ground or above 50 cm), or the
       simulation diverges (non-finite numbers, a body faster than 20 m/s, tissue torn more than
@@ -486,7 +486,8 @@ class SoftGraspEnv(gym.Env):
         return lift + reach, terms
 
     def _success(self, obs: np.ndarray) -> bool:
-        return bool(obs[21] >= self.success_height and obs[19] >= 0.05 and obs[20] >= 0.05)
+        upright = math.acos(float(np.clip(obs[12], -1.0, 1.0))) <= self.max_tilt
+        return bool(obs[21] >= self.success_height and obs[19] >= 0.05 and obs[20] >= 0.05 and upright)
 
     def _knocked_over_or_gone(self, obs: np.ndarray) -> bool:
         sc = self.scene

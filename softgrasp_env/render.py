@@ -81,8 +81,9 @@ class SceneRenderer:
                 p.resetBasePositionAndOrientation(body, x[k].tolist(), q[k].tolist(), physicsClientId=cid)
         if self.human:
             return None
-        cyl = sc.getBasePositionAndOrientation(scene.cylinder)[0]
-        view = p.computeViewMatrixFromYawPitchRoll(cameraTargetPosition=[cyl[0], cyl[1], 0.07], distance=0.34,
+        # A fixed camera on the cylinder's start, so a video shows the lift as motion.
+        cx, cy = scene.config.cylinder_xy
+        view = p.computeViewMatrixFromYawPitchRoll(cameraTargetPosition=[cx, cy, 0.08], distance=0.36,
                                                    yaw=35.0, pitch=-25.0, roll=0.0, upAxisIndex=2,
                                                    physicsClientId=cid)  # fmt: skip
         proj = p.computeProjectionMatrixFOV(fov=50.0, aspect=self.width / self.height, nearVal=0.01, farVal=3.0,

@@ -463,3 +463,25 @@ def test_create_and_close_100_envs_leaves_no_client_connected():
     env = gym.make("SoftGrasp-v0")
     env.close()
     env.close()
+
+
+def test_jaw_wedge_defeats_rigid_fingers_but_not_soft_ones():
+    """The thesis' case for soft fingers: aligned only approximately (here a 0.1 rad wedge between
+    the finger faces, 0.1 rad yaw, 5 mm offset), rigid boxes touch the cylinder at two points and
+    it swings out of the grasp and topples; the tissue conforms and holds it upright."""
+    options = {"jaw_wedge": 0.1, "yaw": 0.1, "lateral_offset": 0.005, "cylinder_xy": (0.0, 0.0)}
+    policy = ScriptedGraspPolicy()
+    outcome = {}
+    for env_id in ("SoftGraspRigid-v0", "SoftGrasp-v0"):
+        env = gym.make(env_id)
+        obs, _ = env.reset(seed=0, options=options)
+        for _ in range(100):
+            obs, r, term, trunc, info = env.step(policy(obs))
+            if term:
+                break
+        outcome[env_id] = (term, info["is_success"], float(obs[OBS_NAMES.index("cyl_axis_z")]))
+        env.close()
+    rigid_term, rigid_success, rigid_axis_z = outcome["SoftGraspRigid-v0"]
+    assert rigid_term and not rigid_success and rigid_axis_z < math.cos(math.pi / 4)
+    soft_term, soft_success, soft_axis_z = outcome["SoftGrasp-v0"]
+    assert not soft_term and soft_success and soft_axis_z > math.cos(0.1)
