@@ -105,6 +105,10 @@ class SceneRenderer:
             self._mirror_rigid(scene)
         self._particles = []
         model = scene.world.model
+        if self.human:
+            # The GUI redraws after every body it is sent; hundreds of particle bodies took ~20 s
+            # that way. Pausing its rendering while they are created is pybullet's usual remedy.
+            self._client.configureDebugVisualizer(p.COV_ENABLE_RENDERING, 0)
         if model is not None:
             c = self._client
             radii = np.round(model.particle_radii, 9)
@@ -123,6 +127,8 @@ class SceneRenderer:
                 bodies = [bodies] if isinstance(bodies, int) else list(bodies)
                 ids[members] = bodies
             self._particles = ids.tolist()
+        if self.human:
+            self._client.configureDebugVisualizer(p.COV_ENABLE_RENDERING, 1)
         self._scene = scene
 
     def _mirror_rigid(self, scene: GraspScene) -> None:

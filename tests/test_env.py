@@ -485,3 +485,26 @@ def test_jaw_wedge_defeats_rigid_fingers_but_not_soft_ones():
     assert rigid_term and not rigid_success and rigid_axis_z < math.cos(math.pi / 4)
     soft_term, soft_success, soft_axis_z = outcome["SoftGrasp-v0"]
     assert not soft_term and soft_success and soft_axis_z > math.cos(0.1)
+
+
+@pytest.mark.skipif(not softgrasp_env.env._display_available(), reason="needs a display (CI runs under xvfb-run)")
+def test_human_mode_runs_the_gui_with_the_particles_shown():
+    env = gym.make("SoftGrasp-v0", render_mode="human")
+    ref = gym.make("SoftGrasp-v0")
+    obs, _ = env.reset(seed=0)
+    ref_obs, _ = ref.reset(seed=0)
+    policy = ScriptedGraspPolicy()
+    for _ in range(10):
+        obs, *_ = env.step(policy(obs))
+        ref_obs, *_ = ref.step(policy(ref_obs))
+    _assert_same(obs, ref_obs)  # the visual-only particle bodies take no part in the dynamics
+    u = env.unwrapped
+    c = u.scene.client
+    assert c.getConnectionInfo()["connectionMethod"] == p.GUI
+    state = u.scene.world.state
+    assert len(u._renderer._particles) == state.particle_x.shape[0]
+    for k in (0, 100, len(u._renderer._particles) - 1):
+        pos, _ = c.getBasePositionAndOrientation(u._renderer._particles[k])
+        np.testing.assert_allclose(pos, state.particle_x[k], atol=1e-9)
+    env.close()
+    ref.close()
