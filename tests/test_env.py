@@ -398,14 +398,14 @@ def test_render_without_mode_warns_and_returns_none():
 def test_record_video_writes_an_episode(tmp_path):
     pytest.importorskip("moviepy")
     env = gym.make("SoftGrasp-v0", render_mode="rgb_array", render_width=96, render_height=64, max_episode_steps=8)
-    env = gym.wrappers.RecordVideo(env, str(tmp_path), episode_trigger=lambda e: True, disable_logger=True)
+    env = gym.wrappers.RecordVideo(env, str(tmp_path / "videos"), episode_trigger=lambda e: True, disable_logger=True)
     env.reset(seed=0)
     done = False
     while not done:
         _, _, term, trunc, _ = env.step(env.action_space.sample())
         done = term or trunc
     env.close()
-    videos = list(tmp_path.glob("*.mp4"))
+    videos = list((tmp_path / "videos").glob("*.mp4"))
     assert len(videos) == 1 and videos[0].stat().st_size > 1000
 
 
