@@ -1,0 +1,75 @@
+"""stable-baselines3 agents for the SoftGrasp environments: one preset per algorithm.
+
+The presets follow what works for manipulation tasks of this size in rl-baselines3-zoo
+(FetchPickAndPlace / panda-gym: SAC or TQC with HER, gamma 0.95-0.98, 256x256 MLPs) and SB3's
+PPO defaults for continuous control; they are starting points, not tuned results.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+from stable_baselines3 import PPO, SAC, HerReplayBuffer
+from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.vec_env import VecEnv
+
+ALGOS = ("ppo", "sac", "her-sac")
+
+PRESETS: dict[str, dict[str, Any]] = {
+    "ppo": {
+        "policy": "MlpPolicy",
+        "n_steps": 1024,
+        "batch_size": 256,
+        "n_epochs": 10,
+        "gamma": 0.98,
+        "gae_lambda": 0.95,
+        "learning_rate": 3e-4,
+        "policy_kwargs": {"net_arch": [256, 256]},
+    },
+    "sac": {
+        "policy": "MlpPolicy",
+        "learning_rate": 1e-3,
+        "buffer_size": 300_000,
+        "batch_size": 256,
+        "gamma": 0.98,
+        "tau": 0.02,
+        "learning_starts": 1000,
+        "policy_kwargs": {"net_arch": [256, 256]},
+    },
+    "her-sac": {
+        "policy": "MultiInputPolicy",
+        "learning_rate": 1e-3,
+        "buffer_size": 300_000,
+        "batch_size": 256,
+        "gamma": 0.95,
+        "tau": 0.05,
+        "learning_starts": 1000,
+        "replay_buffer_class": HerReplayBuffer,
+        "replay_buffer_kwargs": {"n_sampled_goal": 4, "goal_selection_strategy": "future"},
+        "policy_kwargs": {"net_arch": [256, 256]},
+    },
+}
+
+
+def default_algo(env_id: str) -> str:
+    """HER for goal-conditioned ids (dict observations), SAC otherwise."""
+    space = gym.spec(env_id).entry_point
+    return "her-sac" if isinstance(space, str) and space.endswith("GoalEnv") else "sac"
+
+
+def make_model(algo: str, env: gym.Env | VecEnv, *, seed: int | None = None, **overrides: Any) -> BaseAlgorithm:
+    """An SB3 model of ``algo`` (one of :data:`ALGOS`) on ``env`` with the preset, updated by
+    ``overrides`` (any keyword of the SB3 class)."""
+    if algo not in PRESETS:
+        raise ValueError(f"algo must be one of {ALGOS}, got {algo!r}")
+    kwargs = {**PRESETS[algo], **overrides}
+    policy = kwargs.pop("policy")
+    cls = PPO if algo == "ppo" else SAC
+    return cls(policy, env, seed=seed, device="cpu", verbose=0, **kwargs)
+
+
+def model_class(algo: str) -> type[BaseAlgorithm]:
+    if algo not in PRESETS:
+        raise ValueError(f"algo must be one of {ALGOS}, got {algo!r}")
+    return PPO if algo == "ppo" else SAC

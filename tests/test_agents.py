@@ -1,0 +1,75 @@
+"""Agents: the scripted policy through the evaluator, train.py end to end (tiny budgets: these
+check the plumbing; learning itself is measured by running train.py, see README)."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import softgrasp_env  # noqa: F401
+from agents.baselines import ALGOS, default_algo, make_model
+from agents.evaluate import evaluate, load_policy
+from agents.evaluate import main as evaluate_main
+from agents.scripted import ScriptedGraspPolicy
+
+
+def test_scripted_policy_succeeds_where_random_actions_do_not():
+    env = gym.make("SoftGraspRigid-v0")
+    scripted = evaluate(env, ScriptedGraspPolicy(), episodes=3, seed=100)
+    env.action_space.seed(0)
+    random = evaluate(env, load_policy("random", env), episodes=3, seed=100)
+    env.close()
+    assert scripted.success_rate == 1.0 and scripted.mean_final_lift > 0.05 and scripted.diverged == 0
+    assert random.success_rate == 0.0 and random.mean_return < scripted.mean_return
+
+
+def test_default_algos_and_presets():
+    assert default_algo("SoftGraspGoal-v0") == "her-sac"
+    assert default_algo("SoftGrasp-v0") == "sac"
+    env = gym.make("SoftGraspRigid-v0")
+    for algo in ("ppo", "sac"):
+        model = make_model(algo, env, seed=0, **({"n_steps": 64} if algo == "ppo" else {}))
+        assert model.gamma == 0.98
+    with pytest.raises(ValueError, match="algo"):
+        make_model("dqn", env)
+    env.close()
+    assert set(ALGOS) == {"ppo", "sac", "her-sac"}
+
+
+@pytest.mark.parametrize(("env_id", "algo", "steps"), [("SoftGraspRigid-v0", "sac", 300),
+                                                       ("SoftGraspRigid-v0", "ppo", 1024),
+                                                       ("SoftGraspGoal-v0", "her-sac", 230)])  # fmt: skip
+def test_train_writes_a_run_that_evaluate_can_load(tmp_path, env_id, algo, steps, capsys):
+    import train
+
+    rc = train.main(["--env", env_id, "--algo", algo, "--timesteps", str(steps), "--eval-every", "150",
+                     "--eval-episodes", "1", "--learning-starts", "110", "--out", str(tmp_path)])  # fmt: skip
+    assert rc == 0
+    run = tmp_path / f"{env_id}_{algo}_0"
+    meta = json.loads((run / "run.json").read_text())
+    assert meta["algo"] == algo and meta["env"] == env_id
+    assert (run / "model.zip").exists()
+    assert (run / "vecnormalize.pkl").exists() == (algo != "her-sac")
+    rows = list(csv.DictReader(open(run / "progress.csv")))
+    assert int(rows[-1]["timesteps"]) >= steps
+    assert all(np.isfinite(float(r["mean_return"])) for r in rows)
+    monitor = list(run.glob("*.monitor.csv"))
+    assert monitor and "is_success" in monitor[0].read_text().splitlines()[1]
+    capsys.readouterr()
+    assert evaluate_main(["--env", env_id, "--policy", str(run / "model.zip"), "--episodes", "1"]) == 0
+    assert "success" in capsys.readouterr().out
+
+
+def test_train_rejects_bad_arguments(tmp_path):
+    import train
+
+    with pytest.raises(SystemExit):
+        train.main(["--env", "SoftGrasp-v0", "--algo", "her-sac", "--out", str(tmp_path)])
+    with pytest.raises(SystemExit):
+        train.main(["--env", "SoftGrasp-v0", "--timesteps", "0", "--out", str(tmp_path)])
+    with pytest.raises(SystemExit):
+        evaluate_main(["--policy", str(tmp_path / "missing.zip")])
