@@ -150,8 +150,14 @@ def extract_rotation_t(a, q, max_iterations, tolerance):
     polar factor when det A > 0); directions that A leaves undetermined (planar, collinear or zero
     A) keep the warm start instead of snapping to identity.
     """
+    return extract_rotation_unit_t(a, qnormalize(q), max_iterations, tolerance)
+
+
+@jit
+def extract_rotation_unit_t(a, qq, max_iterations, tolerance):
+    """:func:`extract_rotation_t` for a warm start ``qq`` that is already a unit quaternion (the
+    solver's group rotations always are): saves the square root and division of normalising it."""
     a00, a01, a02, a10, a11, a12, a20, a21, a22 = a
-    qq = qnormalize(q)
     tol2 = tolerance * tolerance
     for _ in range(max_iterations):
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = qmat(qq)

@@ -29,7 +29,7 @@ import numpy as np
 from ..config import SimConfig
 from .collision import SHAPE_BOX, SHAPE_CYLINDER, SHAPE_PLANE, SHAPE_SPHERE, shape_distance, support_radius
 from .model import TissueModel
-from .rotation import extract_rotation_t, qconj, qexp, qlog, qmat, qmul, qnormalize, qrotate
+from .rotation import extract_rotation_t, extract_rotation_unit_t, qconj, qexp, qlog, qmat, qmul, qnormalize, qrotate
 from .state import TissueState
 
 COUPLING_THESIS = 0
@@ -459,7 +459,7 @@ def _shape_match_group_goal(i, k_iter, rot_iters, g_off, g_mem, g_pack, rest_q, 
         a20 += moment[j, 6] + x2 * q0
         a21 += moment[j, 7] + x2 * q1
         a22 += moment[j, 8] + x2 * q2
-    qr = extract_rotation_t(
+    qr = extract_rotation_unit_t(  # group_q is kept unit (predict and every solve normalise it)
         (a00, a01, a02, a10, a11, a12, a20, a21, a22),
         (group_q[i, 0], group_q[i, 1], group_q[i, 2], group_q[i, 3]),
         rot_iters,
