@@ -23,7 +23,7 @@ from ..tissue.model import TissueModel, concatenate, with_core_shapes
 from ..tissue.solver import Colliders, StepOutput, TissueSolver
 from ..tissue.state import TissueState, state_at_rest
 from .bullet import RigidRef, StateReader, read_mass_properties
-from .coupling import apply_impulses, sync_attached
+from .coupling import ImpulseApplier, sync_attached
 
 
 @dataclass(frozen=True)
@@ -74,6 +74,7 @@ class World:
         inv_m, inv_i = read_mass_properties(client, self.rigid)
         self._free_base = np.array([r.free_base for r in self.rigid], dtype=np.bool_)
         self._reader = StateReader(client, self.rigid)
+        self._impulses = ImpulseApplier(client, self.rigid, free=self._free_base)
         self.colliders = Colliders(
             rigid_x=np.zeros((nr, 3)),
             rigid_q=np.tile([0.0, 0.0, 0.0, 1.0], (nr, 1)),
@@ -116,9 +117,8 @@ class World:
         if self.solver is not None:
             out = self.solver.step(self.state, col)
             self.last_output = out
-            apply_impulses(self.client, self.rigid, col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w,
-                           col.rigid_inv_mass, col.rigid_inv_inertia, out.rigid_impulse, out.rigid_angular_impulse,
-                           self.sim.dt, self._free_base)  # fmt: skip
+            self._impulses.apply(col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w, col.rigid_inv_mass,
+                                 col.rigid_inv_inertia, out.rigid_impulse, out.rigid_angular_impulse, self.sim.dt)  # fmt: skip
         self.client.stepSimulation()
         self.refresh()
         if self.solver is not None:
