@@ -23,7 +23,7 @@ from ..tissue.model import TissueModel, concatenate, with_core_shapes
 from ..tissue.solver import Colliders, StepOutput, TissueSolver
 from ..tissue.state import TissueState, state_at_rest
 from .bullet import RigidRef, StateReader, read_mass_properties
-from .coupling import apply_impulses, sync_attached
+from .coupling import ImpulseApplier, sync_attached
 
 
 class SimulationDiverged(RuntimeError):
@@ -78,6 +78,7 @@ class World:
         inv_m, inv_i = read_mass_properties(client, self.rigid)
         self._free_base = np.array([r.free_base for r in self.rigid], dtype=np.bool_)
         self._reader = StateReader(client, self.rigid)
+        self._impulses = ImpulseApplier(client, self.rigid, free=self._free_base)
         self.colliders = Colliders(
             rigid_x=np.zeros((nr, 3)),
             rigid_q=np.tile([0.0, 0.0, 0.0, 1.0], (nr, 1)),
@@ -124,9 +125,8 @@ class World:
             # so the caller can end the episode and rebuild.
             if not (np.isfinite(out.rigid_impulse).all() and np.isfinite(out.rigid_angular_impulse).all()):
                 raise SimulationDiverged(f"non-finite tissue impulse at step {self.step_count}")
-            apply_impulses(self.client, self.rigid, col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w,
-                           col.rigid_inv_mass, col.rigid_inv_inertia, out.rigid_impulse, out.rigid_angular_impulse,
-                           self.sim.dt, self._free_base)  # fmt: skip
+            self._impulses.apply(col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w, col.rigid_inv_mass,
+                                 col.rigid_inv_inertia, out.rigid_impulse, out.rigid_angular_impulse, self.sim.dt)  # fmt: skip
         self.client.stepSimulation()
         self.refresh()
         if self.solver is not None:

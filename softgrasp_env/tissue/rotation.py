@@ -14,6 +14,9 @@ import numba as nb
 import numpy as np
 
 _EPS = 1e-12
+# Below these (squared) sizes qexp and qlog use Taylor series that are exact to round-off.
+_SERIES_ANGLE2 = 0.06 * 0.06  # rotation angle 0.06 rad (half angle 0.03)
+_SERIES_LOG2 = 0.01 * 0.01  # tan of the half angle 0.01
 
 jit = nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 
@@ -73,10 +76,23 @@ def qmat(q):
 @jit
 def qexp(r):
     """Quaternion of the rotation vector r = axis * angle."""
-    angle = math.sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2])
-    if angle < 1e-9:
+    a2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+    if a2 < 1e-18:
         # Second-order accurate for tiny angles, and avoids 0/0.
         return qnormalize((0.5 * r[0], 0.5 * r[1], 0.5 * r[2], 1.0))
+    if a2 < _SERIES_ANGLE2:
+        # Per-step turns of particles are small (|w| dt ~ 1e-3 rad): Taylor series of sin(h)/h and
+        # cos(h), h = angle / 2, to h^8. The first omitted terms, h^10/11! and h^10/10!, are below
+        # 1e-22 for h < 0.03, far under double rounding (1.1e-16), so this is sin/cos up to
+        # round-off at a fraction of the cost (no sqrt either).
+        h2 = 0.25 * a2
+        # Horner form with the reciprocal factorials as constants (a division per term would cost
+        # more than the library call).
+        sh = 1.0 + h2 * (-1.0 / 6.0 + h2 * (1.0 / 120.0 + h2 * (-1.0 / 5040.0 + h2 * (1.0 / 362880.0))))
+        ch = 1.0 + h2 * (-0.5 + h2 * (1.0 / 24.0 + h2 * (-1.0 / 720.0 + h2 * (1.0 / 40320.0))))
+        s = 0.5 * sh
+        return (r[0] * s, r[1] * s, r[2] * s, ch)
+    angle = math.sqrt(a2)
     s = math.sin(0.5 * angle) / angle
     return (r[0] * s, r[1] * s, r[2] * s, math.cos(0.5 * angle))
 
@@ -87,9 +103,18 @@ def qlog(q):
     x, y, z, w = q
     if w < 0.0:  # q and -q are one rotation; w >= 0 is the short arc
         x, y, z, w = -x, -y, -z, -w
-    s = math.sqrt(x * x + y * y + z * z)
-    if s < 1e-9:
+    s2 = x * x + y * y + z * z
+    if s2 < 1e-18:
         return (2.0 * x, 2.0 * y, 2.0 * z)
+    if s2 < _SERIES_LOG2 * w * w:
+        # Small turn, t = s / w < 0.01 (w > 0.99 here): atan(t) / t by its Taylor series to t^8;
+        # the first omitted term t^10 / 11 is below 1e-21, far under double rounding, so this is
+        # atan2(s, w) / s up to round-off without the library call.
+        iw = 1.0 / w
+        t2 = s2 * iw * iw
+        f = 2.0 * iw * (1.0 + t2 * (-1.0 / 3.0 + t2 * (1.0 / 5.0 + t2 * (-1.0 / 7.0 + t2 * (1.0 / 9.0)))))
+        return (x * f, y * f, z * f)
+    s = math.sqrt(s2)
     f = 2.0 * math.atan2(s, w) / s
     return (x * f, y * f, z * f)
 
@@ -125,8 +150,14 @@ def extract_rotation_t(a, q, max_iterations, tolerance):
     polar factor when det A > 0); directions that A leaves undetermined (planar, collinear or zero
     A) keep the warm start instead of snapping to identity.
     """
+    return extract_rotation_unit_t(a, qnormalize(q), max_iterations, tolerance)
+
+
+@jit
+def extract_rotation_unit_t(a, qq, max_iterations, tolerance):
+    """:func:`extract_rotation_t` for a warm start ``qq`` that is already a unit quaternion (the
+    solver's group rotations always are): saves the square root and division of normalising it."""
     a00, a01, a02, a10, a11, a12, a20, a21, a22 = a
-    qq = qnormalize(q)
     tol2 = tolerance * tolerance
     for _ in range(max_iterations):
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = qmat(qq)
