@@ -32,7 +32,7 @@ def test_default_algos_and_presets():
     assert default_algo("SoftGrasp-v0") == "sac"
     env = gym.make("SoftGraspRigid-v0")
     for algo in ("ppo", "sac"):
-        model = make_model(algo, env, seed=0, **({"n_steps": 64} if algo == "ppo" else {}))
+        model = make_model(algo, env, seed=0, **({"n_steps": 64, "batch_size": 64} if algo == "ppo" else {}))
         assert model.gamma == 0.98
     with pytest.raises(ValueError, match="algo"):
         make_model("dqn", env)
