@@ -263,6 +263,28 @@ def rest_moments(model: TissueModel) -> np.ndarray:
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _turn_centre(i, qr, k_iter, rest_q, qp, rest_moment, moment):
+    """Goal orientation of an implicit group (DESIGN.md; Mueller & Chentanez 2011 sec. 4): only
+    the centre particle turns toward quat(R) q_bar_i, by the same stiffness, on the short arc
+    (nlerp: no transcendental functions in the innermost loop)."""
+    goal = qmul(qr, (rest_q[i, 0], rest_q[i, 1], rest_q[i, 2], rest_q[i, 3]))
+    sgn = 1.0
+    if goal[0] * qp[i, 0] + goal[1] * qp[i, 1] + goal[2] * qp[i, 2] + goal[3] * qp[i, 3] < 0.0:
+        sgn = -1.0
+    qn = qnormalize((
+        qp[i, 0] + k_iter * (sgn * goal[0] - qp[i, 0]),
+        qp[i, 1] + k_iter * (sgn * goal[1] - qp[i, 1]),
+        qp[i, 2] + k_iter * (sgn * goal[2] - qp[i, 2]),
+        qp[i, 3] + k_iter * (sgn * goal[3] - qp[i, 3]),
+    ))  # fmt: skip
+    qp[i, 0] = qn[0]
+    qp[i, 1] = qn[1]
+    qp[i, 2] = qn[2]
+    qp[i, 3] = qn[3]
+    _refresh_moment(i, qn, rest_moment, moment)
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _shape_match_group(
     i, k_iter, rot_iters, g_off, g_mem, g_rest, mass, rest_q, rest_moment, inertia, xs, xp, qp, group_q, orient_mode,
     moment,
@@ -389,23 +411,7 @@ def _shape_match_group(
     if orient_mode == ORIENT_REACTION:
         _spin_reaction(start, end, g_mem, qp, i00, i01, i02, i11, i12, i22, lx, ly, lz)
         return
-    # Centre orientation toward quat(R) q_bar_i by the same stiffness, on the short arc (nlerp: no
-    # transcendental functions in the innermost loop).
-    goal = qmul(qr, (rest_q[i, 0], rest_q[i, 1], rest_q[i, 2], rest_q[i, 3]))
-    sgn = 1.0
-    if goal[0] * qp[i, 0] + goal[1] * qp[i, 1] + goal[2] * qp[i, 2] + goal[3] * qp[i, 3] < 0.0:
-        sgn = -1.0
-    qn = qnormalize((
-        qp[i, 0] + k_iter * (sgn * goal[0] - qp[i, 0]),
-        qp[i, 1] + k_iter * (sgn * goal[1] - qp[i, 1]),
-        qp[i, 2] + k_iter * (sgn * goal[2] - qp[i, 2]),
-        qp[i, 3] + k_iter * (sgn * goal[3] - qp[i, 3]),
-    ))  # fmt: skip
-    qp[i, 0] = qn[0]
-    qp[i, 1] = qn[1]
-    qp[i, 2] = qn[2]
-    qp[i, 3] = qn[3]
-    _refresh_moment(i, qn, rest_moment, moment)
+    _turn_centre(i, qr, k_iter, rest_q, qp, rest_moment, moment)
 
 
 def group_pack(model: TissueModel) -> np.ndarray:
@@ -478,22 +484,7 @@ def _shape_match_group_goal(i, k_iter, rot_iters, g_off, g_mem, g_pack, rest_q, 
         xp[j, 0] += k_iter * (r00 * q0 + r01 * q1 + r02 * q2 + cx - xp[j, 0])
         xp[j, 1] += k_iter * (r10 * q0 + r11 * q1 + r12 * q2 + cy - xp[j, 1])
         xp[j, 2] += k_iter * (r20 * q0 + r21 * q1 + r22 * q2 + cz - xp[j, 2])
-    # Centre orientation toward quat(R) q_bar_i (nlerp, as in _shape_match_group).
-    goal = qmul(qr, (rest_q[i, 0], rest_q[i, 1], rest_q[i, 2], rest_q[i, 3]))
-    sgn = 1.0
-    if goal[0] * qp[i, 0] + goal[1] * qp[i, 1] + goal[2] * qp[i, 2] + goal[3] * qp[i, 3] < 0.0:
-        sgn = -1.0
-    qn = qnormalize((
-        qp[i, 0] + k_iter * (sgn * goal[0] - qp[i, 0]),
-        qp[i, 1] + k_iter * (sgn * goal[1] - qp[i, 1]),
-        qp[i, 2] + k_iter * (sgn * goal[2] - qp[i, 2]),
-        qp[i, 3] + k_iter * (sgn * goal[3] - qp[i, 3]),
-    ))  # fmt: skip
-    qp[i, 0] = qn[0]
-    qp[i, 1] = qn[1]
-    qp[i, 2] = qn[2]
-    qp[i, 3] = qn[3]
-    _refresh_moment(i, qn, rest_moment, moment)
+    _turn_centre(i, qr, k_iter, rest_q, qp, rest_moment, moment)
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
