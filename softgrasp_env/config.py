@@ -95,8 +95,8 @@ class SimConfig:
     iterations: int = 3
     """Gauss-Seidel iterations over the shape-matching groups and contacts per step. Measured on the
     grasp (benchmarks/speed_accuracy.py, against 4x density, 16 iterations, dt/4): 2 -> 1.4 mm
-    penetration, 1.37 mm RMS height error, 2,310 steps/s; 3 -> 0.47 mm, 0.76 mm, 1,860 steps/s;
-    4 -> 0.12 mm, 0.53 mm, 1,530 steps/s."""
+    penetration, 1.37 mm RMS height error; 3 -> 0.47 mm, 0.76 mm; 4 -> 0.12 mm, 0.53 mm. Each
+    iteration costs ~64 us of the step (README has the current steps/s figures)."""
     rotation_iterations: int = 1
     """Most warm-started rotation-extraction sweeps per group solve (Mueller et al. 2016); stops
     early once the correction is below 1e-10 rad. One sweep per solve suffices with the warm start
