@@ -26,6 +26,9 @@ PALM_HALF_EXTENTS = (0.09, 0.03, 0.01)
 FINGER_DROP = 0.04
 """Gap between the palm's underside and the top of a finger core [m] (the finger's upper part is
 not modelled: only the fingertip segment touches anything)."""
+FINGER_GEAR_FORCE = 100.0
+"""Force limit of the gear that keeps both fingers' travel equal [N]: far above what the motors
+(``finger_force``) or the tissue can make, so it never gives way."""
 
 
 class GraspScene:
@@ -101,8 +104,22 @@ class GraspScene:
             linkJointAxis=[axis_left, axis_right],  # +q closes both fingers
         )
         g = self.gripper
+        # Damping exists only for the base: pybullet ignores a whole changeDynamics call on a link
+        # that asks for damping too (the fingers kept the default friction 0.5 that way), so the
+        # friction of each link is set on its own.
+        c.changeDynamics(g, -1, linearDamping=0.0, angularDamping=0.0)
         for link in (-1, 0, 1):
-            c.changeDynamics(g, link, linearDamping=0.0, angularDamping=0.0, lateralFriction=cfg.tissue.friction_static)
+            c.changeDynamics(g, link, lateralFriction=cfg.tissue.friction_static)
+            if c.getDynamicsInfo(g, link)[1] != cfg.tissue.friction_static:
+                raise RuntimeError(f"pybullet did not take the friction of gripper link {link}")
+        for j in (0, 1):  # travel from fully open (0) to the faces meeting at the centre
+            c.changeDynamics(g, j, jointLowerLimit=0.0, jointUpperLimit=cfg.finger_max_opening)
+        # The fingers are geared to each other (q_left = q_right), as a parallel gripper's rack and
+        # pinion does: with two independent force-limited motors both saturated against the
+        # cylinder, the pair and the cylinder were free to drift sideways together (neutral
+        # equilibrium), 2.5 cm in 15 s for the rigid twin until one finger hit fully open.
+        self.finger_gear = c.createConstraint(g, 0, g, 1, p.JOINT_GEAR, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+        c.changeConstraint(self.finger_gear, gearRatio=-1.0, maxForce=FINGER_GEAR_FORCE)
         self.palm_constraint = c.createConstraint(g, -1, -1, -1, p.JOINT_FIXED, [0, 0, 0], [0, 0, 0],
                                                   self.start_palm.tolist())  # fmt: skip
         self.set_palm_target(self.start_palm, yaw=cfg.yaw)
