@@ -29,6 +29,9 @@ not modelled: only the fingertip segment touches anything)."""
 FINGER_GEAR_FORCE = 100.0
 """Force limit of the gear that keeps both fingers' travel equal [N]: far above what the motors
 (``finger_force``) or the tissue can make, so it never gives way."""
+FINGER_GEAR_ERP = 0.2
+"""Share of the gear's position error corrected per step: pybullet's gear constraint acts on
+velocities only by default (erp 0), and the travel difference then drifted by 3 mm in 60 s."""
 
 
 class GraspScene:
@@ -119,7 +122,7 @@ class GraspScene:
         # cylinder, the pair and the cylinder were free to drift sideways together (neutral
         # equilibrium), 2.5 cm in 15 s for the rigid twin until one finger hit fully open.
         self.finger_gear = c.createConstraint(g, 0, g, 1, p.JOINT_GEAR, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
-        c.changeConstraint(self.finger_gear, gearRatio=-1.0, maxForce=FINGER_GEAR_FORCE)
+        c.changeConstraint(self.finger_gear, gearRatio=-1.0, maxForce=FINGER_GEAR_FORCE, erp=FINGER_GEAR_ERP)
         self.palm_constraint = c.createConstraint(g, -1, -1, -1, p.JOINT_FIXED, [0, 0, 0], [0, 0, 0],
                                                   self.start_palm.tolist())  # fmt: skip
         self.set_palm_target(self.start_palm, yaw=cfg.yaw)
