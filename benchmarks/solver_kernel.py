@@ -21,7 +21,8 @@ import numpy as np
 
 from softgrasp_env.config import SceneConfig, SimConfig, TissueConfig
 from softgrasp_env.tissue.builder import build_free_block
-from softgrasp_env.tissue.solver import Colliders, TissueSolver, empty_colliders
+from softgrasp_env.tissue.rigid import Colliders, empty_colliders
+from softgrasp_env.tissue.solver import TissueSolver
 from softgrasp_env.tissue.state import TissueState, state_at_rest
 
 # Grasp-scene steps whose solver inputs are captured for replay: approach, squeeze, lift, hold.

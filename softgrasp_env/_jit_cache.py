@@ -1,9 +1,9 @@
 """Keep numba's on-disk cache honest.
 
 numba keys a cached kernel on the timestamp of the file that defines it, but our kernels inline
-functions from other modules (solver.py inlines rotation.py and collision.py; sim/coupling.py
-inlines rotation.py). An edit to rotation.py alone would leave solver.py's stale machine code
-running. So at import we hash every source file that holds numba code and, when the hash
+functions from other modules (the tissue's constraint modules inline rotation.py, collision.py,
+rigid.py and one another; sim/coupling.py inlines rotation.py). An edit to rotation.py alone would
+leave contacts.py's stale machine code running. So at import we hash every source file that holds numba code and, when the hash
 changed since the cache was written, drop the package's cached kernels (they recompile once).
 """
 

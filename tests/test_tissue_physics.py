@@ -10,8 +10,9 @@ import pytest
 from softgrasp_env.config import SimConfig, TissueConfig
 from softgrasp_env.tissue.builder import CoreShape, build_combined_body, build_free_block
 from softgrasp_env.tissue.model import with_core_shapes
+from softgrasp_env.tissue.rigid import Colliders, empty_colliders
 from softgrasp_env.tissue.rotation import quat_to_matrix
-from softgrasp_env.tissue.solver import Colliders, TissueSolver, empty_colliders
+from softgrasp_env.tissue.solver import TissueSolver
 from softgrasp_env.tissue.state import state_at_rest
 
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])

@@ -20,7 +20,8 @@ from pybullet_utils.bullet_client import BulletClient
 from ..config import SimConfig
 from ..tissue.collision import SHAPE_CODES
 from ..tissue.model import TissueModel, concatenate, with_core_shapes
-from ..tissue.solver import Colliders, StepOutput, TissueSolver
+from ..tissue.rigid import Colliders
+from ..tissue.solver import StepOutput, TissueSolver
 from ..tissue.state import TissueState, state_at_rest
 from .bullet import RigidRef, StateReader, read_mass_properties
 from .coupling import ImpulseApplier, sync_attached

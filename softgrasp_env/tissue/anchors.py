@@ -1,0 +1,117 @@
+"""Attachment of the tissue to its rigid core: the tissue side of the coupling (thesis 5.1.3).
+
+Attached particles have a fixed spot on their body's core. Two couplings:
+- thesis (COUPLING_THESIS): the core is infinitely heavy inside the solve; after the iterations each
+  attached particle's error against its spot becomes the impulse p = m_i e / dt on the core (PBD
+  2007 sec. 4.2) and the particle snaps back (:func:`snap_attached`).
+- consistent (COUPLING_CONSISTENT): in addition, every iteration projects the attachment as a
+  zero-compliance XPBD constraint whose denominator holds the core's generalised inverse mass
+  (Mueller et al. 2020; Bender's PositionBasedDynamics, solve_RigidBodyParticleBallJoint), so the
+  core takes its share inside the solve (:func:`project_anchors`); the snap then finds little error.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+
+from .rigid import generalized_inv_mass, rigid_apply
+from .rotation import qmul, qrotate
+
+COUPLING_THESIS = 0
+COUPLING_CONSISTENT = 1
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _core_of_body(b, body_core_shape, shape_rigid):
+    s = body_core_shape[b]
+    if s < 0:
+        return -1
+    return shape_rigid[s]
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _project_anchor(i, r, rest_x, xp, inv_mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt):
+    """Consistent coupling: the attachment of particle i to its spot on core r as a zero-compliance
+    XPBD constraint whose denominator holds the core's generalised inverse mass (Mueller et al.
+    2020; Bender's PositionBasedDynamics, solve_RigidBodyParticleBallJoint)."""
+    bx = (rig_x[r, 0], rig_x[r, 1], rig_x[r, 2])
+    bq = (rig_q[r, 0], rig_q[r, 1], rig_q[r, 2], rig_q[r, 3])
+    arm = qrotate(bq, (rest_x[i, 0], rest_x[i, 1], rest_x[i, 2]))
+    ex = xp[i, 0] - (bx[0] + arm[0])
+    ey = xp[i, 1] - (bx[1] + arm[1])
+    ez = xp[i, 2] - (bx[2] + arm[2])
+    el = math.sqrt(ex * ex + ey * ey + ez * ez)
+    if el < 1e-15:
+        return
+    n = (ex / el, ey / el, ez / el)
+    wp = inv_mass[i]
+    wb = 0.0
+    if rig_move[r]:
+        wb = generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, arm[0], arm[1], arm[2], n[0], n[1], n[2])
+    dl = el / (wp + wb)
+    xp[i, 0] -= wp * dl * n[0]
+    xp[i, 1] -= wp * dl * n[1]
+    xp[i, 2] -= wp * dl * n[2]
+    rigid_apply(r, arm[0], arm[1], arm[2], dl * n[0], dl * n[1], dl * n[2], rig_move[r], dt, rig_x, rig_q,
+                rig_inv_mass, rig_inv_inertia, imp_lin, imp_ang)  # fmt: skip
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q, rig_inv_mass,
+                    rig_inv_inertia, rig_move, imp_lin, imp_ang, dt):  # fmt: skip
+    """One Gauss-Seidel pass of the consistent coupling over every attached particle (see
+    _project_anchor)."""
+    n = xp.shape[0]
+    for i in range(n):
+        if attached[i]:
+            r = _core_of_body(p_body[i], body_core_shape, shape_rigid)
+            if r >= 0:
+                _project_anchor(i, r, rest_x, xp, inv_mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
+                                rig_move, imp_lin, imp_ang, dt)  # fmt: skip
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def snap_attached(
+    model_rest_x, model_rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x, rig_q,
+    imp_lin, imp_ang, coupling_imp, dt,
+):  # fmt: skip
+    """Thesis 5.1.3 / 5.2.2: each attached particle's error against its fixed spot on the (predicted)
+    core becomes the impulse p = m_i e / dt at that spot (PBD 2007 sec. 4.2); then the particle is
+    set onto the spot with the core's orientation. The tissue loses exactly the momentum the core
+    gains, whichever coupling ran during the iterations."""
+    n = xp.shape[0]
+    for i in range(n):
+        if not attached[i]:
+            continue
+        r = _core_of_body(p_body[i], body_core_shape, shape_rigid)
+        if r < 0:
+            continue
+        bq = (rig_q[r, 0], rig_q[r, 1], rig_q[r, 2], rig_q[r, 3])
+        arm = qrotate(bq, (model_rest_x[i, 0], model_rest_x[i, 1], model_rest_x[i, 2]))
+        ax = rig_x[r, 0] + arm[0]
+        ay = rig_x[r, 1] + arm[1]
+        az = rig_x[r, 2] + arm[2]
+        m = mass[i]
+        px = m * (xp[i, 0] - ax) / dt
+        py = m * (xp[i, 1] - ay) / dt
+        pz = m * (xp[i, 2] - az) / dt
+        imp_lin[r, 0] += px
+        imp_lin[r, 1] += py
+        imp_lin[r, 2] += pz
+        coupling_imp[r, 0] += px
+        coupling_imp[r, 1] += py
+        coupling_imp[r, 2] += pz
+        imp_ang[r, 0] += arm[1] * pz - arm[2] * py
+        imp_ang[r, 1] += arm[2] * px - arm[0] * pz
+        imp_ang[r, 2] += arm[0] * py - arm[1] * px
+        xp[i, 0] = ax
+        xp[i, 1] = ay
+        xp[i, 2] = az
+        qn = qmul(bq, (model_rest_q[i, 0], model_rest_q[i, 1], model_rest_q[i, 2], model_rest_q[i, 3]))
+        qp[i, 0] = qn[0]
+        qp[i, 1] = qn[1]
+        qp[i, 2] = qn[2]
+        qp[i, 3] = qn[3]
+

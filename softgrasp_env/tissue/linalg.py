@@ -1,0 +1,28 @@
+"""Small dense linear algebra for the tissue kernels (numba, float64, no object mode).
+
+A symmetric 3x3 solve, shared by the group solve's spin reaction (shape_matching.py) and the
+damping of each body's deviation from its rigid motion (integrate.py).
+"""
+
+from __future__ import annotations
+
+import numba as nb
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def solve_sym3(i00, i01, i02, i11, i12, i22, bx, by, bz):
+    """x with I x = b for a symmetric 3x3 I, by the adjugate; (0, 0, 0) if I is not positive
+    definite (e.g. a degenerate group or body)."""
+    c00 = i11 * i22 - i12 * i12
+    c01 = i02 * i12 - i01 * i22
+    c02 = i01 * i12 - i02 * i11
+    c11 = i00 * i22 - i02 * i02
+    c12 = i01 * i02 - i00 * i12
+    c22 = i00 * i11 - i01 * i01
+    det = i00 * c00 + i01 * c01 + i02 * c02
+    if det <= 0.0:
+        return 0.0, 0.0, 0.0
+    inv = 1.0 / det
+    return (inv * (c00 * bx + c01 * by + c02 * bz), inv * (c01 * bx + c11 * by + c12 * bz),
+            inv * (c02 * bx + c12 * by + c22 * bz))  # fmt: skip
+
