@@ -84,6 +84,17 @@ class GraspRecord:
         )  # fmt: skip
 
 
+    def holds_without_slip(self, plan: GraspPlan, *, max_slip: float = 1e-3, max_tilt: float = math.pi / 4) -> bool:
+        """The hold bound's criterion: off the ground (at least half the commanded lift, whatever
+        the tissue sagged under the load) and, once the load is static, not moving in the fingers:
+        less than ``max_slip`` of slip through the hold. Above Coulomb's bound the cylinder slides
+        all through the hold (mu_k < mu_s: once it slides, it keeps sliding)."""
+        return (
+            self.finite and self.min_lift_during_hold >= 0.5 * plan.lift_distance
+            and self.hold_slip < max_slip and self.max_tilt <= max_tilt
+        )  # fmt: skip
+
+
 def _min_jerk(u: float) -> float:
     u = min(max(u, 0.0), 1.0)
     return u * u * u * (10.0 + u * (-15.0 + 6.0 * u))

@@ -17,8 +17,8 @@ import numba as nb
 import numpy as np
 
 from .collision import SHAPE_BOX, SHAPE_CYLINDER, SHAPE_PLANE, SHAPE_SPHERE, shape_distance, support_radius
-from .rigid import generalized_inv_mass, rigid_apply, rigid_point_world
-from .rotation import qconj, qmul, qrotate
+from .rigid import generalized_inv_mass, rigid_apply, shape_world_pose
+from .rotation import qconj, qrotate
 
 # Contacts: one row per (particle, shape) candidate; `inner` rows are a particle against its own
 # core (thesis 5.1.2 inner collisions: centre must stay outside, no friction).
@@ -26,22 +26,9 @@ _NO_RIGID = -1
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def _shape_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q):
-    """World pose (x, q) of shape s given the current rigid poses."""
-    lx = (shape_local_x[s, 0], shape_local_x[s, 1], shape_local_x[s, 2])
-    lq = (shape_local_q[s, 0], shape_local_q[s, 1], shape_local_q[s, 2], shape_local_q[s, 3])
-    r = shape_rigid[s]
-    if r < 0:
-        return lx, lq
-    bx = (rig_x[r, 0], rig_x[r, 1], rig_x[r, 2])
-    bq = (rig_q[r, 0], rig_q[r, 1], rig_q[r, 2], rig_q[r, 3])
-    return rigid_point_world(bx, bq, lx), qmul(bq, lq)
-
-
-@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q):
     """Signed distance of world point p from shape s and the world outward normal."""
-    sx, sq = _shape_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
+    sx, sq = shape_world_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
     d = (p[0] - sx[0], p[1] - sx[1], p[2] - sx[2])
     pl = qrotate(qconj(sq), d)
     dist, nx, ny, nz = shape_distance(shape_kind[s], (shape_params[s, 0], shape_params[s, 1], shape_params[s, 2]), pl)
@@ -72,7 +59,7 @@ def _shape_poses(shape_kind, shape_params, shape_rigid, shape_local_x, shape_loc
     """pose[s] = world position (0:3), orientation (3:7) and bounding radius (7) of every shape, once
     per pass over all particles instead of once per particle (same expressions as _shape_query)."""
     for s in range(shape_kind.shape[0]):
-        sx, sq = _shape_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
+        sx, sq = shape_world_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
         for a in range(3):
             pose[s, a] = sx[a]
         for a in range(4):
@@ -207,7 +194,7 @@ def clear_multipliers(count, lam, lam_t):
 # arithmetic ran at half the speed (the grasp's 124 contacts: 18 us against 9 us a pass).
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def project_shape_contacts(
-    count, c_particle, c_shape, c_inner, c_lambda, c_normal, xp, qp, radii, inv_mass, shape_kind, shape_params,
+    count, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass, shape_kind, shape_params,
     shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin,
     imp_ang, dt, shape_pose,
 ):  # fmt: skip
@@ -236,6 +223,7 @@ def project_shape_contacts(
         c_normal[c, 0] = n[0]
         c_normal[c, 1] = n[1]
         c_normal[c, 2] = n[2]
+        c_rn[c] = rn  # the particle's reach along n: friction acts at x - rn n, the contact point
         wp = inv_mass[i]
         wb = 0.0
         rx = ry = rz = 0.0

@@ -90,6 +90,19 @@ def rigid_point_world(rx, rq, p_local):
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def shape_world_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q):
+    """World pose (x, q) of shape s given the current rigid poses."""
+    lx = (shape_local_x[s, 0], shape_local_x[s, 1], shape_local_x[s, 2])
+    lq = (shape_local_q[s, 0], shape_local_q[s, 1], shape_local_q[s, 2], shape_local_q[s, 3])
+    r = shape_rigid[s]
+    if r < 0:
+        return lx, lq
+    bx = (rig_x[r, 0], rig_x[r, 1], rig_x[r, 2])
+    bq = (rig_q[r, 0], rig_q[r, 1], rig_q[r, 2], rig_q[r, 3])
+    return rigid_point_world(bx, bq, lx), qmul(bq, lq)
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, rx, ry, rz, nx, ny, nz):
     """w = 1/m + (r x n)^T I_w^-1 (r x n) of rigid body r at lever arm (rx, ry, rz) along n
     (Mueller et al. 2020, eq. 2-3)."""

@@ -8,10 +8,11 @@ Alg. 1), reads as a recipe (see :func:`_step`):
     for _ in range(iterations):                   # Gauss-Seidel
         shape-match every implicit group          # Mueller & Chentanez 2011 sec. 4
         project contacts (two-way, mass-weighted) # XPBD rigid bodies, Mueller et al. 2020 sec. 3.3
-        friction on every touched contact         # position level, Macklin et al. 2014 eq. 23-24
+        friction per contact patch, with anchors  # position level, Mueller et al. 2020 sec. 3.5
         [consistent coupling: project anchors]    # generalised inverse mass of the core
     couple: anchor error -> impulse on the core, snap attached particles back   # thesis 5.1.3
     update velocities from positions, angular velocities from q* q^-1 (short arc)
+    kinetic friction's velocity half; keep the friction anchors for the next step
 
 Each line is one module's kernel: rigid.py (rigid bodies as the tissue sees them, their prediction),
 integrate.py (particle prediction and velocity update), contacts.py (collection and projection),
@@ -40,7 +41,7 @@ from .contacts import (
     project_pairs,
     project_shape_contacts,
 )
-from .friction import friction_pairs, friction_shape_contacts
+from .friction import friction_pairs, friction_patches, friction_velocity_pass, load_anchors, store_anchors
 from .integrate import predict_particles, update_velocities
 from .model import TissueModel
 from .rigid import Colliders, predict_rigid
@@ -77,13 +78,14 @@ def _step(
     rest_x, rest_q, rest_moment, inertia, radii, mass, inv_mass, p_body, attached, g_off, g_mem, g_rest, g_pack, body_off,
     body_core_shape, body_stiffness, body_friction,
     # state (updated in place on success)
-    x, v, q, omega, group_q,
+    x, v, q, omega, group_q, anchor_shape, anchor_x, anchor_slide,
     # colliders (read only) and rigid outputs
     rig_x0, rig_q0, rig_v, rig_w, rig_inv_mass, rig_inv_inertia, rig_gravity, rig_move, shape_kind, shape_params,
     shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, imp_lin, imp_ang, coupling_imp,
     # scratch
-    xp, qp, vd, wd, moment, c_particle, c_shape, c_inner, c_lambda, c_lambda_t, c_normal, pair_i, pair_j, pair_lambda,
-    pair_lambda_t, pair_normal, shape_pose,
+    xp, qp, vd, wd, moment, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, c_friction, c_friction_goal,
+    c_anchor, c_point, c_patch, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, shape_pose, patch, patch_slide,
+    patch_change,
     # parameters
     dt, iterations, rot_iters, gx, gy, gz, damping, coupling, orient_mode, margin, counts,
 ):  # fmt: skip
@@ -106,15 +108,18 @@ def _step(
     counts[1] = npairs
     if nc > c_particle.shape[0] or npairs > pair_i.shape[0]:
         return 1
-    clear_multipliers(nc, c_lambda, c_lambda_t)
+    clear_multipliers(nc, c_lambda, c_friction)
     clear_multipliers(npairs, pair_lambda, pair_lambda_t)
+    ns = shape_kind.shape[0]
+    load_anchors(nc, c_particle, c_shape, c_inner, x, p_body, shape_rigid, shape_local_x, shape_local_q, rig_x0, rig_q0,
+                 anchor_shape, anchor_x, anchor_slide, ns, c_anchor, c_patch, patch_slide, patch_change)  # fmt: skip
     # --- Gauss-Seidel iterations. Stiffness per iteration k' = 1 - (1 - k)^(1/n) makes the
     #     per-step stiffness independent of the iteration count (Mueller et al. 2007 sec. 3.3).
     rot_eff = rotation_sweeps(rot_iters, orient_mode)
-    for _ in range(iterations):
+    for it in range(iterations):
         shape_match_sweep(iterations, rot_eff, body_off, body_stiffness, g_off, g_mem, g_rest, g_pack, mass, rest_q,
                           rest_moment, inertia, x, xp, qp, group_q, orient_mode, moment)  # fmt: skip
-        project_shape_contacts(nc, c_particle, c_shape, c_inner, c_lambda, c_normal, xp, qp, radii, inv_mass,
+        project_shape_contacts(nc, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass,
                                shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
                                rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt, shape_pose)  # fmt: skip
         project_pairs(npairs, pair_i, pair_j, pair_lambda, pair_normal, xp, qp, radii, inv_mass)
@@ -122,9 +127,10 @@ def _step(
         # constraint of the same Gauss-Seidel solve as the shape matching. Applied once after the
         # loop it could only stop the touching particles, and a block on a ramp crept downhill
         # at a steady ~0.1 m/s below the friction angle.
-        friction_shape_contacts(nc, c_particle, c_shape, c_inner, c_lambda, c_lambda_t, c_normal, x, xp, inv_mass,
-                                p_body, body_friction, shape_rigid, rig_x0, rig_q0, rig_x, rig_q, rig_inv_mass,
-                                rig_inv_inertia, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
+        friction_patches(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_normal, c_rn,
+                         c_anchor, c_point, xp, inv_mass, body_friction, ns, shape_rigid, shape_local_x, shape_local_q,
+                         rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt, shape_pose, patch,
+                         patch_slide, patch_change, it == iterations - 1)  # fmt: skip
         friction_pairs(npairs, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, x, xp, inv_mass, p_body,
                        body_friction)  # fmt: skip
         if coupling == COUPLING_CONSISTENT:
@@ -136,6 +142,12 @@ def _step(
     # --- velocities from positions (PBD Alg. 1 lines 18-21); angular velocity from q* q^-1 on the
     #     short arc (Mueller & Chentanez 2011 sec. 3)
     update_velocities(x, v, q, omega, xp, qp, dt)
+    # --- the velocity half of kinetic friction; anchors kept for the next step
+    friction_velocity_pass(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_normal, c_rn, x, v, inv_mass,
+                           shape_rigid, rig_x0, rig_q0, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin,
+                           imp_ang, dt, patch_slide, patch_change)  # fmt: skip
+    store_anchors(nc, c_particle, c_shape, c_patch, c_lambda, c_anchor, x, shape_rigid, shape_local_x, shape_local_q,
+                  rig_x, rig_q, patch_slide, patch_change, anchor_shape, anchor_x, anchor_slide)  # fmt: skip
     return 0
 
 
@@ -163,15 +175,21 @@ class TissueSolver:
         self._alloc_contacts(4 * n + 16)
         self._alloc_pairs(4 * n + 16)
         self._rigid_buffers_for = -1
-        self._shape_pose = np.zeros((0, 8))
+        self._shape_pose = None
+        self._shape_buffer(0)
 
     def _alloc_contacts(self, cap: int) -> None:
         self._c_particle = np.zeros(cap, dtype=np.int32)
         self._c_shape = np.zeros(cap, dtype=np.int32)
         self._c_inner = np.zeros(cap, dtype=np.bool_)
         self._c_lambda = np.zeros(cap)
-        self._c_lambda_t = np.zeros(cap)
         self._c_normal = np.zeros((cap, 3))
+        self._c_rn = np.zeros(cap)
+        self._c_friction = np.zeros((cap, 3))
+        self._c_friction_goal = np.zeros((cap, 3))
+        self._c_anchor = np.zeros((cap, 3))
+        self._c_point = np.zeros((cap, 3))
+        self._c_patch = np.zeros(cap, dtype=np.int32)
 
     def _alloc_pairs(self, cap: int) -> None:
         self._pair_i = np.zeros(cap, dtype=np.int32)
@@ -190,8 +208,13 @@ class TissueSolver:
             self._rigid_buffers_for = count
 
     def _shape_buffer(self, count: int) -> np.ndarray:
-        if self._shape_pose.shape[0] != count:
+        if self._shape_pose is None or self._shape_pose.shape[0] != count:
             self._shape_pose = np.zeros((count, 8))
+            # one friction patch per (tissue body, shape): see friction.friction_patches
+            npatch = self.model.body_count * count
+            self._patch = np.zeros((npatch, 16))
+            self._patch_slide = np.zeros(npatch, dtype=np.bool_)
+            self._patch_change = np.zeros(npatch, dtype=np.bool_)
         return self._shape_pose
 
     def step(self, state: TissueState, col: Colliders) -> StepOutput:
@@ -208,13 +231,15 @@ class TissueSolver:
                 m.particle_body, m.particle_attached, m.group_offsets, m.group_members, m.group_rest_offset,
                 self._g_pack, m.body_particle_offsets, m.body_core_shape, m.body_stiffness, m.body_friction,
                 state.particle_x, state.particle_v, state.particle_q, state.particle_omega, state.group_q,
+                state.particle_anchor_shape, state.particle_anchor_x, state.particle_anchor_slide,
                 col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w, col.rigid_inv_mass, col.rigid_inv_inertia,
                 col.rigid_gravity, col.rigid_in_solve, col.shape_kind, col.shape_params, col.shape_rigid,
                 col.shape_local_x, col.shape_local_q, self._rig_x, self._rig_q, self._imp_lin, self._imp_ang,
                 self._coupling_imp,
                 self._xp, self._qp, self._vd, self._wd, self._moment, self._c_particle, self._c_shape, self._c_inner,
-                self._c_lambda, self._c_lambda_t, self._c_normal, self._pair_i, self._pair_j, self._pair_lambda,
-                self._pair_lambda_t, self._pair_normal, shape_pose,
+                self._c_lambda, self._c_normal, self._c_rn, self._c_friction, self._c_friction_goal, self._c_anchor,
+                self._c_point, self._c_patch, self._pair_i, self._pair_j, self._pair_lambda, self._pair_lambda_t,
+                self._pair_normal, shape_pose, self._patch, self._patch_slide, self._patch_change,
                 sim.dt, sim.iterations, sim.rotation_iterations, 0.0, 0.0, -sim.gravity, sim.damping, coupling,
                 ORIENT_MODES[sim.orientation], sim.contact_margin, self._counts,
             )  # fmt: skip

@@ -9,6 +9,11 @@ import numpy as np
 from .model import TissueModel
 
 
+ANCHOR_SLOTS = 2
+"""Friction anchors kept per particle: one per shape it touches (a particle at the cylinder's
+bottom edge can touch the cylinder and the ground at once)."""
+
+
 @dataclass(eq=False)
 class TissueState:
     particle_x: np.ndarray
@@ -22,6 +27,13 @@ class TissueState:
     group_q: np.ndarray
     """(N, 4) last extracted rotation of each group (rest frame -> world): the warm start of
     Mueller et al. 2016, so degenerate groups keep their rotation instead of snapping to identity."""
+    particle_anchor_shape: np.ndarray
+    """(N, K) int32: the shape each of a particle's K friction anchors sticks to, -1 for none."""
+    particle_anchor_x: np.ndarray
+    """(N, K, 3) the anchor in its shape's frame [m]: where the particle's centre was, relative to
+    the shape, when its contact began to stick (see tissue/friction.py)."""
+    particle_anchor_slide: np.ndarray
+    """(N, K) bool: the anchor's contact patch was sliding at the end of the last step."""
 
     def copy(self) -> TissueState:
         return TissueState(**{f.name: getattr(self, f.name).copy() for f in fields(self)})
@@ -58,6 +70,9 @@ def state_at_rest(model: TissueModel, body_x: np.ndarray, body_q: np.ndarray) ->
         particle_q=q,
         particle_omega=np.zeros((n, 3)),
         group_q=group_q,
+        particle_anchor_shape=np.full((n, ANCHOR_SLOTS), -1, dtype=np.int32),
+        particle_anchor_x=np.zeros((n, ANCHOR_SLOTS, 3)),
+        particle_anchor_slide=np.zeros((n, ANCHOR_SLOTS), dtype=np.bool_),
     )
 
 
