@@ -129,11 +129,11 @@ class GraspScene:
         self.set_finger_target(0.0)
 
         # --- what the tissue sees
-        # Cores are infinitely heavy inside the solve in the thesis coupling; World turns in_solve on
-        # for every slot when SimConfig.coupling is "consistent".
+        # Cores are infinitely heavy inside the solve in the thesis coupling; under the consistent one
+        # they slide along their joints (World). The palm, held by the stiff arm, never moves in it.
         rigid = [
-            RigidRef(g, 0, gravity=False, in_solve=False, free_base=False),  # left core
-            RigidRef(g, 1, gravity=False, in_solve=False, free_base=False),  # right core
+            RigidRef(g, 0, gravity=False, in_solve=False, free_base=False, core=True),  # left core
+            RigidRef(g, 1, gravity=False, in_solve=False, free_base=False, core=True),  # right core
             RigidRef(self.cylinder, -1, gravity=True, in_solve=True, free_base=True),
             RigidRef(g, -1, gravity=False, in_solve=False, free_base=False),  # palm, held by the arm
         ]

@@ -26,7 +26,7 @@ def falling_box_world(coupling: str):
     world = World(
         client,
         sim,
-        [RigidRef(body, -1, gravity=True, in_solve=False, free_base=True)],
+        [RigidRef(body, -1, gravity=True, in_solve=False, free_base=True, core=True)],
         [ShapeSpec("box", core.half_extents, rigid=0)],
         [TissueSpec(build_combined_body(core, TissueConfig(), shape_offset=offset), 0)],
     )

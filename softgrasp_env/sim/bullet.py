@@ -61,10 +61,15 @@ class RigidRef:
     gravity: bool
     """Predicted under gravity (free body) or not (held by joints/constraints)."""
     in_solve: bool
-    """Takes its mass-weighted share of tissue corrections inside the solve."""
+    """Takes its mass-weighted share of tissue corrections inside the solve, whatever the coupling
+    (a free body such as the cylinder)."""
     free_base: bool
     """A free base body: tissue impulses change its velocity directly; otherwise they become an
     external force and torque for pybullet's next step (links, constrained bases)."""
+    core: bool = False
+    """The rigid core of a combined body: it joins the solve (``in_solve``) under the consistent
+    coupling. A core on a link must hang on a prismatic joint then: it moves along the joint axis
+    inside the solve, under its joint motor's last force (see World)."""
 
 
 def read_mass_properties(client: BulletClient, refs: list[RigidRef]) -> tuple[np.ndarray, np.ndarray]:

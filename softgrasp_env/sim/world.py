@@ -15,16 +15,50 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import pybullet as p
 from pybullet_utils.bullet_client import BulletClient
 
 from ..config import SimConfig
 from ..tissue.collision import SHAPE_CODES
 from ..tissue.model import TissueModel, concatenate, with_core_shapes
+from ..tissue.rotation import quat_to_matrix
 from ..tissue.rigid import Colliders
 from ..tissue.solver import StepOutput, TissueSolver
 from ..tissue.state import TissueState, state_at_rest
 from .bullet import RigidRef, StateReader, read_mass_properties
 from .coupling import ImpulseApplier, sync_attached
+
+
+class _SlidingCores:
+    """Cores on prismatic links that move inside the solve (consistent coupling): each step, the
+    joint axis in the world and the force its motor applied in pybullet's last step along it.
+
+    Inside the solve such a core can only slide along its joint (the joint takes the rest of any
+    impulse), and it is predicted under its motor's force: a squeezing finger's motor pushes with
+    its force limit, and predicted without it the core recoiled from the tissue like a free body,
+    the motor then drove it back in pybullet's step, and the tissue was shifted 1.5 mm a step
+    with nothing pushing back (the consistent coupling squeezed 2 N harder than the motors)."""
+
+    def __init__(self, client: BulletClient, refs: list[RigidRef], in_solve: np.ndarray) -> None:
+        self._cid = client._client
+        self._slots: list[tuple[int, int, int, np.ndarray]] = []
+        for k, r in enumerate(refs):
+            if r.link < 0 or not in_solve[k]:
+                continue
+            info = client.getJointInfo(r.body, r.link)
+            if info[2] != p.JOINT_PRISMATIC:
+                raise ValueError(
+                    f"rigid slot {k} (body {r.body} link {r.link}) moves inside the solve but hangs on a joint of type "
+                    f"{info[2]}; only prismatic links (or free bases) can: pass in_solve=False and core=False"
+                )
+            axis = np.asarray(info[13], dtype=np.float64)
+            self._slots.append((k, r.body, r.link, axis / np.linalg.norm(axis)))
+
+    def read(self, q: np.ndarray, axis_out: np.ndarray, force_out: np.ndarray) -> None:
+        for k, body, link, axis in self._slots:
+            a = quat_to_matrix(q[k]) @ axis  # joint axis: in the link frame, which is the CoM frame
+            axis_out[k] = a
+            force_out[k] = p.getJointState(body, link, physicsClientId=self._cid)[3] * a
 
 
 class SimulationDiverged(RuntimeError):
@@ -89,7 +123,7 @@ class World:
             rigid_inv_inertia=inv_i,
             rigid_gravity=np.array([r.gravity for r in self.rigid], dtype=np.bool_),
             rigid_in_solve=np.array(
-                [r.in_solve or (sim.coupling == "consistent") for r in self.rigid], dtype=np.bool_
+                [r.in_solve or (r.core and sim.coupling == "consistent") for r in self.rigid], dtype=np.bool_
             ),
             shape_kind=np.array([SHAPE_CODES[s.kind] for s in self.shapes], dtype=np.int32),
             shape_params=np.array([s.params for s in self.shapes], dtype=np.float64).reshape(-1, 3),
@@ -97,6 +131,7 @@ class World:
             shape_local_x=np.array([s.local_x for s in self.shapes], dtype=np.float64).reshape(-1, 3),
             shape_local_q=np.array([s.local_q for s in self.shapes], dtype=np.float64).reshape(-1, 4),
         )
+        self._joints = _SlidingCores(client, self.rigid, self.colliders.rigid_in_solve)
         self.model: TissueModel | None = None
         self.solver: TissueSolver | None = None
         self.state: TissueState | None = None
@@ -138,6 +173,7 @@ class World:
         """Re-read every rigid slot's pose and velocity from pybullet (after a step or a reset)."""
         c = self.colliders
         self._reader.read(c.rigid_x, c.rigid_q, c.rigid_v, c.rigid_w)
+        self._joints.read(c.rigid_q, c.rigid_axis, c.rigid_force)
 
     def _sync(self) -> None:
         m, s, c = self.model, self.state, self.colliders

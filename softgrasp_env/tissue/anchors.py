@@ -32,7 +32,8 @@ def _core_of_body(b, body_core_shape, shape_rigid):
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def _project_anchor(i, r, rest_x, xp, inv_mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt):
+def _project_anchor(i, r, rest_x, xp, inv_mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin,
+                    imp_ang, dt):  # fmt: skip
     """Consistent coupling: the attachment of particle i to its spot on core r as a zero-compliance
     XPBD constraint whose denominator holds the core's generalised inverse mass (Mueller et al.
     2020; Bender's PositionBasedDynamics, solve_RigidBodyParticleBallJoint)."""
@@ -49,18 +50,18 @@ def _project_anchor(i, r, rest_x, xp, inv_mass, rig_x, rig_q, rig_inv_mass, rig_
     wp = inv_mass[i]
     wb = 0.0
     if rig_move[r]:
-        wb = generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, arm[0], arm[1], arm[2], n[0], n[1], n[2])
+        wb = generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, arm[0], arm[1], arm[2], n[0], n[1], n[2])
     dl = el / (wp + wb)
     xp[i, 0] -= wp * dl * n[0]
     xp[i, 1] -= wp * dl * n[1]
     xp[i, 2] -= wp * dl * n[2]
     rigid_apply(r, arm[0], arm[1], arm[2], dl * n[0], dl * n[1], dl * n[2], rig_move[r], dt, rig_x, rig_q,
-                rig_inv_mass, rig_inv_inertia, imp_lin, imp_ang)  # fmt: skip
+                rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang)  # fmt: skip
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q, rig_inv_mass,
-                    rig_inv_inertia, rig_move, imp_lin, imp_ang, dt):  # fmt: skip
+                    rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt):  # fmt: skip
     """One Gauss-Seidel pass of the consistent coupling over every attached particle (see
     _project_anchor)."""
     n = xp.shape[0]
@@ -68,7 +69,7 @@ def project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_r
         if attached[i]:
             r = _core_of_body(p_body[i], body_core_shape, shape_rigid)
             if r >= 0:
-                _project_anchor(i, r, rest_x, xp, inv_mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
+                _project_anchor(i, r, rest_x, xp, inv_mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
                                 rig_move, imp_lin, imp_ang, dt)  # fmt: skip
 
 

@@ -195,8 +195,8 @@ def clear_multipliers(count, lam, lam_t):
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def project_shape_contacts(
     count, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass, shape_kind, shape_params,
-    shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin,
-    imp_ang, dt, shape_pose,
+    shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
+    imp_lin, imp_ang, dt, shape_pose,
 ):  # fmt: skip
     """Non-penetration of an ellipsoid particle and a rigid shape (Mueller & Chentanez 2011 sec. 5:
     the ellipsoid is treated as a sphere of its support radius along the contact normal), split by
@@ -233,7 +233,7 @@ def project_shape_contacts(
             ry = p[1] - dist * n[1] - rig_x[r, 1]
             rz = p[2] - dist * n[2] - rig_x[r, 2]
             if rig_move[r]:
-                wb = generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, rx, ry, rz, n[0], n[1], n[2])
+                wb = generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rx, ry, rz, n[0], n[1], n[2])
         dl = pen / (wp + wb)
         c_lambda[c] += dl
         xp[i, 0] += wp * dl * n[0]
@@ -241,7 +241,7 @@ def project_shape_contacts(
         xp[i, 2] += wp * dl * n[2]
         if r >= 0:
             rigid_apply(r, rx, ry, rz, -dl * n[0], -dl * n[1], -dl * n[2], rig_move[r], dt, rig_x, rig_q,
-                        rig_inv_mass, rig_inv_inertia, imp_lin, imp_ang)  # fmt: skip
+                        rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang)  # fmt: skip
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})

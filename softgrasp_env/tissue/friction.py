@@ -84,7 +84,7 @@ def load_anchors(nc, c_particle, c_shape, c_inner, x0, p_body, shape_rigid, shap
 def friction_patches(
     nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_normal, c_rn, c_anchor, c_point, xp, inv_mass,
     body_friction, ns, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
-    rig_move, imp_lin, imp_ang, dt, shape_pose, patch, patch_slide, patch_change, last,
+    rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose, patch, patch_slide, patch_change, last,
 ):  # fmt: skip
     """One Gauss-Seidel pass of Coulomb friction over all tissue-shape contacts.
 
@@ -155,7 +155,7 @@ def friction_patches(
         if el > 1e-15:
             w = inv_mass[i]
             if r >= 0 and rig_move[r]:
-                w += generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, c_point[c, 0] - rig_x[r, 0],
+                w += generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, c_point[c, 0] - rig_x[r, 0],
                                            c_point[c, 1] - rig_x[r, 1], c_point[c, 2] - rig_x[r, 2], ex / el, ey / el,
                                            ez / el)  # fmt: skip
             fx -= ex / w
@@ -277,13 +277,13 @@ def friction_patches(
         xp[i, 2] += wp * iz
         if r >= 0:
             rigid_apply(r, c_point[c, 0] - rig_x[r, 0], c_point[c, 1] - rig_x[r, 1], c_point[c, 2] - rig_x[r, 2], -ix,
-                         -iy, -iz, rig_move[r], dt, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, imp_lin, imp_ang)  # fmt: skip
+                         -iy, -iz, rig_move[r], dt, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang)  # fmt: skip
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def friction_velocity_pass(
     nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_normal, c_rn, x, v, inv_mass, shape_rigid, rig_x0, rig_q0,
-    rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt, patch_slide, patch_change,
+    rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, patch_slide, patch_change,
 ):  # fmt: skip
     """The velocity half of kinetic friction (see friction_patches; Mueller et al. 2020 sec. 3.6
     apply dynamic friction on velocities, here it is split with the position level). A patch still
@@ -334,7 +334,7 @@ def friction_velocity_pass(
             cap = fl / dt  # the same impulse again as at position level
         w = inv_mass[i]
         if r >= 0 and rig_move[r]:
-            w += generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, lx, ly, lz, dx, dy, dz)
+            w += generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, lx, ly, lz, dx, dy, dz)
         j = min(need / w, cap)
         wp = inv_mass[i]
         v[i, 0] += wp * j * dx
@@ -343,7 +343,7 @@ def friction_velocity_pass(
         if r >= 0:
             # a velocity change of the body only (its predicted pose stays): the impulse -j d
             rigid_apply(r, lx, ly, lz, -j * dx * dt, -j * dy * dt, -j * dz * dt, False, dt, rig_x, rig_q,
-                         rig_inv_mass, rig_inv_inertia, imp_lin, imp_ang)  # fmt: skip
+                         rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang)  # fmt: skip
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})

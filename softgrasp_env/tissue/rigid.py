@@ -11,7 +11,7 @@ Nothing here imports pybullet.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numba as nb
 import numpy as np
@@ -54,6 +54,22 @@ class Colliders:
     """(S, 3) shape origin in its body's frame (world frame for static shapes) [m]."""
     shape_local_q: np.ndarray
     """(S, 4) shape orientation in its body's frame."""
+    rigid_axis: np.ndarray | None = field(default=None)
+    """(R, 3) unit axis along which a slot moves inside the solve, or zeros for a free body: a link
+    on a prismatic joint can only slide along it (the joint takes up the rest of any impulse, and
+    it cannot turn). Defaults to all free."""
+    rigid_force: np.ndarray | None = field(default=None)
+    """(R, 3) force pybullet will put on a slot over the coming step that is known now, apart
+    from gravity and the tissue (a finger's joint motor, as applied in the last step) [N]. Slots
+    that move inside the solve are predicted under it; without it a pushed core recoils in the
+    solve as if nothing pushed it. Defaults to zeros."""
+
+    def __post_init__(self) -> None:
+        n = self.rigid_inv_mass.shape[0]
+        if self.rigid_axis is None:
+            self.rigid_axis = np.zeros((n, 3))
+        if self.rigid_force is None:
+            self.rigid_force = np.zeros((n, 3))
 
     @property
     def rigid_count(self) -> int:
@@ -80,6 +96,8 @@ def empty_colliders() -> Colliders:
         shape_rigid=np.zeros(0, dtype=np.int32),
         shape_local_x=np.zeros((0, 3)),
         shape_local_q=np.zeros((0, 4)),
+        rigid_axis=np.zeros((0, 3)),
+        rigid_force=np.zeros((0, 3)),
     )
 
 
@@ -103,9 +121,14 @@ def shape_world_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, rx, ry, rz, nx, ny, nz):
+def generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rx, ry, rz, nx, ny, nz):
     """w = 1/m + (r x n)^T I_w^-1 (r x n) of rigid body r at lever arm (rx, ry, rz) along n
-    (Mueller et al. 2020, eq. 2-3)."""
+    (Mueller et al. 2020, eq. 2-3); for a slot that only slides along a unit axis a (a prismatic
+    joint's link), w = (a . n)^2 / m."""
+    ax, ay, az = rig_axis[r, 0], rig_axis[r, 1], rig_axis[r, 2]
+    if ax != 0.0 or ay != 0.0 or az != 0.0:
+        d = ax * nx + ay * ny + az * nz
+        return rig_inv_mass[r] * d * d
     cx = ry * nz - rz * ny
     cy = rz * nx - rx * nz
     cz = rx * ny - ry * nx
@@ -120,10 +143,11 @@ def generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, rx, ry, rz, nx
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def rigid_apply(r, rx, ry, rz, px, py, pz, move, dt, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, imp_lin, imp_ang):
+def rigid_apply(r, rx, ry, rz, px, py, pz, move, dt, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin,
+                imp_ang):  # fmt: skip
     """Apply positional impulse P (kg m) at lever arm r to rigid body r: record P/dt and r x P/dt
     as the impulse on it, and, if it moves inside the solve, update its predicted pose
-    (Mueller et al. 2020, eq. 6-9)."""
+    (Mueller et al. 2020, eq. 6-9); a slot on an axis moves along it by (a . P) / m only."""
     lx = ry * pz - rz * py
     ly = rz * px - rx * pz
     lz = rx * py - ry * px
@@ -136,6 +160,13 @@ def rigid_apply(r, rx, ry, rz, px, py, pz, move, dt, rig_x, rig_q, rig_inv_mass,
     if not move:
         return
     im = rig_inv_mass[r]
+    ax, ay, az = rig_axis[r, 0], rig_axis[r, 1], rig_axis[r, 2]
+    if ax != 0.0 or ay != 0.0 or az != 0.0:
+        d = im * (ax * px + ay * py + az * pz)
+        rig_x[r, 0] += d * ax
+        rig_x[r, 1] += d * ay
+        rig_x[r, 2] += d * az
+        return
     rig_x[r, 0] += im * px
     rig_x[r, 1] += im * py
     rig_x[r, 2] += im * pz
@@ -151,11 +182,12 @@ def rigid_apply(r, rx, ry, rz, px, py, pz, move, dt, rig_x, rig_q, rig_inv_mass,
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
-def predict_rigid(rig_x0, rig_q0, rig_v, rig_w, rig_gravity, gx, gy, gz, dt, rig_x, rig_q, imp_lin, imp_ang,
-                  coupling_imp):  # fmt: skip
+def predict_rigid(rig_x0, rig_q0, rig_v, rig_w, rig_gravity, rig_move, rig_inv_mass, rig_force, gx, gy, gz, dt, rig_x,
+                  rig_q, imp_lin, imp_ang, coupling_imp):  # fmt: skip
     """Predict every rigid body's pose by semi-implicit Euler, as pybullet will integrate it (thesis
-    5.2.2): v += g dt for bodies under gravity, x* = x + v dt, q* = exp(w dt) q. Also clears the
-    impulse accumulators the step adds to."""
+    5.2.2): v += g dt for bodies under gravity, v += F / m dt for the known forces of slots that
+    move inside the solve, x* = x + v dt, q* = exp(w dt) q. Also clears the impulse accumulators
+    the step adds to."""
     nr = rig_x0.shape[0]
     for r in range(nr):
         vx, vy, vz = rig_v[r, 0], rig_v[r, 1], rig_v[r, 2]
@@ -163,6 +195,11 @@ def predict_rigid(rig_x0, rig_q0, rig_v, rig_w, rig_gravity, gx, gy, gz, dt, rig
             vx += gx * dt
             vy += gy * dt
             vz += gz * dt
+        if rig_move[r]:
+            k = rig_inv_mass[r] * dt
+            vx += k * rig_force[r, 0]
+            vy += k * rig_force[r, 1]
+            vz += k * rig_force[r, 2]
         rig_x[r, 0] = rig_x0[r, 0] + vx * dt
         rig_x[r, 1] = rig_x0[r, 1] + vy * dt
         rig_x[r, 2] = rig_x0[r, 2] + vz * dt

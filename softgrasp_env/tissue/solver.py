@@ -80,7 +80,8 @@ def _step(
     # state (updated in place on success)
     x, v, q, omega, group_q, anchor_shape, anchor_x, anchor_slide,
     # colliders (read only) and rigid outputs
-    rig_x0, rig_q0, rig_v, rig_w, rig_inv_mass, rig_inv_inertia, rig_gravity, rig_move, shape_kind, shape_params,
+    rig_x0, rig_q0, rig_v, rig_w, rig_inv_mass, rig_inv_inertia, rig_axis, rig_force, rig_gravity, rig_move, shape_kind,
+    shape_params,
     shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, imp_lin, imp_ang, coupling_imp,
     # scratch
     xp, qp, vd, wd, moment, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, c_friction, c_friction_goal,
@@ -92,8 +93,8 @@ def _step(
     """One tissue step. Returns 0, or 1 if a contact buffer was too small (``counts`` then holds
     the sizes needed and the state is untouched, so the caller can grow the buffers and retry)."""
     # --- predict rigid bodies: semi-implicit Euler, as pybullet will integrate them (thesis 5.2.2)
-    predict_rigid(rig_x0, rig_q0, rig_v, rig_w, rig_gravity, gx, gy, gz, dt, rig_x, rig_q, imp_lin, imp_ang,
-                  coupling_imp)  # fmt: skip
+    predict_rigid(rig_x0, rig_q0, rig_v, rig_w, rig_gravity, rig_move, rig_inv_mass, rig_force, gx, gy, gz, dt, rig_x,
+                  rig_q, imp_lin, imp_ang, coupling_imp)  # fmt: skip
     # --- predict particles (PBD Alg. 1 lines 5-11; Mueller & Chentanez 2011 sec. 3):
     #     v += g dt; damping of the deviation from each body's rigid motion; x* = x + v dt;
     #     q* = [w_hat sin(|w| dt / 2), cos(|w| dt / 2)] q
@@ -121,7 +122,7 @@ def _step(
                           rest_moment, inertia, x, xp, qp, group_q, orient_mode, moment)  # fmt: skip
         project_shape_contacts(nc, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass,
                                shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
-                               rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt, shape_pose)  # fmt: skip
+                               rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose)  # fmt: skip
         project_pairs(npairs, pair_i, pair_j, pair_lambda, pair_normal, xp, qp, radii, inv_mass)
         # Friction inside the loop, after the normal corrections: static friction is then a
         # constraint of the same Gauss-Seidel solve as the shape matching. Applied once after the
@@ -129,13 +130,14 @@ def _step(
         # at a steady ~0.1 m/s below the friction angle.
         friction_patches(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_normal, c_rn,
                          c_anchor, c_point, xp, inv_mass, body_friction, ns, shape_rigid, shape_local_x, shape_local_q,
-                         rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt, shape_pose, patch,
+                         rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose,
+                         patch,
                          patch_slide, patch_change, it == iterations - 1)  # fmt: skip
         friction_pairs(npairs, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, x, xp, inv_mass, p_body,
                        body_friction)  # fmt: skip
         if coupling == COUPLING_CONSISTENT:
             project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q,
-                            rig_inv_mass, rig_inv_inertia, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
+                            rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
     # --- coupling to the cores (thesis 5.1.3): error -> impulse, snap back
     snap_attached(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x, rig_q,
                   imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
@@ -144,8 +146,8 @@ def _step(
     update_velocities(x, v, q, omega, xp, qp, dt)
     # --- the velocity half of kinetic friction; anchors kept for the next step
     friction_velocity_pass(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_normal, c_rn, x, v, inv_mass,
-                           shape_rigid, rig_x0, rig_q0, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_move, imp_lin,
-                           imp_ang, dt, patch_slide, patch_change)  # fmt: skip
+                           shape_rigid, rig_x0, rig_q0, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
+                           imp_lin, imp_ang, dt, patch_slide, patch_change)  # fmt: skip
     store_anchors(nc, c_particle, c_shape, c_patch, c_lambda, c_anchor, x, shape_rigid, shape_local_x, shape_local_q,
                   rig_x, rig_q, patch_slide, patch_change, anchor_shape, anchor_x, anchor_slide)  # fmt: skip
     return 0
@@ -233,7 +235,7 @@ class TissueSolver:
                 state.particle_x, state.particle_v, state.particle_q, state.particle_omega, state.group_q,
                 state.particle_anchor_shape, state.particle_anchor_x, state.particle_anchor_slide,
                 col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w, col.rigid_inv_mass, col.rigid_inv_inertia,
-                col.rigid_gravity, col.rigid_in_solve, col.shape_kind, col.shape_params, col.shape_rigid,
+                col.rigid_axis, col.rigid_force, col.rigid_gravity, col.rigid_in_solve, col.shape_kind, col.shape_params, col.shape_rigid,
                 col.shape_local_x, col.shape_local_q, self._rig_x, self._rig_q, self._imp_lin, self._imp_ang,
                 self._coupling_imp,
                 self._xp, self._qp, self._vd, self._wd, self._moment, self._c_particle, self._c_shape, self._c_inner,
