@@ -101,8 +101,7 @@ class SimConfig:
     """Most warm-started rotation-extraction sweeps per group solve (Mueller et al. 2016); stops
     early once the correction is below 1e-10 rad. One sweep per solve suffices with the warm start
     carried by each group's spin: 4 sweeps changed the grasp's height error by 3 % (0.534 -> 0.518
-    mm) and cost 20 % of the speed. orientation='reaction' always extracts to convergence (up to 16
-    sweeps): its spin feedback is unstable about an unconverged rotation."""
+    mm) and cost 20 % of the speed."""
     gravity: float = 9.81
     """Gravitational acceleration along -z [m/s^2]."""
     damping: float = 0.5
@@ -110,14 +109,14 @@ class SimConfig:
     2007 sec. 3.5): the deviation shrinks by exp(-damping * dt) per step. 0 disables it."""
     coupling: CouplingMode = "thesis"
     """'thesis': core infinitely heavy inside the solve, error -> impulse, snap back (thesis 5.1.3).
-    'consistent': attachment projected with the core's generalised inverse mass (XPBD)."""
-    orientation: Literal["reaction", "goal"] = "goal"
-    """How particle orientations follow their groups. 'goal' (the paper, Mueller & Chentanez 2011
-    sec. 4.3): only a group's centre turns toward the group rotation; keeps flat particles aligned
-    with the surface under contact (grasp: 0.09 mm penetration) but leaks angular momentum (a
-    freely spinning block loses > 2 % in 300 steps). 'reaction': every member takes up the
-    projection's torque as spin, conserving angular momentum; under a squeeze its flat particles
-    turn edge-on and the grasp shows ~2 mm penetration."""
+    'consistent': attachment projected with the core's generalised inverse mass (XPBD); a core on a
+    prismatic joint slides along it under its motor's force."""
+    orientation: Literal["goal"] = "goal"
+    """How particle orientations follow their groups: 'goal', the paper's rule (Mueller & Chentanez
+    2011 sec. 4.3), only a group's centre turns toward the group rotation. The only mode: the
+    'reaction' mode of earlier versions (every member takes up the projection's torque as spin) was
+    removed, its energy grew 10-fold in 1,000 steps with spinning particles; angular momentum of
+    free bodies is now kept exactly in goal mode (tissue/momentum.py)."""
     contact_margin: float = 0.002
     """Extra distance [m] within which contact candidates are collected per step."""
 
@@ -130,8 +129,13 @@ class SimConfig:
         _check_range(o, "damping", self.damping, 0.0, 1e4)
         if self.coupling not in COUPLING_MODES:
             raise ValueError(f"SimConfig.coupling must be one of {COUPLING_MODES}, got {self.coupling!r}")
-        if self.orientation not in ("reaction", "goal"):
-            raise ValueError(f"SimConfig.orientation must be 'reaction' or 'goal', got {self.orientation!r}")
+        if self.orientation == "reaction":
+            raise ValueError(
+                "SimConfig.orientation='reaction' was removed (its energy grew with spinning particles); "
+                "'goal' now keeps free bodies' angular momentum exactly: use orientation='goal'"
+            )
+        if self.orientation != "goal":
+            raise ValueError(f"SimConfig.orientation must be 'goal', got {self.orientation!r}")
         _check_range(o, "contact_margin", self.contact_margin, 0.0, 0.1)
 
 

@@ -45,7 +45,7 @@ from .friction import friction_pairs, friction_patches, friction_velocity_pass, 
 from .integrate import predict_particles, update_velocities
 from .model import TissueModel
 from .rigid import Colliders, predict_rigid
-from .shape_matching import ORIENT_MODES, group_pack, rest_moments, rotation_sweeps, shape_match_sweep
+from .shape_matching import balance_torques, group_frames, group_pack, rest_moments, shape_match_sweep
 from .state import TissueState
 
 
@@ -75,7 +75,7 @@ class StepOutput:
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _step(
     # model
-    rest_x, rest_q, rest_moment, inertia, radii, mass, inv_mass, p_body, attached, g_off, g_mem, g_rest, g_pack, body_off,
+    rest_x, rest_q, rest_moment, inertia, radii, mass, inv_mass, p_body, attached, g_off, g_mem, g_pack, body_off,
     body_core_shape, body_stiffness, body_friction,
     # state (updated in place on success)
     x, v, q, omega, group_q, anchor_shape, anchor_x, anchor_slide,
@@ -84,11 +84,11 @@ def _step(
     shape_params,
     shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, imp_lin, imp_ang, coupling_imp,
     # scratch
-    xp, qp, vd, wd, moment, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, c_friction, c_friction_goal,
+    xp, qp, q_pred, vd, wd, moment, spin_kick, g_frame, g_torque, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, c_friction, c_friction_goal,
     c_anchor, c_point, c_patch, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, shape_pose, patch, patch_slide,
     patch_change,
     # parameters
-    dt, iterations, rot_iters, gx, gy, gz, damping, coupling, orient_mode, margin, counts,
+    dt, iterations, rot_iters, gx, gy, gz, damping, coupling, margin, counts,
 ):  # fmt: skip
     """One tissue step. Returns 0, or 1 if a contact buffer was too small (``counts`` then holds
     the sizes needed and the state is untouched, so the caller can grow the buffers and retry)."""
@@ -98,8 +98,9 @@ def _step(
     # --- predict particles (PBD Alg. 1 lines 5-11; Mueller & Chentanez 2011 sec. 3):
     #     v += g dt; damping of the deviation from each body's rigid motion; x* = x + v dt;
     #     q* = [w_hat sin(|w| dt / 2), cos(|w| dt / 2)] q
-    predict_particles(x, v, q, omega, group_q, mass, body_off, rest_moment, gx, gy, gz, damping, dt, orient_mode, xp,
-                      qp, vd, wd, moment)  # fmt: skip
+    predict_particles(x, v, q, omega, group_q, mass, inertia, body_off, rest_moment, gx, gy, gz, damping, dt, xp, qp,
+                      q_pred, vd, wd, moment)  # fmt: skip
+    group_frames(g_off, g_mem, mass, x, g_frame, g_torque)  # the groups' start-of-step torque balance data
     # --- contact candidates, against predicted rigid poses
     nc = collect_contacts(xp, x, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid,
                           shape_local_x, shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner,
@@ -116,10 +117,12 @@ def _step(
                  anchor_shape, anchor_x, anchor_slide, ns, c_anchor, c_patch, patch_slide, patch_change)  # fmt: skip
     # --- Gauss-Seidel iterations. Stiffness per iteration k' = 1 - (1 - k)^(1/n) makes the
     #     per-step stiffness independent of the iteration count (Mueller et al. 2007 sec. 3.3).
-    rot_eff = rotation_sweeps(rot_iters, orient_mode)
     for it in range(iterations):
-        shape_match_sweep(iterations, rot_eff, body_off, body_stiffness, g_off, g_mem, g_rest, g_pack, mass, rest_q,
-                          rest_moment, inertia, x, xp, qp, group_q, orient_mode, moment)  # fmt: skip
+        shape_match_sweep(iterations, rot_iters, body_off, body_stiffness, g_off, g_mem, g_pack, g_frame, g_torque,
+                          attached, rest_q, rest_moment, x, xp, qp, group_q, moment)  # fmt: skip
+        if it == iterations - 1:
+            # internal forces exert no torque: each group's corrections of the step, turned back
+            balance_torques(g_off, g_mem, g_frame, g_torque, attached, inertia, x, xp, qp, q_pred, spin_kick)
         project_shape_contacts(nc, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass,
                                shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
                                rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose)  # fmt: skip
@@ -143,7 +146,7 @@ def _step(
                   imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
     # --- velocities from positions (PBD Alg. 1 lines 18-21); angular velocity from q* q^-1 on the
     #     short arc (Mueller & Chentanez 2011 sec. 3)
-    update_velocities(x, v, q, omega, xp, qp, dt)
+    update_velocities(x, v, q, omega, xp, qp, wd, inertia, spin_kick, attached, dt)
     # --- the velocity half of kinetic friction; anchors kept for the next step
     friction_velocity_pass(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_normal, c_rn, x, v, inv_mass,
                            shape_rigid, rig_x0, rig_q0, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
@@ -170,6 +173,10 @@ class TissueSolver:
         self._vd = np.zeros((n, 3))
         self._wd = np.zeros((n, 3))
         self._moment = np.zeros((n, 9))
+        self._spin_kick = np.zeros((n, 3))
+        self._q_pred = np.zeros((n, 4))
+        self._g_frame = np.zeros((n, 10))
+        self._g_torque = np.zeros((n, 3))
         self._rest_moment = rest_moments(model)
         self._g_pack = group_pack(model)
         self._inertia = np.ascontiguousarray(model.particle_inertia_local())
@@ -230,20 +237,20 @@ class TissueSolver:
         while True:
             code = _step(
                 m.particle_rest_x, m.particle_rest_q, self._rest_moment, self._inertia, m.particle_radii, m.particle_mass, m.particle_inv_mass,
-                m.particle_body, m.particle_attached, m.group_offsets, m.group_members, m.group_rest_offset,
-                self._g_pack, m.body_particle_offsets, m.body_core_shape, m.body_stiffness, m.body_friction,
+                m.particle_body, m.particle_attached, m.group_offsets, m.group_members, self._g_pack, m.body_particle_offsets, m.body_core_shape, m.body_stiffness, m.body_friction,
                 state.particle_x, state.particle_v, state.particle_q, state.particle_omega, state.group_q,
                 state.particle_anchor_shape, state.particle_anchor_x, state.particle_anchor_slide,
                 col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w, col.rigid_inv_mass, col.rigid_inv_inertia,
                 col.rigid_axis, col.rigid_force, col.rigid_gravity, col.rigid_in_solve, col.shape_kind, col.shape_params, col.shape_rigid,
                 col.shape_local_x, col.shape_local_q, self._rig_x, self._rig_q, self._imp_lin, self._imp_ang,
                 self._coupling_imp,
-                self._xp, self._qp, self._vd, self._wd, self._moment, self._c_particle, self._c_shape, self._c_inner,
+                self._xp, self._qp, self._q_pred, self._vd, self._wd, self._moment, self._spin_kick, self._g_frame, self._g_torque,
+                self._c_particle, self._c_shape, self._c_inner,
                 self._c_lambda, self._c_normal, self._c_rn, self._c_friction, self._c_friction_goal, self._c_anchor,
                 self._c_point, self._c_patch, self._pair_i, self._pair_j, self._pair_lambda, self._pair_lambda_t,
                 self._pair_normal, shape_pose, self._patch, self._patch_slide, self._patch_change,
                 sim.dt, sim.iterations, sim.rotation_iterations, 0.0, 0.0, -sim.gravity, sim.damping, coupling,
-                ORIENT_MODES[sim.orientation], sim.contact_margin, self._counts,
+                sim.contact_margin, self._counts,
             )  # fmt: skip
             if code == 0:
                 break

@@ -8,7 +8,6 @@ import numpy as np
 
 from .model import TissueModel
 
-
 ANCHOR_SLOTS = 2
 """Friction anchors kept per particle: one per shape it touches (a particle at the cylinder's
 bottom edge can touch the cylinder and the ground at once)."""
