@@ -104,8 +104,8 @@ def _copy_colliders(col: Colliders) -> Colliders:
 
 def capture_scene() -> tuple[TissueSolver, list[tuple[TissueState, Colliders]], dict]:
     """Run the scripted grasp once; return the solver and the inputs of the steps in SNAP_STEPS,
-    plus the demo's result and its time inside the tissue solver."""
-    from softgrasp_env.demo import ScriptTimes, run_scripted_grasp
+    plus the scripted grasp's result and its time inside the tissue solver."""
+    from softgrasp_env.accuracy import GraspPlan, run_grasp
     from softgrasp_env.scene import GraspScene
 
     scene = GraspScene(SceneConfig())
@@ -126,12 +126,12 @@ def capture_scene() -> tuple[TissueSolver, list[tuple[TissueState, Colliders]], 
 
     solver.step = step
     try:
-        res = run_scripted_grasp(scene, ScriptTimes())
+        res = run_grasp(scene, GraspPlan())
         final = scene.world.state.copy()
     finally:
         scene.close()
     solver.step = inner
-    info = dict(result=res, tissue_seconds=tissue_time[0], final=final, held=res.held(ScriptTimes()))
+    info = dict(result=res, tissue_seconds=tissue_time[0], final=final, held=res.held(GraspPlan()))
     return solver, snaps, info
 
 

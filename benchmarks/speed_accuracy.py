@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from softgrasp_env.config import SceneConfig, SimConfig, TissueConfig
-from softgrasp_env.demo import ScriptTimes, run_scripted_grasp
+from softgrasp_env.accuracy import GraspPlan, run_grasp
+from softgrasp_env.config import SceneConfig
 from softgrasp_env.scene import GraspScene
 
 OUT = Path(__file__).resolve().parent / "out"
@@ -41,14 +41,14 @@ def run(cfg: SceneConfig) -> tuple[dict, np.ndarray, np.ndarray]:
 
     world.step = step  # record the trace without touching the script
     try:
-        res = run_scripted_grasp(scene, ScriptTimes())
+        res = run_grasp(scene, GraspPlan())
     finally:
         scene.close()
     n = 0 if world.model is None else world.model.particle_count
     metrics = dict(
         particles=n,
         steps_per_s=res.steps_per_second,
-        held=res.held(ScriptTimes()),
+        held=res.held(GraspPlan()),
         lift_cm=100 * res.lift_height,
         penetration_mm=1000 * res.max_penetration,
     )

@@ -14,10 +14,9 @@ import math
 
 import numpy as np
 import pybullet as p
-
-from .config import SceneConfig
 from pybullet_utils.bullet_client import BulletClient
 
+from .config import SceneConfig
 from .sim.bullet import RigidRef, connect
 from .sim.world import ShapeSpec, TissueSpec, World
 from .tissue.builder import build_combined_body, core_shape_from_bullet

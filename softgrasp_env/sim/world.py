@@ -21,8 +21,8 @@ from pybullet_utils.bullet_client import BulletClient
 from ..config import SimConfig
 from ..tissue.collision import SHAPE_CODES
 from ..tissue.model import TissueModel, concatenate, with_core_shapes
-from ..tissue.rotation import quat_to_matrix
 from ..tissue.rigid import Colliders
+from ..tissue.rotation import quat_to_matrix
 from ..tissue.solver import StepOutput, TissueSolver
 from ..tissue.state import TissueState, state_at_rest
 from .bullet import RigidRef, StateReader, read_mass_properties
