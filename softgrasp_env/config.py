@@ -94,9 +94,10 @@ class SimConfig:
     """Physics step [s]; one tissue step and one pybullet step per world step."""
     iterations: int = 3
     """Gauss-Seidel iterations over the shape-matching groups and contacts per step. Measured on the
-    grasp (benchmarks/speed_accuracy.py, against 4x density, 16 iterations, dt/4): 2 -> 1.4 mm
-    penetration, 1.37 mm RMS height error; 3 -> 0.47 mm, 0.76 mm; 4 -> 0.12 mm, 0.53 mm. Each
-    iteration costs ~64 us of the step (README has the current steps/s figures)."""
+    scripted grasp (deepest penetration over every step, thesis coupling): 1 -> 2.7 mm, 2 -> 0.97
+    mm, 3 -> 0.51 mm, 4 -> 0.19 mm; at dt / 2, 1 iteration gives 0.13 mm but the ramp breakaway
+    comes 15 % early, 2 give 0.06 mm. 3 is the fewest at 1/240 s that meets every accuracy target
+    (README, Measured); each iteration costs roughly 80 us of the step."""
     rotation_iterations: int = 1
     """Most warm-started rotation-extraction sweeps per group solve (Mueller et al. 2016); stops
     early once the correction is below 1e-10 rad. One sweep per solve suffices with the warm start
@@ -160,10 +161,13 @@ class SceneConfig:
     """Mass of one finger core [kg]."""
     finger_force: float = 3.0
     """Force limit of each finger's closing motor [N]. 3 N holds the default cylinder 5.5 times over
-    (2 mu N / m g); at 10 N the motors push the cores through the 1 cm tissue (PBD contact
-    stiffness scales with particle mass / dt^2) and pybullet's core-cylinder contact takes over."""
+    (2 mu_s N / m g; measured within 1 % for a slow lift); at 10 N the motors push the cores through
+    the 1 cm tissue (PBD contact stiffness scales with particle mass / dt^2) and pybullet's
+    core-cylinder contact takes over."""
     finger_speed: float = 0.1
-    """Maximum closing speed of a finger [m/s]."""
+    """Maximum closing speed of a finger [m/s]. The deepest tissue penetration of the grasp comes
+    the moment the fingers meet the cylinder: 0.51 mm at 0.1 m/s, 0.12 mm at 0.05 m/s (thesis
+    coupling)."""
     finger_max_opening: float = 0.06
     """Largest distance of a finger core's inner face from the gripper centre [m]."""
     palm_mass: float = 0.5

@@ -152,8 +152,32 @@ class SoftGraspEnv(gym.Env):
     its reset draw and the actions since, and the copy replays them: an exact copy, at the cost of
     re-simulating the episode so far.
 
+    ## Physics and its accuracy (measured at the defaults, ``benchmarks/accuracy_defaults.py``)
+    Both fingers are geared to equal travel (a parallel gripper's rack and pinion) within
+    [0, ``finger_max_opening``]. Tissue friction is Coulomb's with mu_s > mu_k, decided per contact
+    patch, with anchors (softgrasp_env/tissue/friction.py):
+
+    | check | Coulomb / physics | measured |
+    |---|---|---|
+    | heaviest cylinder held at 3 N per finger, slow lift | 2 mu_s F / g = 0.551 kg | soft 0.555 kg (+0.9 %), soft ``coupling="consistent"`` 0.567 kg (+3.0 %), rigid twin 0.550 kg (-0.0 %) |
+    | held cylinder over 60 s | stays put | slip < 0.01 mm, tilt < 0.07 deg (all three) |
+    | tissue pad on a slowly tilted ramp, mu_s 0.3 / 0.6 / 0.9 | breaks loose at tan = mu_s | +0.15 / +0.09 / +0.08 % |
+    | pad sliding to a stop from 0.25 / 0.5 / 1 m/s | v^2 / (2 mu_k g) | -1.1 / -0.4 / -0.05 % |
+    | free tissue body, 1,000 steps | momentum and angular momentum conserved | 7e-10 / 1e-10 relative |
+    | deepest tissue penetration, every step | 0 | 0.51 mm (thesis coupling, at the fingers' 0.1 m/s impact; 0.08 mm holding), 0.13 mm (consistent) |
+
+    The tissue is compliant: under load the pads shear (about 1 mm with the default cylinder, 6 mm
+    near the bound), and a fast lift loses part of the bound to the lift-off transient (the
+    cylinder leaves the ground only once the pads have sheared, then catches up with the palm): a
+    1 s lift holds 14 % less than Coulomb's bound.
+
     ## Version history
-    - v0: initial release.
+    - v0: initial release. Since then, with the ids kept until the task's next version (results
+      change): the rigid twin's fingers get the friction asked for (pybullet had silently kept 0.5,
+      not 0.9); the fingers are geared and limited; tissue friction obeys Coulomb at the defaults
+      (anchored, per patch, kinetic friction half on velocities); free tissue bodies keep their
+      angular momentum; the consistent coupling moves a finger core only along its joint;
+      ``SimConfig(orientation="reaction")`` was removed.
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 20}

@@ -1,7 +1,7 @@
 """Small dense linear algebra for the tissue kernels (numba, float64, no object mode).
 
-A symmetric 3x3 solve, shared by the group solve's spin reaction (shape_matching.py) and the
-damping of each body's deviation from its rigid motion (integrate.py).
+A symmetric 3x3 solve, for the damping of each body's deviation from its rigid motion
+(integrate.py).
 """
 
 from __future__ import annotations

@@ -10,11 +10,12 @@ eq. 4.8). Only the centre particle turns, toward quat(R) q_bar_i (the paper's go
 sec. 4.3). Stiffness per iteration k' = 1 - (1 - k)^(1/n) (Mueller et al. 2007 sec. 3.3).
 
 The projection exerts a torque (A carries the particles' own moments) that the goal orientation
-takes up nowhere: a freely spinning block lost 23 % of its angular momentum in 1,000 steps. For
-bodies without a core the sweep sums that torque and momentum.py takes the angular momentum it
-added back out after the step. (An earlier 'reaction' rule turned every member by the spin that
-takes up the torque: it conserved angular momentum only to first order, and with spinning
-particles and no damping its energy grew 10-fold in 1,000 steps; it was removed.)
+takes up nowhere: a freely spinning block lost 23 % of its angular momentum in 1,000 steps. So
+each group's corrections of a step are made torque-free (_shape_match_group, balance_torques),
+and the particles' spin is carried as angular momentum (integrate.update_velocities). (An earlier
+'reaction' rule turned every member by the spin that takes up the torque: it conserved angular
+momentum only to first order, and with spinning particles and no damping its energy grew 10-fold
+in 1,000 steps; it was removed.)
 """
 
 from __future__ import annotations
