@@ -7,4 +7,8 @@ cd "$(dirname "$0")/.."
 .venv/bin/python -m pip install -q --upgrade pip
 .venv/bin/python -m pip install -q "torch==2.13.0"
 .venv/bin/python -m pip install -q -e ".[test]"
+# numba compiles the solver's kernels on first use (about half a minute) and caches them on disk:
+# do it now, so that the first demo, test or training run starts at once.
+echo "compiling the solver's kernels (first time only, about half a minute)..."
+.venv/bin/python -c "from softgrasp_env.scene import GraspScene; s = GraspScene(); s.world.step(); s.world.penetration(); s.close()"
 echo "setup done: activate with 'source .venv/bin/activate'"
