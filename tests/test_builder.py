@@ -458,6 +458,63 @@ def test_build_groups_leaves_inputs_untouched():
     assert (x == x0).all() and (mass == m0).all() and (partner == p0).all()
 
 
+def _groups_by_all_pairs(x, partner, size):
+    """The definition itself: the partner, then the nearest others, ties to the lower index."""
+    d2 = ((x[:, None, :] - x[None, :, :]) ** 2).sum(axis=2)
+    out = []
+    for i in range(len(x)):
+        row = [i] + ([int(partner[i])] if partner[i] >= 0 else [])
+        others = [int(j) for j in np.argsort(d2[i], kind="stable") if j != i and j != partner[i]]
+        out.append((row + others)[:size])
+    return np.array(out)
+
+
+@pytest.mark.parametrize("kind", ["box", "cylinder", "sphere", "capsule", "lattice", "random", "sheet"])
+@pytest.mark.parametrize("size", [4, 8, 16])
+def test_build_groups_matches_the_all_pairs_definition(kind, size):
+    """The grid search finds exactly the groups an all-pairs distance table gives, ties included
+    (lattices and sampled surfaces are full of equal distances)."""
+    rng = np.random.default_rng(1)
+    if kind in ("box", "cylinder", "sphere", "capsule"):
+        m = build_combined_body(CoreShape(kind, half_extents=(0.008, 0.02, 0.03), radius=0.02, half_height=0.03),
+                                TissueConfig())  # fmt: skip
+        x, partner = m.particle_rest_x, m.particle_partner
+    elif kind == "lattice":
+        m = build_free_block((0.02, 0.02, 0.02), TissueConfig(), spacing=0.008)
+        x, partner = m.particle_rest_x, m.particle_partner
+    elif kind == "random":
+        x, partner = rng.normal(size=(400, 3)), np.full(400, -1)
+    else:  # a nearly flat sheet: the grid must not assume a volume
+        x, partner = rng.uniform(size=(300, 3)) * [1.0, 1.0, 1e-3], np.full(300, -1)
+    offsets, members, _ = build_groups(x, np.ones(len(x)), partner, size)
+    assert np.array_equal(members.reshape(len(x), -1), _groups_by_all_pairs(x, partner, min(size, len(x))))
+
+
+def test_build_groups_memory_is_linear_in_the_particle_count():
+    """100 times the default density (16,000 particles a finger) builds in well under a second of
+    arithmetic and a few kB per particle; the all-pairs table needed n^2 * 24 bytes (6 GB here)."""
+    import tracemalloc
+
+    tissue = TissueConfig(density=100 * TissueConfig().density)
+    build_combined_body(CoreShape("box", half_extents=(0.008, 0.02, 0.03)), TissueConfig())  # compiled
+    tracemalloc.start()
+    m = build_combined_body(CoreShape("box", half_extents=(0.008, 0.02, 0.03)), tissue)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert m.particle_count == 16_000
+    assert peak < 2_000 * m.particle_count
+
+
+def test_a_tissue_that_cannot_fit_is_refused_before_building(monkeypatch):
+    from softgrasp_env.tissue import builder
+
+    monkeypatch.setattr(builder, "_available_bytes", lambda: 100 * 2**20)  # 100 MiB free
+    with pytest.raises(ValueError, match=r"combined body: 64,000 particles would need about 0\.2 GiB.*density"):
+        build_combined_body(CoreShape("box", half_extents=(0.008, 0.02, 0.03)), TissueConfig(density=4e6))
+    with pytest.raises(ValueError, match="free block"):
+        build_free_block((0.1, 0.1, 0.1), TissueConfig(), spacing=0.001)
+
+
 def test_build_groups_rejects_a_single_particle():
     with pytest.raises(ValueError, match="at least 2"):
         build_groups(np.zeros((1, 3)), np.ones(1), np.full(1, -1), 8)

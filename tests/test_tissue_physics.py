@@ -258,7 +258,7 @@ def test_two_tissue_bodies_collide_without_interpenetrating():
         assert (r - d).max() < 0.25 * tissue.spacing  # spheres: support radius = radius
     p1 = (model.particle_mass[:, None] * state.particle_v).sum(axis=0)
     assert touched > 10
-    np.testing.assert_allclose(p1, p0, rtol=1e-9, atol=1e-15)
+    assert np.linalg.norm(p1 - p0) < 1e-10 * np.linalg.norm(p0)  # round-off: ~1e-12 measured
     # they pushed each other: the faster block was slowed, the other turned around
     va = state.particle_v[a, 0].mean()
     vb = state.particle_v[b, 0].mean()
