@@ -515,6 +515,27 @@ def test_a_tissue_that_cannot_fit_is_refused_before_building(monkeypatch):
         build_free_block((0.1, 0.1, 0.1), TissueConfig(), spacing=0.001)
 
 
+def test_combined_body_on_chosen_faces_only():
+    """Tissue only where contact can happen: the chosen faces of a box core, the rest bare. Areas
+    still sum to exactly the covered faces' area, and every attached particle lies on one of them."""
+    box = CoreShape("box", half_extents=(0.008, 0.02, 0.03))
+    tissue = TissueConfig()
+    full = build_combined_body(box, tissue)
+    part = build_combined_body(box, tissue, faces=("+x", "-z"))
+    att = part.particle_attached
+    x = part.particle_rest_x[att]
+    on_plus_x = np.isclose(x[:, 0], 0.008)
+    on_minus_z = np.isclose(x[:, 2], -0.03)
+    assert (on_plus_x | on_minus_z).all() and on_plus_x.any() and on_minus_z.any()
+    pts, _, area = sample_surface(box, tissue.spacing, faces=("+x", "-z"))
+    assert area.sum() == pytest.approx(4 * 0.02 * 0.03 + 4 * 0.008 * 0.02, rel=1e-12)
+    assert part.particle_count == 64 and full.particle_count == 176
+    with pytest.raises(ValueError, match="subset"):
+        build_combined_body(box, tissue, faces=("+w",))
+    with pytest.raises(ValueError, match="box core only"):
+        sample_surface(CoreShape("sphere", radius=0.01), 0.01, faces=("+x",))
+
+
 def test_build_groups_rejects_a_single_particle():
     with pytest.raises(ValueError, match="at least 2"):
         build_groups(np.zeros((1, 3)), np.ones(1), np.full(1, -1), 8)

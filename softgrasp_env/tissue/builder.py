@@ -106,11 +106,28 @@ def _fibonacci_sphere(n: int, upper_half_only: bool = False) -> np.ndarray:
     return np.stack([rho * np.cos(phi), rho * np.sin(phi), z], axis=1)
 
 
-def sample_surface(shape: CoreShape, spacing: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+BOX_FACES: tuple[str, ...] = ("+x", "-x", "+y", "-y", "+z", "-z")
+"""The faces of a box core, by outward normal in its frame."""
+
+
+def _check_faces(shape: CoreShape, faces) -> frozenset[str] | None:
+    if faces is None:
+        return None
+    if shape.kind != "box":
+        raise ValueError(f"faces can be chosen for a box core only, got a {shape.kind}")
+    chosen = frozenset(faces)
+    if not chosen or not chosen <= set(BOX_FACES):
+        raise ValueError(f"faces must be a non-empty subset of {BOX_FACES}, got {tuple(faces)!r}")
+    return chosen
+
+
+def sample_surface(shape: CoreShape, spacing: float, *, faces=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Points spread evenly over the surface at about ``spacing``: (points, outward normals, area
-    each point stands for). Areas sum to the surface area exactly."""
+    each point stands for). Areas sum to the surface area exactly. ``faces`` (box cores only:
+    names from BOX_FACES) keeps those faces and leaves the rest bare."""
     if not spacing > 0.0:
         raise ValueError(f"spacing must be > 0, got {spacing!r}")
+    chosen = _check_faces(shape, faces)
     pts, nrm, area = [], [], []
     if shape.kind == "box":
         h = np.asarray(shape.half_extents, dtype=np.float64)
@@ -120,6 +137,8 @@ def sample_surface(shape: CoreShape, spacing: float) -> tuple[np.ndarray, np.nda
             n_v = _count(2 * h[v_ax], spacing)
             uu, vv = _grid(n_u, n_v)
             for sign in (1.0, -1.0):
+                if chosen is not None and f"{'+' if sign > 0 else '-'}{'xyz'[axis]}" not in chosen:
+                    continue
                 p = np.zeros((uu.size, 3))
                 p[:, axis] = sign * h[axis]
                 p[:, u_ax] = uu * h[u_ax]
@@ -367,6 +386,7 @@ def build_combined_body(
     *,
     shape_offset: np.ndarray | None = None,
     extrude_direction: ExtrudeDirection = "normal",
+    faces=None,
 ) -> TissueModel:
     """Tissue for one combined body (thesis 5.2.1), in the core's centre-of-mass frame.
 
@@ -377,13 +397,15 @@ def build_combined_body(
     particle at a face corner moves 75 % along the face, not away from it), so the default is the
     surface normal, which equals the radial direction on a sphere.
     ``shape_offset`` is the shape centre's position in the centre-of-mass frame (pybullet's
-    collision-shape frame); the shape's axes must be those of that frame.
+    collision-shape frame); the shape's axes must be those of that frame. ``faces`` (box cores:
+    names from BOX_FACES) covers only those faces: tissue where contact can happen, the rest of
+    the core bare (it still meets the world through pybullet's own contacts).
     """
     if extrude_direction not in ("normal", "radial"):
         raise ValueError(f"extrude_direction must be 'normal' or 'radial', got {extrude_direction!r}")
     offset = np.zeros(3) if shape_offset is None else np.asarray(shape_offset, dtype=np.float64)
     check_fits(2 * int(math.ceil(shape.area * tissue.density)), tissue.group_size, what="combined body")
-    pts, nrm, area = sample_surface(shape, tissue.spacing)
+    pts, nrm, area = sample_surface(shape, tissue.spacing, faces=faces)
     pts = pts + offset
     if extrude_direction == "radial":
         d = pts / np.maximum(np.linalg.norm(pts, axis=1, keepdims=True), 1e-12)
