@@ -32,9 +32,9 @@ from softgrasp_env.tissue.solver import TissueSolver
 from softgrasp_env.tissue.state import state_at_rest
 
 KINDS = {
-    "soft, thesis coupling": dict(soft=True, sim=SimConfig()),
-    "soft, consistent coupling": dict(soft=True, sim=SimConfig(coupling="consistent")),
-    "rigid-only fingers": dict(soft=False, sim=SimConfig()),
+    "soft, thesis coupling": dict(sim=SimConfig()),
+    "soft, consistent coupling": dict(sim=SimConfig(coupling="consistent")),
+    "rigid-only fingers": dict(fingers="rigid", sim=SimConfig()),
 }
 
 

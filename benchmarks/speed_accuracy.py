@@ -73,7 +73,7 @@ def main() -> None:
     rotation = (1, 4) if args.quick else (1, 2, 4)
     groups = (8,) if args.quick else (6, 8)
     rows = []
-    rigid, _, rigid_z = run(replace(base, soft=False))
+    rigid, _, rigid_z = run(replace(base, fingers="rigid"))
     rows.append(dict(setting="rigid-only", iterations=0, rotation_iterations=0, group_size=0, **rigid,
                      height_rms_mm=np.nan))  # fmt: skip
     for it, rot, gs in itertools.product(iterations, rotation, groups):

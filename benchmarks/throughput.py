@@ -57,7 +57,7 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=1000, help="timed steps per run")
     args = parser.parse_args()
     base = SceneConfig()
-    rigid, _ = steps_per_second(SceneConfig(soft=False), args.steps)
+    rigid, _ = steps_per_second(SceneConfig(fingers="rigid"), args.steps)
     soft, n = steps_per_second(base, args.steps)
     print(f"{'scene':<28}{'particles':>10}{'steps/s':>12}")
     print(f"{'rigid-only fingers':<28}{0:>10}{rigid:>12.0f}")

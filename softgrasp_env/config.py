@@ -13,6 +13,8 @@ from typing import Literal
 
 CouplingMode = Literal["thesis", "consistent"]
 COUPLING_MODES: tuple[str, ...] = ("thesis", "consistent")
+FINGER_KINDS: tuple[str, ...] = ("tissue", "rigid")
+TISSUE_FACES: tuple[str, ...] = ("all", "contact")
 
 
 def _check_range(
@@ -144,8 +146,14 @@ class SimConfig:
 class SceneConfig:
     """The grasp scene: ground, a two-finger gripper and a cylinder (thesis 5.2.1)."""
 
-    soft: bool = True
-    """True: fingers are combined bodies (core + tissue). False: rigid-only fingers, same cores."""
+    fingers: str = "tissue"
+    """How the fingers touch the cylinder, one of FINGER_KINDS: 'tissue' - each core is a combined
+    body, wrapped in oriented-particle tissue (the thesis); 'rigid' - the bare cores, through
+    pybullet's own contacts (the rigid-only twin)."""
+    tissue_faces: str = "all"
+    """Which faces of a finger core get tissue: 'all', or 'contact' - only the inner face and the
+    tip, where the fingers can touch the cylinder (36 % of the particles; the rest of the core
+    meets the world through pybullet's contacts)."""
     cylinder_radius: float = 0.03
     """Cylinder radius [m]."""
     cylinder_height: float = 0.10
@@ -191,8 +199,10 @@ class SceneConfig:
 
     def __post_init__(self) -> None:
         o = "SceneConfig"
-        if not isinstance(self.soft, bool):
-            raise ValueError(f"SceneConfig.soft must be a bool, got {self.soft!r}")
+        if self.fingers not in FINGER_KINDS:
+            raise ValueError(f"SceneConfig.fingers must be one of {FINGER_KINDS}, got {self.fingers!r}")
+        if self.tissue_faces not in TISSUE_FACES:
+            raise ValueError(f"SceneConfig.tissue_faces must be one of {TISSUE_FACES}, got {self.tissue_faces!r}")
         _check_range(o, "cylinder_radius", self.cylinder_radius, 0.005, 0.2)
         _check_range(o, "cylinder_height", self.cylinder_height, 0.01, 0.5)
         _check_range(o, "cylinder_mass", self.cylinder_mass, 0.001, 10.0)
@@ -221,6 +231,12 @@ class SceneConfig:
             raise ValueError(f"SceneConfig.sim must be a SimConfig, got {type(self.sim).__name__}")
 
 
+    @property
+    def soft(self) -> bool:
+        """True if the fingers are wrapped in tissue (``fingers == 'tissue'``)."""
+        return self.fingers == "tissue"
+
+
 def field_names(cls: type) -> tuple[str, ...]:
     """Names of a config dataclass's fields (used by CLIs to map flags onto configs)."""
     return tuple(f.name for f in fields(cls))
@@ -228,6 +244,8 @@ def field_names(cls: type) -> tuple[str, ...]:
 
 __all__ = [
     "COUPLING_MODES",
+    "FINGER_KINDS",
+    "TISSUE_FACES",
     "CouplingMode",
     "SceneConfig",
     "SimConfig",

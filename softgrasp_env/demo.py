@@ -57,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
         sim = SimConfig(**sim_kw)
         scene_kw = {k: getattr(ns, k) for k in ("cylinder_radius", "cylinder_height", "cylinder_mass",
                                                  "finger_force", "lateral_offset", "yaw") if getattr(ns, k) is not None}  # fmt: skip
-        cfg = SceneConfig(soft=not ns.rigid, tissue=tissue, sim=sim, **scene_kw)
+        cfg = SceneConfig(fingers="rigid" if ns.rigid else "tissue", tissue=tissue, sim=sim, **scene_kw)
     except ValueError as exc:
         parser.error(str(exc))
     plan = GraspPlan(hold=ns.hold)

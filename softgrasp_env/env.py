@@ -123,7 +123,9 @@ class SoftGraspEnv(gym.Env):
     ## Arguments
     ``gym.make("SoftGrasp-v0", **kwargs)``; all keyword-only except ``render_mode``:
 
-    - ``soft`` (True): tissue on the fingers, or rigid-only fingers.
+    - ``soft`` (True): tissue on the fingers, or rigid-only fingers; ``fingers`` ('tissue' |
+      'rigid', overrides ``soft``) names the finger kind; ``tissue_faces`` ('all' | 'contact':
+      only the inner face and tip of each core get tissue).
     - ``reward_type`` ("dense" | "sparse").
     - ``control_frequency`` (20 Hz): must divide the physics rate ``1 / sim.dt`` (240 Hz).
     - ``gripper_speed`` (0.15 m/s): arm displacement per step at full action, times the step time.
@@ -187,6 +189,8 @@ class SoftGraspEnv(gym.Env):
         render_mode: str | None = None,
         *,
         soft: bool = True,
+        fingers: str | None = None,
+        tissue_faces: str = "all",
         reward_type: str = "dense",
         control_frequency: float = 20.0,
         gripper_speed: float = 0.15,
@@ -220,6 +224,10 @@ class SoftGraspEnv(gym.Env):
                              "use render_mode='rgb_array' headless")  # fmt: skip
         if not isinstance(soft, bool):
             raise ValueError(f"soft must be a bool, got {soft!r}")
+        if fingers is None:
+            fingers = "tissue" if soft else "rigid"
+        elif not soft and fingers == "tissue":
+            raise ValueError("soft=False asks for rigid-only fingers, but fingers='tissue': give one of the two")
         if reward_type not in ("dense", "sparse"):
             raise ValueError(f"reward_type must be 'dense' or 'sparse', got {reward_type!r}")
         _check("control_frequency", control_frequency, 0.5, 240.0)
@@ -253,14 +261,15 @@ class SoftGraspEnv(gym.Env):
             raise ValueError(f"control_frequency must divide the physics rate 1/sim.dt = {1.0 / sim.dt:g} Hz, "
                              f"got {control_frequency!r}")  # fmt: skip
         # The base scene, validated now so that bad sizes fail at construction, not at reset.
-        self._base = SceneConfig(soft=soft, cylinder_radius=cylinder_radius, cylinder_height=cylinder_height,
+        self._base = SceneConfig(fingers=fingers, tissue_faces=tissue_faces, cylinder_radius=cylinder_radius, cylinder_height=cylinder_height,
                                  cylinder_mass=cylinder_mass, finger_force=finger_force, tissue=tissue, sim=sim)  # fmt: skip
         if cylinder_radius - cylinder_radius_range < 0.005:
             raise ValueError(f"cylinder_radius - cylinder_radius_range must be >= 0.005 m, got "
                              f"{cylinder_radius} - {cylinder_radius_range}")  # fmt: skip
 
         self.render_mode = render_mode
-        self.soft = soft
+        self.soft = self._base.soft
+        self.fingers = self._base.fingers
         self.reward_type = reward_type
         self.control_frequency = float(control_frequency)
         self.gripper_speed = float(gripper_speed)

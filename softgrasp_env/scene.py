@@ -1,6 +1,6 @@
 """The grasp scene (thesis 5.2.1): a static ground, a gripper whose two finger links are the rigid
-cores, and a rigid cylinder. With ``soft=True`` each core is wrapped in oriented-particle tissue;
-with ``soft=False`` the same cores touch the cylinder through pybullet's own contacts.
+cores, and a rigid cylinder. With ``fingers='tissue'`` each core is wrapped in oriented-particle
+tissue; with ``fingers='rigid'`` the same cores touch the cylinder through pybullet's own contacts.
 
 Frames: z up, the cylinder stands at the origin. The gripper palm is a pybullet base driven by a
 force-limited fixed constraint (the "arm"); the fingers are prismatic links closing along the
@@ -144,12 +144,18 @@ class GraspScene:
             ShapeSpec("box", PALM_HALF_EXTENTS, rigid=3),
         ]
         tissue = []
-        if cfg.soft:
+        if cfg.fingers == "tissue":
+            # 'contact': the inner face (toward the other finger: +x for the left core, -x for the
+            # right one, in the core frame) and the tip (-z). The back and top never meet the
+            # cylinder; the sides only when it is offset past the face's end, and then the bare
+            # core's pybullet contact takes it.
+            faces = {0: ("+x", "-z"), 1: ("-x", "-z")} if cfg.tissue_faces == "contact" else {0: None, 1: None}
             for link, shape_index in ((0, 2), (1, 3)):
                 core, offset, orn = core_shape_from_bullet(c, g, link)
                 if abs(orn[3]) < 1.0 - 1e-12:
                     raise ValueError("finger collision shape must be aligned with its link frame")
-                tissue.append(TissueSpec(build_combined_body(core, cfg.tissue, shape_offset=offset), shape_index))
+                body = build_combined_body(core, cfg.tissue, shape_offset=offset, faces=faces[link])
+                tissue.append(TissueSpec(body, shape_index))
         self.world = World(c, sim, rigid, shapes, tissue)
 
     # --- control ---------------------------------------------------------------------------------

@@ -146,8 +146,9 @@ def test_sim_config_accepts(kwargs):
         (dict(finger_half_extents=(0.008, 0.02)), "finger_half_extents"),
         (dict(finger_half_extents=(0.008, 0.0, 0.03)), r"finger_half_extents\[1\]"),
         (dict(finger_half_extents=(0.008, 0.02, NAN)), r"finger_half_extents\[2\]"),
-        (dict(soft=1), "soft"),
-        (dict(soft="yes"), "soft"),
+        (dict(fingers="soft"), "fingers"),
+        (dict(fingers=True), "fingers"),
+        (dict(tissue_faces="inner"), "tissue_faces"),
         (dict(tissue=SimConfig()), "tissue"),
         (dict(sim=TissueConfig()), "sim"),
         (dict(sim=None), "sim"),
@@ -159,7 +160,7 @@ def test_scene_config_rejects(kwargs, field):
 
 
 def test_scene_config_accepts():
-    cfg = SceneConfig(soft=False, yaw=math.pi / 4, lateral_offset=-0.1, tissue=TissueConfig(stiffness=0.2),
+    cfg = SceneConfig(fingers="rigid", yaw=math.pi / 4, lateral_offset=-0.1, tissue=TissueConfig(stiffness=0.2),
                       sim=SimConfig(coupling="consistent"))  # fmt: skip
     assert cfg.soft is False
     assert cfg.yaw == pytest.approx(math.pi / 4)
