@@ -97,7 +97,7 @@ class SimConfig:
     iterations: int = 3
     """Gauss-Seidel iterations over the shape-matching groups and contacts per step. Measured on the
     scripted grasp (deepest penetration over every step, thesis coupling): 1 -> 2.7 mm, 2 -> 0.97
-    mm, 3 -> 0.51 mm, 4 -> 0.19 mm; at dt / 2, 1 iteration gives 0.13 mm but the ramp breakaway
+    mm, 3 -> 0.50 mm, 4 -> 0.19 mm; at dt / 2, 1 iteration gives 0.13 mm but the ramp breakaway
     comes 15 % early, 2 give 0.06 mm. 3 is the fewest at 1/240 s that meets every accuracy target
     (README, Measured); each iteration costs roughly 80 us of the step."""
     rotation_iterations: int = 1
@@ -174,7 +174,7 @@ class SceneConfig:
     core-cylinder contact takes over."""
     finger_speed: float = 0.1
     """Maximum closing speed of a finger [m/s]. The deepest tissue penetration of the grasp comes
-    the moment the fingers meet the cylinder: 0.51 mm at 0.1 m/s, 0.12 mm at 0.05 m/s (thesis
+    the moment the fingers meet the cylinder: 0.50 mm at 0.1 m/s, 0.12 mm at 0.05 m/s (thesis
     coupling)."""
     finger_max_opening: float = 0.06
     """Largest distance of a finger core's inner face from the gripper centre [m]."""
