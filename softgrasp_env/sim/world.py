@@ -157,12 +157,12 @@ class World:
         if self.solver is not None:
             out = self.solver.step(self.state, col)
             self.last_output = out
-            # A NaN impulse would poison pybullet's bodies (and its broadphase) for good: stop here,
-            # so the caller can end the episode and rebuild.
-            if not (np.isfinite(out.rigid_impulse).all() and np.isfinite(out.rigid_angular_impulse).all()):
+            # A NaN impulse would poison pybullet's bodies (and its broadphase) for good: the applier
+            # hands nothing over then, and we stop here so the caller can end the episode and rebuild.
+            if not self._impulses.apply(col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w, col.rigid_inv_mass,
+                                        col.rigid_inv_inertia, out.rigid_impulse, out.rigid_angular_impulse,
+                                        self.sim.dt):  # fmt: skip
                 raise SimulationDiverged(f"non-finite tissue impulse at step {self.step_count}")
-            self._impulses.apply(col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w, col.rigid_inv_mass,
-                                 col.rigid_inv_inertia, out.rigid_impulse, out.rigid_angular_impulse, self.sim.dt)  # fmt: skip
         self.client.stepSimulation()
         self.refresh()
         if self.solver is not None:

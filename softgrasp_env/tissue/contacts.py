@@ -203,8 +203,9 @@ def project_shape_contacts(
     generalised inverse masses so the body receives the opposite correction (Mueller et al. 2020
     sec. 3.3). Inner contacts keep only the particle centre outside its own core (radius 0)."""
     for c in range(count):
-        i = c_particle[c]
-        s = c_shape[c]
+        # unsigned indices: no negative-index wraparound per access (as in the group solve)
+        i = np.uint64(c_particle[c])
+        s = np.uint64(c_shape[c])
         p = (xp[i, 0], xp[i, 1], xp[i, 2])
         r = shape_rigid[s]
         if r >= 0 and rig_move[r]:

@@ -27,6 +27,7 @@ from __future__ import annotations
 import math
 
 import numba as nb
+import numpy as np
 
 from .rigid import generalized_inv_mass, rigid_apply, shape_world_pose
 from .rotation import qconj, qrotate
@@ -120,7 +121,7 @@ def friction_patches(
         lam = c_lambda[c]
         if p < 0 or lam <= 0.0:
             continue
-        i = c_particle[c]
+        i = np.uint64(c_particle[c])  # unsigned: no negative-index wraparound per access
         rn = c_rn[c]
         for a in range(3):
             c_point[c, a] = xp[i, a] - rn * c_normal[c, a]
@@ -133,8 +134,8 @@ def friction_patches(
         lam = c_lambda[c]
         if p < 0 or lam <= 0.0:
             continue
-        i = c_particle[c]
-        s = c_shape[c]
+        i = np.uint64(c_particle[c])
+        s = np.uint64(c_shape[c])
         r = shape_rigid[s]
         if r >= 0 and rig_move[r]:
             sx, sq = shape_world_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
@@ -236,7 +237,7 @@ def friction_patches(
         lam = c_lambda[c]
         if p < 0 or lam <= 0.0:
             continue
-        i = c_particle[c]
+        i = np.uint64(c_particle[c])
         r = shape_rigid[c_shape[c]]
         sc = patch[p, 13]
         keep = patch[p, 14]

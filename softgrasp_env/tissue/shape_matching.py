@@ -116,14 +116,16 @@ def group_frames(g_off, g_mem, mass, xs, frame, torque):
     zz), M], the group's centre of mass at the start, the inverse of its inertia about it (0 if
     singular: a degenerate group gets no balance) and its mass. Clears the groups' torque sums."""
     for i in range(g_off.shape[0] - 1):
-        start = g_off[i]
-        end = g_off[i + 1]
+        # unsigned indices: no negative-index wraparound per access (as in _shape_match_group)
+        i = np.uint64(i)
+        start = np.uint64(g_off[i])
+        end = np.uint64(g_off[i + 1])
         # moments about the centre particle's start position (small numbers: no cancellation)
         ox, oy, oz = xs[i, 0], xs[i, 1], xs[i, 2]
         msum = sx = sy = sz = 0.0
         s00 = s01 = s02 = s11 = s12 = s22 = 0.0
         for e in range(start, end):
-            j = g_mem[e]
+            j = np.uint64(g_mem[e])
             m = mass[j]
             rx = xs[j, 0] - ox
             ry = xs[j, 1] - oy
@@ -293,6 +295,7 @@ def balance_torques(g_off, g_mem, frame, torque, attached, inertia, xs, xp, qp, 
     turns of each iteration: the lever arms r_j do not change over the step. (In the sweep itself,
     this branch made every sweep 50 % slower.)"""
     for i in range(g_off.shape[0] - 1):
+        i = np.uint64(i)  # unsigned indices: no negative-index wraparound per access
         tx, ty, tz = torque[i, 0], torque[i, 1], torque[i, 2]
         if not attached[i]:
             kx, ky, kz = _spin_gained(i, q_pred, qp, inertia, spin_kick)
@@ -303,8 +306,8 @@ def balance_torques(g_off, g_mem, frame, torque, attached, inertia, xs, xp, qp, 
         wy = frame[i, 4] * tx + frame[i, 6] * ty + frame[i, 7] * tz
         wz = frame[i, 5] * tx + frame[i, 7] * ty + frame[i, 8] * tz
         csx, csy, csz = frame[i, 0], frame[i, 1], frame[i, 2]
-        for e in range(g_off[i], g_off[i + 1]):
-            j = g_mem[e]
+        for e in range(np.uint64(g_off[i]), np.uint64(g_off[i + 1])):
+            j = np.uint64(g_mem[e])
             rx = xs[j, 0] - csx
             ry = xs[j, 1] - csy
             rz = xs[j, 2] - csz
