@@ -31,10 +31,10 @@ def steps_per_second(cfg: SceneConfig, steps: int, repeats: int = 3) -> tuple[fl
             scene.set_palm_target(np.array([0.0, 0.0, scene.grasp_height + scene.palm_offset]))
             scene.set_finger_target(cfg.finger_max_opening)
             for _ in range(240):  # settle into the squeeze, and compile anything not cached
-                scene.world.step()
+                scene.step()
             tic = time.perf_counter()
             for _ in range(steps):
-                scene.world.step()
+                scene.step()
             best = max(best, steps / (time.perf_counter() - tic))
             particles = 0 if scene.world.model is None else scene.world.model.particle_count
         finally:
@@ -46,7 +46,7 @@ def startup_seconds() -> float:
     """Wall time for a new process to import, build the soft scene and take its first step."""
     code = (
         "import time; t=time.perf_counter();"
-        "from softgrasp_env.scene import GraspScene; s=GraspScene(); s.world.step();"
+        "from softgrasp_env.scene import GraspScene; s=GraspScene(); s.step();"
         "print(time.perf_counter()-t)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

@@ -166,7 +166,7 @@ def run_grasp(scene: GraspScene, plan: GraspPlan | None = None, *, on_step: Call
                 target[2] += plan.lift_distance * _min_jerk((k + 1) / n)
                 scene.set_palm_target(target)
             tic = time.perf_counter()
-            world.step()
+            scene.step()
             seconds += time.perf_counter() - tic
             if not world.is_finite():
                 finite = False

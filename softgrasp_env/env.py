@@ -22,7 +22,6 @@ from .sim.world import SimulationDiverged
 
 # Slots of GraspScene's rigid list and shapes (see scene.py).
 _LEFT, _RIGHT, _CYL, _PALM = 0, 1, 2, 3
-_CYL_SHAPE = 1
 
 OBS_NAMES: tuple[str, ...] = (
     "grip_x", "grip_y", "grip_z",
@@ -452,11 +451,10 @@ class SoftGraspEnv(gym.Env):
         sc.set_palm_target(target)
         sc.set_finger_target(0.5 * (float(act[3]) + 1.0) * sc.config.finger_max_opening)
         forces = np.zeros(2)
-        world = sc.world
         try:
             for _ in range(self._substeps):
-                world.step()
-                forces += self._finger_forces()
+                sc.step()
+                forces += sc.finger_forces()
         except SimulationDiverged:
             self._episode_over = True
             return True
@@ -465,19 +463,6 @@ class SoftGraspEnv(gym.Env):
             self._episode_over = True
             return True
         return False
-
-    def _finger_forces(self) -> np.ndarray:
-        """Normal force of each finger on the cylinder in the last physics step: the tissue's
-        contacts (soft) plus pybullet's core contacts (the core can meet the cylinder too) [N]."""
-        sc = self.scene
-        c = sc.client
-        f = np.zeros(2)
-        for k, link in enumerate((0, 1)):
-            for pt in c.getContactPoints(bodyA=sc.cylinder, bodyB=sc.gripper, linkIndexA=-1, linkIndexB=link):
-                f[k] += pt[9]
-        if sc.world.solver is not None:
-            f += sc.world.solver.contact_normal_force(_CYL_SHAPE)
-        return f
 
     def _diverged(self) -> bool:
         w = self.scene.world

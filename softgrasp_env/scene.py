@@ -22,6 +22,8 @@ from .sim.world import ShapeSpec, TissueSpec, World
 from .tissue.builder import build_combined_body, core_shape_from_bullet
 
 PALM_HALF_EXTENTS = (0.09, 0.03, 0.01)
+CYLINDER_SHAPE = 1
+"""Index of the cylinder among the shapes the tissue sees (see the ``shapes`` list below)."""
 FINGER_DROP = 0.04
 """Gap between the palm's underside and the top of a finger core [m] (the finger's upper part is
 not modelled: only the fingertip segment touches anything)."""
@@ -34,7 +36,7 @@ velocities only by default (erp 0), and the travel difference then drifted by 3 
 
 
 class GraspScene:
-    """Builds and drives the scene; ``world.step()`` advances it."""
+    """Builds and drives the scene; :meth:`step` advances it by one physics step."""
 
     def __init__(self, config: SceneConfig | None = None, *, gui: bool = False, client: BulletClient | None = None) -> None:
         """Build the scene in a new physics server, or in ``client`` after emptying it
@@ -157,6 +159,25 @@ class GraspScene:
                 body = build_combined_body(core, cfg.tissue, shape_offset=offset, faces=faces[link])
                 tissue.append(TissueSpec(body, shape_index))
         self.world = World(c, sim, rigid, shapes, tissue)
+
+    # --- stepping --------------------------------------------------------------------------------
+
+    def step(self) -> None:
+        """One physics step of the whole scene (``world.step()``: tissue, then pybullet)."""
+        self.world.step()
+
+    def finger_forces(self) -> np.ndarray:
+        """Normal force each finger (left, right) pressed on the cylinder with in the last physics
+        step [N]: the tissue's contacts plus pybullet's contacts of the finger's own links (a core
+        can meet the cylinder too, and is all there is of a rigid finger)."""
+        c = self.client
+        f = np.zeros(2)
+        for k, link in enumerate((0, 1)):
+            for pt in c.getContactPoints(bodyA=self.cylinder, bodyB=self.gripper, linkIndexA=-1, linkIndexB=link):
+                f[k] += pt[9]
+        if self.world.solver is not None:
+            f += self.world.solver.contact_normal_force(CYLINDER_SHAPE)
+        return f
 
     # --- control ---------------------------------------------------------------------------------
 
