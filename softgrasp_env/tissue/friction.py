@@ -81,6 +81,22 @@ def load_anchors(nc, c_particle, c_shape, c_inner, x0, p_body, shape_rigid, shap
                 c_anchor[c, a] = loc[a]
 
 
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _patch_lever(c, p, c_point, patch):
+    """Contact c's lever arm from its patch's centre of pressure, in the plane of the patch's mean
+    normal, and that unit normal: (rx, ry, rz, mx, my, mz) (pass 1 of friction_patches summed
+    what they come from)."""
+    inv_n = 1.0 / patch[p, 0]
+    mx, my, mz = patch[p, 4], patch[p, 5], patch[p, 6]
+    ml = math.sqrt(mx * mx + my * my + mz * mz)
+    mx, my, mz = mx / ml, my / ml, mz / ml
+    rx = c_point[c, 0] - patch[p, 1] * inv_n
+    ry = c_point[c, 1] - patch[p, 2] * inv_n
+    rz = c_point[c, 2] - patch[p, 3] * inv_n
+    rd = rx * mx + ry * my + rz * mz
+    return rx - rd * mx, ry - rd * my, rz - rd * mz, mx, my, mz
+
+
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def friction_patches(
     nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_normal, c_rn, c_anchor, c_point, xp, inv_mass,
@@ -165,18 +181,7 @@ def friction_patches(
         c_friction_goal[c, 0] = fx
         c_friction_goal[c, 1] = fy
         c_friction_goal[c, 2] = fz
-        # lever arm from the centre of pressure, in the plane of the mean normal
-        inv_n = 1.0 / patch[p, 0]
-        mx, my, mz = patch[p, 4], patch[p, 5], patch[p, 6]
-        ml = math.sqrt(mx * mx + my * my + mz * mz)
-        mx, my, mz = mx / ml, my / ml, mz / ml
-        rx = c_point[c, 0] - patch[p, 1] * inv_n
-        ry = c_point[c, 1] - patch[p, 2] * inv_n
-        rz = c_point[c, 2] - patch[p, 3] * inv_n
-        rd = rx * mx + ry * my + rz * mz
-        rx -= rd * mx
-        ry -= rd * my
-        rz -= rd * mz
+        rx, ry, rz, mx, my, mz = _patch_lever(c, p, c_point, patch)
         r2 = rx * rx + ry * ry + rz * rz
         patch[p, 7] += lam * math.sqrt(r2)
         patch[p, 8] += lam * r2
@@ -249,16 +254,7 @@ def friction_patches(
             gy = share * patch[p, 10]
             gz = share * patch[p, 11]
             if patch[p, 8] > 0.0:
-                mx, my, mz = patch[p, 4], patch[p, 5], patch[p, 6]
-                ml = math.sqrt(mx * mx + my * my + mz * mz)
-                mx, my, mz = mx / ml, my / ml, mz / ml
-                rx = c_point[c, 0] - patch[p, 1] * inv_n
-                ry = c_point[c, 1] - patch[p, 2] * inv_n
-                rz = c_point[c, 2] - patch[p, 3] * inv_n
-                rd = rx * mx + ry * my + rz * mz
-                rx -= rd * mx
-                ry -= rd * my
-                rz -= rd * mz
+                rx, ry, rz, mx, my, mz = _patch_lever(c, p, c_point, patch)
                 k = patch[p, 12] / patch[p, 8] * lam
                 gx += k * (my * rz - mz * ry)
                 gy += k * (mz * rx - mx * rz)
