@@ -60,7 +60,8 @@ class GraspRecord:
     """Cylinder centre above its resting height at the end [m]."""
     min_lift_during_hold: float
     max_penetration: float
-    """Deepest tissue overlap with any other rigid shape, checked after every step [m]."""
+    """Deepest overlap of a finger (tissue, or pybullet's own contacts) with the cylinder or the
+    ground, checked after every step [m] (GraspScene.penetration)."""
     max_core_intrusion: float
     """Deepest intrusion of an outer particle's centre into its own core, every step [m]."""
     max_tilt: float
@@ -75,10 +76,17 @@ class GraspRecord:
     hold began [m]: slip in the hand (0 for a grasp that holds)."""
     hold_turn: float
     """Largest rotation of the cylinder relative to the palm since the hold began [rad]."""
+    in_hand_motion: float
+    """Largest distance of the cylinder centre, in the palm's frame, from where it was when the
+    lift began, over lift and hold [m]: what the hand let it move by, sag of the fingers plus slip
+    (ideal 0 while the bound is met)."""
     steps: int
     seconds: float
     """Wall time of the physics steps alone [s]."""
     finite: bool
+    trace: np.ndarray | None = None
+    """With ``run_grasp(..., trace=True)``: (steps, 8) rows [t, cylinder x, y, z, qx, qy, qz, qw]
+    after every step, for comparing runs (pose_error)."""
 
     @property
     def steps_per_second(self) -> float:
@@ -126,9 +134,13 @@ def _angle_between(q0: np.ndarray, q1: np.ndarray) -> float:
     return 2.0 * math.acos(min(1.0, d))
 
 
-def run_grasp(scene: GraspScene, plan: GraspPlan | None = None, *, on_step: Callable[[str], None] | None = None) -> GraspRecord:
+def run_grasp(
+    scene: GraspScene, plan: GraspPlan | None = None, *, on_step: Callable[[str], None] | None = None,
+    trace: bool = False,
+) -> GraspRecord:
     """Drive ``scene`` through approach, squeeze, lift and hold (fingers commanded past contact: the
-    motors' force limit sets the squeeze) and measure it; ``on_step(phase)`` runs after every step."""
+    motors' force limit sets the squeeze) and measure it; ``on_step(phase)`` runs after every step;
+    ``trace`` records the cylinder's pose after every step."""
     plan = plan or GraspPlan()
     dt = scene.config.sim.dt
     world = scene.world
@@ -144,10 +156,11 @@ def run_grasp(scene: GraspScene, plan: GraspPlan | None = None, *, on_step: Call
               ("lift", n_steps(plan.lift)), ("hold", n_steps(plan.hold))]  # fmt: skip
     max_pen = max_intr = max_tilt = 0.0
     min_hold = math.inf
-    lift_slip = hold_slip = hold_turn = 0.0
+    lift_slip = hold_slip = hold_turn = in_hand = 0.0
     rel0 = hold0 = None
     finite = True
     seconds = 0.0
+    rows: list[tuple[float, ...]] = []
     for phase, n in phases:
         if phase == "lift":
             rel0 = _relative_pose(scene)
@@ -171,11 +184,15 @@ def run_grasp(scene: GraspScene, plan: GraspPlan | None = None, *, on_step: Call
             if not world.is_finite():
                 finite = False
                 break
-            pen, intr = world.penetration()
+            pen, intr = scene.penetration()
             max_pen = max(max_pen, pen)
+            if trace:
+                cp, cq = scene.cylinder_pose()
+                rows.append((world.step_count * dt, *cp, *cq))
             max_intr = max(max_intr, intr)
             if phase in ("lift", "hold"):
                 max_tilt = max(max_tilt, scene.cylinder_tilt())
+                in_hand = max(in_hand, float(np.linalg.norm(_relative_pose(scene)[0] - rel0[0])))
             if phase == "hold":
                 min_hold = min(min_hold, scene.lift_height())
                 pos, q = _relative_pose(scene)
@@ -195,10 +212,26 @@ def run_grasp(scene: GraspScene, plan: GraspPlan | None = None, *, on_step: Call
         lift_slip=lift_slip,
         hold_slip=hold_slip,
         hold_turn=hold_turn,
+        in_hand_motion=in_hand,
         steps=world.step_count,
         seconds=seconds,
         finite=finite,
+        trace=np.array(rows) if trace else None,
     )
+
+
+def pose_error(trace: np.ndarray, reference: np.ndarray) -> tuple[float, float]:
+    """RMS difference of two runs' cylinder poses over time: (position [m], orientation [rad]),
+    ``reference`` interpolated (positions linearly, orientations by nearest sample) at ``trace``'s
+    times within the span both cover. Runs at different time steps compare this way."""
+    t = trace[:, 0]
+    keep = (t >= reference[0, 0]) & (t <= reference[-1, 0])
+    t = t[keep]
+    pos = np.stack([np.interp(t, reference[:, 0], reference[:, 1 + a]) for a in range(3)], axis=1)
+    idx = np.clip(np.searchsorted(reference[:, 0], t), 0, len(reference) - 1)
+    dq = np.abs((trace[keep, 4:8] * reference[idx, 4:8]).sum(axis=1))
+    ang = 2.0 * np.arccos(np.clip(dq, -1.0, 1.0))
+    return float(np.sqrt(((trace[keep, 1:4] - pos) ** 2).sum(axis=1).mean())), float(np.sqrt((ang**2).mean()))
 
 
 def coulomb_hold_bound(mu_s: float, finger_force: float, gravity: float) -> float:

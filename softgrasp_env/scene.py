@@ -179,6 +179,18 @@ class GraspScene:
             f += self.world.solver.contact_normal_force(CYLINDER_SHAPE)
         return f
 
+    def penetration(self) -> tuple[float, float]:
+        """(deepest overlap of a finger with the cylinder or the ground, deepest intrusion of tissue
+        into its own core) now [m], the same measure for every finger kind: the tissue's overlap
+        with any rigid shape, and the depth of pybullet's own contacts between the gripper and the
+        cylinder or the ground (a rigid finger's, or a bare core's)."""
+        pen, intrusion = self.world.penetration()
+        c = self.client
+        for other in (self.cylinder, self.ground):
+            for pt in c.getContactPoints(bodyA=self.gripper, bodyB=other):
+                pen = max(pen, -pt[8])
+        return pen, intrusion
+
     # --- control ---------------------------------------------------------------------------------
 
     def set_palm_target(self, pos: np.ndarray, *, yaw: float | None = None) -> None:
