@@ -22,7 +22,9 @@ import time
 
 import numpy as np
 
-from softgrasp_env import accuracy
+from dataclasses import replace
+
+from softgrasp_env import accuracy, presets
 from softgrasp_env.accuracy import GraspPlan, coulomb_hold_bound, find_hold_bound, run_grasp
 from softgrasp_env.config import SceneConfig, SimConfig, TissueConfig
 from softgrasp_env.scene import GraspScene
@@ -31,11 +33,13 @@ from softgrasp_env.tissue.rigid import empty_colliders
 from softgrasp_env.tissue.solver import TissueSolver
 from softgrasp_env.tissue.state import state_at_rest
 
-KINDS = {
-    "soft, thesis coupling": dict(sim=SimConfig()),
-    "soft, consistent coupling": dict(sim=SimConfig(coupling="consistent")),
-    "rigid-only fingers": dict(fingers="rigid", sim=SimConfig()),
-}
+def kinds(preset: str) -> dict[str, SceneConfig]:
+    base = presets.scene_config(preset)
+    return {
+        "soft, thesis coupling": base,
+        "soft, consistent coupling": replace(base, sim=replace(base.sim, coupling="consistent")),
+        "rigid-only fingers": replace(base, fingers="rigid"),
+    }
 
 
 def pct(value: float, reference: float) -> str:
@@ -82,10 +86,10 @@ def conservation_rows() -> None:
               f"{np.linalg.norm(l1 - l0) / np.linalg.norm(l0):.1e} (relative); energy at most {rise:+.1e} above the start")  # fmt: skip
 
 
-def grasp_rows(soak: float) -> None:
-    print(f"scripted grasp at the defaults, then {soak:g} s of holding")
-    for name, kw in KINDS.items():
-        scene = GraspScene(SceneConfig(**kw))
+def grasp_rows(soak: float, preset: str) -> None:
+    print(f"scripted grasp, preset {preset!r}, then {soak:g} s of holding")
+    for name, cfg in kinds(preset).items():
+        scene = GraspScene(cfg)
         try:
             r = run_grasp(scene, GraspPlan(hold=soak))
         finally:
@@ -96,15 +100,15 @@ def grasp_rows(soak: float) -> None:
               f"{'held' if r.held(GraspPlan(hold=soak)) else 'NOT HELD'}")  # fmt: skip
 
 
-def bound_rows(rel_tol: float) -> None:
+def bound_rows(rel_tol: float, preset: str) -> None:
     plan = GraspPlan(lift=4.0, hold=3.0)
-    base = SceneConfig()
+    base = presets.scene_config(preset)
     ref = coulomb_hold_bound(base.tissue.friction_static, base.finger_force, base.sim.gravity)
     print(f"hold bound at {base.finger_force:g} N per finger (4 s lift, 3 s hold): Coulomb 2 mu_s F / g = {ref:.4f} kg")
-    for name, kw in KINDS.items():
+    for name, cfg in kinds(preset).items():
 
-        def held(mass: float, kw=kw) -> bool:
-            scene = GraspScene(SceneConfig(cylinder_mass=mass, **kw))
+        def held(mass: float, cfg=cfg) -> bool:
+            scene = GraspScene(replace(cfg, cylinder_mass=mass))
             try:
                 return run_grasp(scene, plan).holds_without_slip(plan)
             finally:
@@ -118,11 +122,14 @@ def bound_rows(rel_tol: float) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="hold 5 s instead of 60 s, bisect to 2 %%")
+    parser.add_argument("--preset", default="default", choices=tuple(presets.PRESETS), help="scene preset of the grasp rows")
+    parser.add_argument("--grasp-only", action="store_true", help="only the grasp and hold-bound rows")
     args = parser.parse_args()
-    friction_rows()
-    conservation_rows()
-    grasp_rows(5.0 if args.quick else 60.0)
-    bound_rows(0.02 if args.quick else 0.005)
+    if not args.grasp_only:
+        friction_rows()
+        conservation_rows()
+    grasp_rows(5.0 if args.quick else 60.0, args.preset)
+    bound_rows(0.02 if args.quick else 0.005, args.preset)
 
 
 if __name__ == "__main__":

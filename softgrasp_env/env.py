@@ -16,6 +16,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from . import presets
 from .config import SceneConfig, SimConfig, TissueConfig
 from .scene import GraspScene
 from .sim.world import SimulationDiverged
@@ -125,6 +126,9 @@ class SoftGraspEnv(gym.Env):
     - ``soft`` (True): tissue on the fingers, or rigid-only fingers; ``fingers`` ('tissue' |
       'rigid', overrides ``soft``) names the finger kind; ``tissue_faces`` ('all' | 'contact':
       only the inner face and tip of each core get tissue).
+    - ``preset`` ('fast' | 'default' | 'accurate', softgrasp_env/presets.py): the tissue and
+      solver settings to start from; ``tissue``, ``sim``, ``tissue_faces`` and the tissue
+      arguments below override them.
     - ``reward_type`` ("dense" | "sparse").
     - ``control_frequency`` (20 Hz): must divide the physics rate ``1 / sim.dt`` (240 Hz).
     - ``gripper_speed`` (0.15 m/s): arm displacement per step at full action, times the step time.
@@ -193,7 +197,8 @@ class SoftGraspEnv(gym.Env):
         *,
         soft: bool = True,
         fingers: str | None = None,
-        tissue_faces: str = "all",
+        tissue_faces: str | None = None,
+        preset: str = "default",
         reward_type: str = "dense",
         control_frequency: float = 20.0,
         gripper_speed: float = 0.15,
@@ -249,13 +254,17 @@ class SoftGraspEnv(gym.Env):
             if isinstance(val, bool) or not isinstance(val, (int, np.integer)) or not 16 <= val <= 4096:
                 raise ValueError(f"{name} must be an integer in [16, 4096], got {val!r}")
 
-        tissue = tissue if tissue is not None else TissueConfig()
+        if preset not in presets.PRESETS:
+            raise ValueError(f"preset must be one of {tuple(presets.PRESETS)}, got {preset!r}")
+        p_tissue, p_sim, p_scene = presets.tissue_and_sim(preset)
+        tissue_faces = tissue_faces if tissue_faces is not None else p_scene.get("tissue_faces", "all")
+        tissue = tissue if tissue is not None else p_tissue
         if not isinstance(tissue, TissueConfig):
             raise ValueError(f"tissue must be a TissueConfig, got {type(tissue).__name__}")
         overrides = {k: v for k, v in (("density", tissue_density), ("friction_static", friction_static),
                                        ("friction_dynamic", friction_dynamic)) if v is not None}  # fmt: skip
         tissue = replace(tissue, **overrides)  # validated by TissueConfig
-        sim = sim if sim is not None else SimConfig()
+        sim = sim if sim is not None else p_sim
         if not isinstance(sim, SimConfig):
             raise ValueError(f"sim must be a SimConfig, got {type(sim).__name__}")
         ratio = 1.0 / (sim.dt * control_frequency)

@@ -166,3 +166,21 @@ def test_tissue_on_the_contact_faces_only_still_grasps():
     assert count == 128
     assert res.held(plan) and res.hold_slip < 0.1e-3
     assert res.max_penetration < 1e-3
+
+
+def test_presets_build_and_the_env_takes_them():
+    from softgrasp_env import presets
+
+    counts = {}
+    for name in presets.PRESETS:
+        cfg = presets.scene_config(name)
+        scene = GraspScene(cfg)
+        try:
+            counts[name] = scene.world.model.particle_count
+        finally:
+            scene.close()
+    assert counts == {"fast": 60, "default": 352, "accurate": 352}
+    assert presets.scene_config("default") == SceneConfig()
+    assert presets.scene_config("accurate").sim.dt == pytest.approx(1 / 480)
+    with pytest.raises(ValueError, match="preset must be one of"):
+        presets.scene_config("slow")

@@ -1,0 +1,212 @@
+"""Every method side by side: speed against accuracy, one run, one chart (issue 9).
+
+    PYTHONPATH=. python benchmarks/methods.py [--quick] [--no-bound]
+
+Methods (all in the same scene, the same scripted grasp, seed-free: the scene is deterministic):
+- rigid blocks (``fingers="rigid"``), and whatever other finger kinds config.FINGER_KINDS offers;
+- ours, oriented-particle tissue, ``coupling="thesis"`` and ``"consistent"``, swept one knob at a
+  time around the default over iterations, time step (substeps: dt / k), particle density, group
+  size and the faces covered (``tissue_faces``), plus the presets (softgrasp_env/presets.py).
+
+For each: whole-world physics steps/s (the stepping alone), and errors measured the same way for
+every method (softgrasp_env/accuracy.py): deepest penetration over every step, in-hand motion of
+the cylinder over lift and hold, the hold-bound error |m* / (2 mu_s F / g) - 1| (bisection, 4 s
+lift; skipped with --no-bound), and for the tissue the RMS cylinder-position error against a
+converged run (4x density, 16 iterations, dt / 4). Writes benchmarks/out/methods.csv and
+methods.png: x = steps/s (log), y = each error (log), one marker per method, the Pareto front
+(no other point both faster and more accurate) drawn per panel. Prints convergence orders: the
+slope of log(pose error) against log(iterations), log(dt), log(spacing).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from softgrasp_env import presets
+from softgrasp_env.accuracy import GraspPlan, coulomb_hold_bound, find_hold_bound, pose_error, run_grasp
+from softgrasp_env.config import FINGER_KINDS, SceneConfig
+from softgrasp_env.scene import GraspScene
+
+OUT = Path(__file__).resolve().parent / "out"
+PLAN = GraspPlan()
+BOUND_PLAN = GraspPlan(lift=4.0, hold=3.0)
+
+
+def measure(cfg: SceneConfig, *, bound: bool, reference: np.ndarray | None) -> dict:
+    scene = GraspScene(cfg)
+    try:
+        rec = run_grasp(scene, PLAN, trace=True)
+        particles = 0 if scene.world.model is None else scene.world.model.particle_count
+    finally:
+        scene.close()
+    row = dict(
+        particles=particles,
+        steps_per_s=rec.steps_per_second,
+        realtime=rec.steps_per_second * cfg.sim.dt,
+        held=rec.held(PLAN),
+        penetration_mm=1000 * rec.max_penetration,
+        in_hand_mm=1000 * rec.in_hand_motion,
+        pose_rms_mm=math.nan,
+        bound_err_pct=math.nan,
+    )
+    if reference is not None and rec.finite:
+        row["pose_rms_mm"] = 1000 * pose_error(rec.trace, reference)[0]
+    if bound:
+        ref = coulomb_hold_bound(cfg.tissue.friction_static, cfg.finger_force, cfg.sim.gravity)
+
+        def held(mass: float) -> bool:
+            sc = GraspScene(replace(cfg, cylinder_mass=mass))
+            try:
+                return run_grasp(sc, BOUND_PLAN).holds_without_slip(BOUND_PLAN)
+            finally:
+                sc.close()
+
+        try:
+            m, _ = find_hold_bound(held, lo=0.4 * ref, hi=1.6 * ref, rel_tol=0.02)
+            row["bound_err_pct"] = 100 * (m / ref - 1.0)
+        except ValueError:  # not bracketed: it holds nothing, or everything
+            row["bound_err_pct"] = math.nan
+    return row
+
+
+def settings(quick: bool, tiny: bool = False) -> list[tuple[str, str, SceneConfig]]:
+    """(method family, setting label, scene) for every point of the chart."""
+    base = SceneConfig()
+    rows: list[tuple[str, str, SceneConfig]] = []
+    if tiny:  # CI: one point per family and the resolution sweep the test checks
+        rows += [(kind, kind, replace(base, fingers=kind)) for kind in FINGER_KINDS if kind != "tissue"]
+        rows += [("preset", name, presets.scene_config(name)) for name in presets.PRESETS]
+        rows += [("tissue, thesis", "default", base), ("tissue, thesis", "dt/2", replace(base, sim=replace(base.sim, dt=base.sim.dt / 2)))]
+        return rows
+    for kind in FINGER_KINDS:
+        if kind != "tissue":
+            rows.append((kind, kind, replace(base, fingers=kind)))
+    for name in presets.PRESETS:
+        rows.append(("preset", name, presets.scene_config(name)))
+    iters = (1, 2, 4, 8) if not quick else (2, 4)
+    substeps = (2, 4) if not quick else (2,)
+    dens = (0.5, 2.0) if not quick else (2.0,)
+    for coupling in ("thesis", "consistent"):
+        fam = f"tissue, {coupling}"
+        sim0 = replace(base.sim, coupling=coupling)
+        c0 = replace(base, sim=sim0)
+        rows.append((fam, "default", c0))
+        for n in iters:
+            rows.append((fam, f"{n} iterations", replace(c0, sim=replace(sim0, iterations=n))))
+        for k in substeps:
+            rows.append((fam, f"dt/{k}", replace(c0, sim=replace(sim0, dt=sim0.dt / k))))
+        if coupling == "thesis":
+            for f in dens:
+                rows.append((fam, f"density x{f:g}", replace(c0, tissue=replace(base.tissue, density=f * base.tissue.density))))
+            rows.append((fam, "group size 6", replace(c0, tissue=replace(base.tissue, group_size=6))))
+            rows.append((fam, "contact faces", replace(c0, tissue_faces="contact")))
+    return rows
+
+
+def pareto(speed: np.ndarray, err: np.ndarray) -> np.ndarray:
+    """Indices of the points no other point beats on both (faster and smaller error), by speed."""
+    ok = np.isfinite(speed) & np.isfinite(err)
+    idx = [i for i in np.flatnonzero(ok) if not any(
+        speed[j] >= speed[i] and err[j] <= err[i] and (speed[j] > speed[i] or err[j] < err[i]) for j in np.flatnonzero(ok)
+    )]  # fmt: skip
+    return np.array(sorted(idx, key=lambda i: speed[i]), dtype=int)
+
+
+def order(xs, errs) -> float:
+    """Slope of log(error) against log(x) by least squares (the convergence order)."""
+    x, e = np.log(np.asarray(xs, float)), np.log(np.asarray(errs, float))
+    ok = np.isfinite(x) & np.isfinite(e)
+    return float(np.polyfit(x[ok], e[ok], 1)[0]) if ok.sum() >= 2 else math.nan
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true", help="a few settings (smoke run)")
+    parser.add_argument("--no-bound", action="store_true", help="skip the hold-bound bisections (the slow part)")
+    parser.add_argument("--tiny", action="store_true", help="the CI smoke run: a point per method, a cheaper reference")
+    parser.add_argument("--out", type=Path, default=OUT)
+    args = parser.parse_args()
+    base = SceneConfig()
+    k = 2 if args.tiny else 4
+    ref_cfg = replace(base, tissue=replace(base.tissue, density=k * base.tissue.density),
+                      sim=replace(base.sim, iterations=4 * k, dt=base.sim.dt / k))  # fmt: skip
+    scene = GraspScene(ref_cfg)
+    try:
+        reference = run_grasp(scene, PLAN, trace=True).trace
+    finally:
+        scene.close()
+    results = []
+    print(f"{'method':<22}{'setting':<16}{'particles':>9}{'steps/s':>9}{'x real':>7}{'held':>6}"
+          f"{'pen mm':>8}{'hand mm':>8}{'pose mm':>8}{'bound %':>8}")  # fmt: skip
+    for fam, label, cfg in settings(args.quick, args.tiny):
+        tissue_like = cfg.fingers == "tissue"
+        row = dict(method=fam, setting=label, **measure(cfg, bound=not args.no_bound,
+                                                          reference=reference if tissue_like else None))  # fmt: skip
+        results.append(row)
+        print(f"{fam:<22}{label:<16}{row['particles']:>9}{row['steps_per_s']:>9.0f}{row['realtime']:>7.1f}"
+              f"{str(row['held']):>6}{row['penetration_mm']:>8.3f}{row['in_hand_mm']:>8.3f}"
+              f"{row['pose_rms_mm']:>8.3f}{row['bound_err_pct']:>8.2f}", flush=True)  # fmt: skip
+    args.out.mkdir(parents=True, exist_ok=True)
+    with open(args.out / "methods.csv", "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(results[0]))
+        w.writeheader()
+        w.writerows(results)
+
+    def sweep(prefix: str, key):
+        pts = [(key(r), r["pose_rms_mm"]) for r in results if r["method"] == "tissue, thesis"
+               and (r["setting"].startswith(prefix) or r["setting"] == "default")]  # fmt: skip
+        return zip(*pts) if pts else ((), ())
+
+    it_x, it_e = sweep("", lambda r: int(r["setting"].split()[0]) if r["setting"].endswith("iterations") else 3)
+    dt_x, dt_e = sweep("dt/", lambda r: 1.0 / int(r["setting"][3:]) if r["setting"].startswith("dt/") else 1.0)
+    de_x, de_e = sweep("density", lambda r: float(r["setting"][9:]) ** -0.5 if r["setting"].startswith("density") else 1.0)
+    print(f"convergence order of the pose error (tissue, thesis): iterations {order(it_x, it_e):+.2f}, "
+          f"dt {order(dt_x, dt_e):+.2f}, particle spacing {order(de_x, de_e):+.2f}")  # fmt: skip
+    chart(results, args.out / "methods.png")
+    print(f"wrote {args.out / 'methods.csv'} and {args.out / 'methods.png'}")
+
+
+def chart(results: list[dict], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    metrics = [("penetration_mm", "deepest penetration [mm]"), ("in_hand_mm", "in-hand motion, lift + hold [mm]"),
+               ("pose_rms_mm", "RMS cylinder position vs converged run [mm]"),
+               ("bound_err_pct", "|hold-bound error| [%]")]  # fmt: skip
+    families = sorted({r["method"] for r in results})
+    markers = dict(zip(families, "o^sDvP*Xh<>"))
+    fig, axes = plt.subplots(2, 2, figsize=(12, 9))
+    speed = np.array([r["steps_per_s"] for r in results])
+    for ax, (key, title) in zip(axes.ravel(), metrics):
+        err = np.array([abs(r[key]) for r in results], dtype=float)
+        err = np.where(err > 0, err, np.nan if key == "pose_rms_mm" else 1e-3)  # log axis: exact zeros at the floor
+        for fam in families:
+            sel = np.array([r["method"] == fam for r in results])
+            ax.scatter(speed[sel], err[sel], marker=markers[fam], label=fam, s=40)
+        front = pareto(speed, err)
+        if len(front):
+            ax.plot(speed[front], err[front], "k--", lw=1, label="Pareto front")
+        for i, r in enumerate(results):
+            if r["method"] == "preset" and np.isfinite(err[i]):
+                ax.annotate(r["setting"], (speed[i], err[i]), fontsize=7, xytext=(3, 3), textcoords="offset points")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("whole-world physics steps/s")
+        ax.set_title(title)
+        ax.grid(True, which="both", alpha=0.3)
+    axes[0, 0].legend(fontsize=7)
+    fig.suptitle("Speed against accuracy, every method, one run (scripted grasp, 3 N per finger)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
+if __name__ == "__main__":
+    main()
