@@ -1,20 +1,25 @@
-"""Where each method fails: the scripted grasp over grids of misalignment, rigid-only vs soft
-fingers, same scene, same policy, same seeds.
+"""Where each method fails: the scripted grasp over grids of settings, every finger kind, same
+scene, same policy, same seed (issue 9).
 
-    PYTHONPATH=. python benchmarks/stability_map.py [--quick]
+    PYTHONPATH=. python benchmarks/stability_map.py [--quick | --tiny] [--methods rigid,tissue,...]
 
-Map 1: jaw wedge (angle between the finger faces) x gripper yaw, lateral offset 5 mm.
-Map 2: lateral offset x friction scale (tissue and rigid finger friction, ground), no wedge.
-Map 3: finger force x solver iterations (the tissue's own limits; rigid fingers ignore iterations).
-A cell is the outcome of one 5 s episode: 2 = held (is_success at the end), 1 = lifted but lost or
-not held at the end, 0 = never lifted 5 cm, -1 = simulation diverged. Writes
-benchmarks/out/stability_map.csv and .png and prints the grids.
+Maps (rows x columns):
+1. jaw wedge (angle between the finger faces) x gripper yaw, lateral offset 5 mm;
+2. lateral offset along the finger face, up to past its end (the face is 4 cm long) x friction
+   scale (tissue, rigid finger and ground coefficients together), no wedge;
+3. physics time step (1/1000 to 1/60 s) x finger force;
+4. cylinder mass x cylinder radius.
+A cell is one 5 s episode of SoftGraspEnv with agents.scripted.ScriptedGraspPolicy:
+2 = held (lifted and held at the end), 1 = slipped (lifted, then lost), 0 = dropped (never lifted),
+-1 = diverged. Methods: the finger kinds of config.FINGER_KINDS, ours with both couplings. Writes
+benchmarks/out/stability_map.csv and .png (one heatmap per method and map) and prints the grids.
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+from dataclasses import replace
 from pathlib import Path
 
 import gymnasium as gym
@@ -22,10 +27,22 @@ import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
 from agents.scripted import ScriptedGraspPolicy
-from softgrasp_env.config import SimConfig
+from softgrasp_env.config import FINGER_KINDS, SimConfig
 
 OUT = Path(__file__).resolve().parent / "out"
-IDS = ("SoftGraspRigid-v0", "SoftGrasp-v0")
+LABELS = {2: "held", 1: "slipped", 0: "dropped", -1: "diverged"}
+
+
+def methods() -> dict[str, dict]:
+    """Every method: env arguments."""
+    out = {}
+    for kind in FINGER_KINDS:
+        if kind == "tissue":
+            out["tissue, thesis"] = dict(fingers="tissue")
+            out["tissue, consistent"] = dict(fingers="tissue", sim=SimConfig(coupling="consistent"))
+        else:
+            out[kind] = dict(fingers=kind)
+    return out
 
 
 def episode(env, options: dict, policy) -> int:
@@ -43,78 +60,97 @@ def episode(env, options: dict, policy) -> int:
     return 1 if ever else 0
 
 
-MAKE_ARGS = ("finger_force", "iterations")
+MAKE_ARGS = ("finger_force", "dt")
 """Grid parameters that are env arguments (a new env per cell), not reset options."""
 
 
-def grid(env_id: str, rows: tuple[str, list[float]], cols: tuple[str, list[float]], fixed: dict) -> np.ndarray:
-    policy = ScriptedGraspPolicy()
+def grid(make: dict, rows: tuple[str, list[float]], cols: tuple[str, list[float]], fixed: dict) -> np.ndarray:
     out = np.zeros((len(rows[1]), len(cols[1])), dtype=int)
-    env = None
+    env, key = None, None
     for i, rv in enumerate(rows[1]):
         for j, cv in enumerate(cols[1]):
             cell = {**fixed, rows[0]: rv, cols[0]: cv}
-            make = {k: cell.pop(k) for k in MAKE_ARGS if k in cell}
-            if "iterations" in make:
-                make["sim"] = SimConfig(iterations=int(make.pop("iterations")))
-            if env is None or make:
+            kwargs = dict(make)
+            for name in MAKE_ARGS:
+                if name in cell:
+                    value = cell.pop(name)
+                    if name == "dt":
+                        kwargs["sim"] = replace(kwargs.get("sim", SimConfig()), dt=value)
+                    else:
+                        kwargs[name] = value
+            if env is None or repr(kwargs) != key:
                 if env is not None:
                     env.close()
-                env = gym.make(env_id, **make)
-            out[i, j] = episode(env, cell, policy)
+                env, key = gym.make("SoftGrasp-v0", **kwargs), repr(kwargs)
+            out[i, j] = episode(env, cell, ScriptedGraspPolicy())
     env.close()
     return out
+
+
+def maps(quick: bool, tiny: bool) -> list[tuple[str, list, str, list, dict]]:
+    if tiny:  # CI: the wedge where rigid blocks fail and tissue holds
+        return [("jaw_wedge", [0.0, 0.1], "yaw", [0.1], {"lateral_offset": 0.005, "cylinder_xy": (0.0, 0.0)})]
+    q = quick
+    return [
+        ("jaw_wedge", [0.0, 0.05, 0.2, 0.45] if q else [0.0, 0.025, 0.05, 0.1, 0.2, 0.3, 0.45],
+         "yaw", [0.0, 0.2] if q else [0.0, 0.1, 0.2, 0.3], {"lateral_offset": 0.005, "cylinder_xy": (0.0, 0.0)}),
+        ("lateral_offset", [0.0, 0.02, 0.03] if q else [0.0, 0.01, 0.02, 0.025, 0.03],
+         "friction_scale", [0.3, 1.0] if q else [0.2, 0.3, 0.5, 0.75, 1.0], {"yaw": 0.0, "jaw_wedge": 0.0, "cylinder_xy": (0.0, 0.0)}),
+        ("dt", [1 / 1000, 1 / 240, 1 / 60] if q else [1 / 1000, 1 / 480, 1 / 240, 1 / 120, 1 / 60],
+         "finger_force", [1.0, 10.0] if q else [1.0, 3.0, 6.0, 10.0, 20.0], {"yaw": 0.05, "lateral_offset": 0.005, "jaw_wedge": 0.0, "cylinder_xy": (0.0, 0.0)}),
+        ("cylinder_mass", [0.05, 0.4] if q else [0.05, 0.1, 0.2, 0.4, 0.6],
+         "cylinder_radius", [0.02, 0.04] if q else [0.015, 0.02, 0.03, 0.04], {"yaw": 0.05, "lateral_offset": 0.005, "jaw_wedge": 0.0, "cylinder_xy": (0.0, 0.0)}),
+    ]  # fmt: skip
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="coarser grids")
+    parser.add_argument("--tiny", action="store_true", help="the CI smoke run: one wedge row")
+    parser.add_argument("--methods", default="", help="comma-separated subset of the methods")
+    parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args()
-    wedges = [0.0, 0.05, 0.2, 0.45] if args.quick else [0.0, 0.025, 0.05, 0.1, 0.2, 0.3, 0.45]
-    yaws = [0.0, 0.2] if args.quick else [0.0, 0.1, 0.2, 0.3]
-    offsets = [0.0, 0.01, 0.02] if args.quick else [0.0, 0.005, 0.01, 0.015, 0.02]
-    frictions = [0.3, 1.0] if args.quick else [0.2, 0.3, 0.5, 0.75, 1.0]
-    forces = [1.0, 10.0] if args.quick else [1.0, 3.0, 6.0, 10.0, 20.0]
-    iterations = [1, 3] if args.quick else [1, 2, 3, 6]
-    maps = [
-        ("jaw_wedge", wedges, "yaw", yaws, {"lateral_offset": 0.005, "cylinder_xy": (0.0, 0.0)}),
-        ("lateral_offset", offsets, "friction_scale", frictions, {"yaw": 0.0, "jaw_wedge": 0.0, "cylinder_xy": (0.0, 0.0)}),
-        ("finger_force", forces, "iterations", iterations, {"yaw": 0.05, "lateral_offset": 0.005, "jaw_wedge": 0.0,
-                                                             "cylinder_xy": (0.0, 0.0)}),
-    ]
-    OUT.mkdir(exist_ok=True)
-    rows_csv = []
-    results = []
-    for rname, rvals, cname, cvals, fixed in maps:
-        for env_id in IDS:
-            g = grid(env_id, (rname, rvals), (cname, cvals), fixed)
-            results.append((env_id, rname, rvals, cname, cvals, g))
-            print(f"\n{env_id}: rows {rname}, columns {cname} (2 held, 1 lost, 0 never lifted, -1 diverged)")
+    chosen = methods()
+    if args.methods:
+        names = args.methods.split(",")
+        unknown = set(names) - set(chosen)
+        if unknown:
+            parser.error(f"unknown methods {sorted(unknown)}; choose from {sorted(chosen)}")
+        chosen = {k: chosen[k] for k in names}
+    args.out.mkdir(parents=True, exist_ok=True)
+    rows_csv, results = [], []
+    for rname, rvals, cname, cvals, fixed in maps(args.quick, args.tiny):
+        for name, make in chosen.items():
+            g = grid(make, (rname, rvals), (cname, cvals), fixed)
+            results.append((name, rname, rvals, cname, cvals, g))
+            print(f"\n{name}: rows {rname}, columns {cname} (2 held, 1 slipped, 0 dropped, -1 diverged)")
             print(" " * 10 + "".join(f"{c:>8g}" for c in cvals))
             for rv, line in zip(rvals, g):
-                print(f"{rv:>10g}" + "".join(f"{v:>8d}" for v in line))
-                rows_csv += [(env_id, rname, rv, cname, cv, int(v)) for cv, v in zip(cvals, line)]
-    with open(OUT / "stability_map.csv", "w", newline="") as f:
+                print(f"{rv:>10.4g}" + "".join(f"{v:>8d}" for v in line), flush=True)
+                rows_csv += [(name, rname, rv, cname, cv, int(v), LABELS[int(v)]) for cv, v in zip(cvals, line)]
+    with open(args.out / "stability_map.csv", "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["env_id", "row_param", "row_value", "col_param", "col_value", "outcome"])
+        w.writerow(["method", "row_param", "row_value", "col_param", "col_value", "outcome", "label"])
         w.writerows(rows_csv)
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(2, 3, figsize=(15, 8))
-    for ax, (env_id, rname, rvals, cname, cvals, g) in zip(axes.T.ravel(), results):
+    n_maps = len(results) // len(chosen)
+    fig, axes = plt.subplots(n_maps, len(chosen), figsize=(3.6 * len(chosen), 3.0 * n_maps), squeeze=False)
+    for k, (name, rname, rvals, cname, cvals, g) in enumerate(results):
+        ax = axes[k // len(chosen), k % len(chosen)]
         ax.imshow(g, cmap="RdYlGn", vmin=-1, vmax=2, origin="lower", aspect="auto")
-        ax.set_xticks(range(len(cvals)), [f"{c:g}" for c in cvals])
-        ax.set_yticks(range(len(rvals)), [f"{r:g}" for r in rvals])
-        ax.set_xlabel(cname)
-        ax.set_ylabel(rname)
-        ax.set_title(env_id)
-    fig.suptitle("Scripted grasp outcome: green held, yellow lost, orange never lifted, red diverged")
+        ax.set_xticks(range(len(cvals)), [f"{c:g}" for c in cvals], fontsize=7)
+        ax.set_yticks(range(len(rvals)), [f"{r:.3g}" for r in rvals], fontsize=7)
+        ax.set_xlabel(cname, fontsize=8)
+        ax.set_ylabel(rname, fontsize=8)
+        ax.set_title(name, fontsize=9)
+    fig.suptitle("Scripted grasp: green held, yellow slipped, orange dropped, red diverged")
     fig.tight_layout()
-    fig.savefig(OUT / "stability_map.png", dpi=100)
-    print(f"\nwrote {OUT / 'stability_map.csv'} and {OUT / 'stability_map.png'}")
+    fig.savefig(args.out / "stability_map.png", dpi=90)
+    print(f"\nwrote {args.out / 'stability_map.csv'} and {args.out / 'stability_map.png'}")
 
 
 if __name__ == "__main__":

@@ -37,3 +37,17 @@ def test_methods_chart_has_every_method_and_ours_converges_with_the_time_step(tm
     # rigid blocks are the fastest; every method's speed was measured
     assert float(by["rigid", "rigid"]["steps_per_s"]) > max(float(r["steps_per_s"]) for r in rows if r["method"] != "rigid")
     assert "convergence order" in out
+
+
+def test_stability_map_sees_rigid_fingers_fail_where_the_tissue_holds(tmp_path):
+    """The full map (docs/RESULTS.md) marks a 0.1 rad jaw wedge as rigid-slips / tissue-holds; the
+    tiny map sees the same, and every method appears in its CSV."""
+    run("stability_map.py", "--tiny", out=tmp_path)
+    rows = list(csv.DictReader(open(tmp_path / "stability_map.csv")))
+    outcome = {(r["method"], float(r["row_value"])): r["label"] for r in rows}
+    from softgrasp_env.config import FINGER_KINDS
+
+    assert {r["method"] for r in rows} >= {k for k in FINGER_KINDS if k != "tissue"} | {"tissue, thesis", "tissue, consistent"}
+    assert outcome["rigid", 0.0] == "held" and outcome["rigid", 0.1] != "held"
+    assert outcome["tissue, thesis", 0.1] == "held" and outcome["tissue, consistent", 0.1] == "held"
+    assert (tmp_path / "stability_map.png").stat().st_size > 5_000
