@@ -13,7 +13,8 @@ from typing import Literal
 
 CouplingMode = Literal["thesis", "consistent"]
 COUPLING_MODES: tuple[str, ...] = ("thesis", "consistent")
-FINGER_KINDS: tuple[str, ...] = ("tissue", "rigid")
+FINGER_KINDS: tuple[str, ...] = ("tissue", "rigid", "segmented")
+SEGMENT_SPRINGS: tuple[str, ...] = ("motor", "torque")
 TISSUE_FACES: tuple[str, ...] = ("all", "contact")
 
 
@@ -149,7 +150,25 @@ class SceneConfig:
     fingers: str = "tissue"
     """How the fingers touch the cylinder, one of FINGER_KINDS: 'tissue' - each core is a combined
     body, wrapped in oriented-particle tissue (the thesis); 'rigid' - the bare cores, through
-    pybullet's own contacts (the rigid-only twin)."""
+    pybullet's own contacts (the rigid-only twin); 'segmented' - each core carries
+    ``finger_segments`` rigid segments on sprung two-axis gimbals that form its contact face (the
+    thesis' "traditional" fix, softgrasp_env/segmented.py)."""
+    finger_segments: int = 3
+    """Segments per finger (fingers='segmented'), side by side along the face's 40 mm: 3 gives
+    13 mm wide segments, narrower than the cylinder's flat-contact zone, so one of them always
+    takes a lateral offset of up to the face's half width on its centre part."""
+    segment_stiffness_pitch: float = 0.3
+    """Spring stiffness of a segment's pitch joint (about the face's long axis y) [N m/rad]."""
+    segment_stiffness_yaw: float = 0.03
+    """Spring stiffness of a segment's yaw joint (about z) [N m/rad]."""
+    segment_damping_pitch: float = 0.002
+    """Damping of a segment's pitch joint [N m s/rad]."""
+    segment_damping_yaw: float = 0.0002
+    """Damping of a segment's yaw joint [N m s/rad]."""
+    segment_spring: str = "motor"
+    """How the segments' springs are made in pybullet: 'motor' - a force-limited position motor
+    re-limited every step to the spring-damper torque (stable at any dt); 'torque' - the explicit
+    torque -(k q + c q') every step (unstable at these inertias; kept to measure it)."""
     tissue_faces: str = "all"
     """Which faces of a finger core get tissue: 'all', or 'contact' - only the inner face and the
     tip, where the fingers can touch the cylinder (36 % of the particles; the rest of the core
@@ -203,6 +222,13 @@ class SceneConfig:
             raise ValueError(f"SceneConfig.fingers must be one of {FINGER_KINDS}, got {self.fingers!r}")
         if self.tissue_faces not in TISSUE_FACES:
             raise ValueError(f"SceneConfig.tissue_faces must be one of {TISSUE_FACES}, got {self.tissue_faces!r}")
+        _check_int(o, "finger_segments", self.finger_segments, 1, 8)
+        _check_range(o, "segment_stiffness_pitch", self.segment_stiffness_pitch, 0.0, 100.0, lo_open=True)
+        _check_range(o, "segment_stiffness_yaw", self.segment_stiffness_yaw, 0.0, 100.0, lo_open=True)
+        _check_range(o, "segment_damping_pitch", self.segment_damping_pitch, 0.0, 10.0)
+        _check_range(o, "segment_damping_yaw", self.segment_damping_yaw, 0.0, 10.0)
+        if self.segment_spring not in SEGMENT_SPRINGS:
+            raise ValueError(f"SceneConfig.segment_spring must be one of {SEGMENT_SPRINGS}, got {self.segment_spring!r}")
         _check_range(o, "cylinder_radius", self.cylinder_radius, 0.005, 0.2)
         _check_range(o, "cylinder_height", self.cylinder_height, 0.01, 0.5)
         _check_range(o, "cylinder_mass", self.cylinder_mass, 0.001, 10.0)
@@ -245,6 +271,7 @@ def field_names(cls: type) -> tuple[str, ...]:
 __all__ = [
     "COUPLING_MODES",
     "FINGER_KINDS",
+    "SEGMENT_SPRINGS",
     "TISSUE_FACES",
     "CouplingMode",
     "SceneConfig",

@@ -17,6 +17,7 @@ import pybullet as p
 from pybullet_utils.bullet_client import BulletClient
 
 from .config import SceneConfig
+from .segmented import SegmentedFingers
 from .sim.bullet import RigidRef, connect
 from .sim.world import ShapeSpec, TissueSpec, World
 from .tissue.builder import build_combined_body, core_shape_from_bullet
@@ -90,12 +91,7 @@ class GraspScene:
         axis_right = [-math.cos(half), 0.0, -math.sin(half)]  # R_y(+half)^T (-x)
         self.start_palm = np.array([0.0, cfg.lateral_offset, self.grasp_height + self.palm_offset + 0.05])
         self.start_yaw = cfg.yaw
-        self.gripper = c.createMultiBody(
-            baseMass=cfg.palm_mass,
-            baseCollisionShapeIndex=palm_col,
-            baseVisualShapeIndex=palm_vis,
-            basePosition=self.start_palm.tolist(),
-            baseOrientation=c.getQuaternionFromEuler([0.0, 0.0, cfg.yaw]),
+        links = dict(
             linkMasses=[cfg.finger_mass, cfg.finger_mass],
             linkCollisionShapeIndices=[fin_col, fin_col],
             linkVisualShapeIndices=[fin_vis, fin_vis],
@@ -106,6 +102,22 @@ class GraspScene:
             linkParentIndices=[0, 0],
             linkJointTypes=[p.JOINT_PRISMATIC, p.JOINT_PRISMATIC],
             linkJointAxis=[axis_left, axis_right],  # +q closes both fingers
+        )
+        # --- segmented fingers (hook): segment links after the two cores, joints 0/1 stay the fingers
+        self.segments: SegmentedFingers | None = None
+        self.finger_links: tuple[tuple[int, ...], tuple[int, ...]] = ((0,), (1,))
+        """Gripper links whose contacts with the cylinder count as each finger's."""
+        if cfg.fingers == "segmented":
+            self.segments = SegmentedFingers(cfg)
+            self.segments.extend_links(links, c)
+            self.finger_links = self.segments.finger_links
+        self.gripper = c.createMultiBody(
+            baseMass=cfg.palm_mass,
+            baseCollisionShapeIndex=palm_col,
+            baseVisualShapeIndex=palm_vis,
+            basePosition=self.start_palm.tolist(),
+            baseOrientation=c.getQuaternionFromEuler([0.0, 0.0, cfg.yaw]),
+            **links,
         )
         g = self.gripper
         # Damping exists only for the base: pybullet ignores a whole changeDynamics call on a link
@@ -128,6 +140,8 @@ class GraspScene:
                                                   self.start_palm.tolist())  # fmt: skip
         self.set_palm_target(self.start_palm, yaw=cfg.yaw)
         self.set_finger_target(0.0)
+        if self.segments is not None:
+            self.segments.attach(c, g, gear_force=FINGER_GEAR_FORCE, gear_erp=FINGER_GEAR_ERP)
 
         # --- what the tissue sees
         # Cores are infinitely heavy inside the solve in the thesis coupling; under the consistent one
@@ -164,6 +178,8 @@ class GraspScene:
 
     def step(self) -> None:
         """One physics step of the whole scene (``world.step()``: tissue, then pybullet)."""
+        if self.segments is not None:
+            self.segments.apply_springs()
         self.world.step()
 
     def finger_forces(self) -> np.ndarray:
@@ -172,9 +188,10 @@ class GraspScene:
         can meet the cylinder too, and is all there is of a rigid finger)."""
         c = self.client
         f = np.zeros(2)
-        for k, link in enumerate((0, 1)):
-            for pt in c.getContactPoints(bodyA=self.cylinder, bodyB=self.gripper, linkIndexA=-1, linkIndexB=link):
-                f[k] += pt[9]
+        for k, links in enumerate(self.finger_links):
+            for link in links:
+                for pt in c.getContactPoints(bodyA=self.cylinder, bodyB=self.gripper, linkIndexA=-1, linkIndexB=link):
+                    f[k] += pt[9]
         if self.world.solver is not None:
             f += self.world.solver.contact_normal_force(CYLINDER_SHAPE)
         return f

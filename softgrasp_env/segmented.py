@@ -1,0 +1,245 @@
+"""Segmented rigid fingers (``SceneConfig(fingers='segmented')``): the thesis' "traditional" fix
+for rigid fingers that meet a cylinder only approximately aligned - several rigid bodies per
+finger, joined by joints - built so that it can be compared side by side with the rigid twin and
+the tissue.
+
+Each finger keeps its prismatic core link (joint 0 / 1, the same box, mass, motor and gear as the
+other kinds) and carries ``finger_segments`` rigid segments on its inner face, which are what
+grips the cylinder:
+
+- **Layout: side by side along the face's long horizontal axis y**, each segment the full height
+  of the core (60 mm), ``(2 * 20 mm - gaps) / n`` wide, 6 mm thick, 2 mm in front of the core's
+  inner face (a pivot boss; segment face + boss = 8 mm, the tissue pad's thickness). Full-height
+  segments side by side rather than a stack along z: under a jaw wedge the core face is tilted
+  about y, so the distance from the face to the (vertical) cylinder side grows along z; segments
+  stacked along z, each pivoting about y, would all align but only the lowest would reach the
+  cylinder, whereas one full-height segment pivoting about y lies flush along the whole line of
+  contact - the line (not the point of the rigid twin's edge) is what keeps the cylinder from
+  swinging out about the axis through the two fingers' contacts.
+- **Joints: a two-axis gimbal per segment**, a revolute about the core's y (pitch: conforms to the
+  wedge) then a revolute about the segment's z (yaw: turns the face to the cylinder's local
+  tangent under gripper yaw / offset / the curvature). The gimbal sits at the segment's centre, so
+  neither axis carries a gravity torque. Pitch and yaw are self-centring under a normal load: a
+  round cylinder's normal force passes through its axis, so a segment yawed by phi about a pivot
+  at distance D from that axis feels -F D phi (stable), and a pitched flat face touches along an
+  edge, which turns it back flush. No twist about the face normal (x): that would let the cylinder
+  turn in the grasp. The gimbal's middle link is a small massless-looking body (1 g, no collision
+  shape), the pybullet way of chaining two revolutes.
+- **Springs: a force-limited POSITION_CONTROL motor per passive joint whose force limit is set
+  every physics step to the spring-damper torque |k q + c q'|** (``SceneConfig.segment_spring =
+  'motor'``, the default). pybullet has no spring joints for multibodies. An explicit torque
+  -(k q + c q') (``'torque'``: TORQUE_CONTROL each step) is unstable here: a segment's inertia
+  about its yaw axis is ~2e-7 kg m^2, so even k = 0.05 N m/rad gives omega dt = 2.1 at 1/240 s.
+  A plain POSITION_CONTROL motor with a fixed force limit is no spring either: it is a hard
+  velocity constraint that holds the rest angle exactly until its limit, then gives way at a
+  constant torque. Re-limiting the motor to the spring torque each step keeps both good parts:
+  blocked by a contact (the case that matters, holding), the motor row saturates and pushes back
+  with exactly k q + c q' - the static stiffness is k at any dt; free, it drives the joint toward
+  rest at no more than ``SPRING_POSITION_GAIN`` of the angle per step, so it can never overshoot
+  rest and never gain energy (stable at every dt; free motion is over-damped where a real spring
+  of that stiffness would ring faster than dt can resolve).
+
+Segment friction is ``tissue.friction_static`` like the rigid twin's links (pybullet has one
+coefficient), set in a changeDynamics call of its own and checked. Links of one multibody do not
+collide with each other in pybullet (no self-collision flag), so segments and core overlap freely
+where a segment pitches by more than the 2 mm boss allows (atan(2 / 30) = 0.067 rad): a real
+finger would have its face relieved there; the core's box stays that of the other kinds so the
+comparison changes one thing only.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pybullet as p
+from pybullet_utils.bullet_client import BulletClient
+
+from .config import SceneConfig
+
+SEGMENT_THICKNESS = 0.006
+"""Thickness of a segment along the closing axis x [m]."""
+SEGMENT_STANDOFF = 0.002
+"""Gap between the core's inner face and a segment's back at rest (the pivot boss) [m]."""
+SEGMENT_GAP = 0.001
+"""Gap between neighbouring segments along y [m]."""
+SEGMENT_DENSITY = 2700.0
+"""Mass density of a segment [kg/m^3] (aluminium): 12.3 g per segment at 3 segments."""
+CARRIAGE_MASS = 0.005
+"""Mass of a finger's carriage, the link its segments hang on [kg] (no collision shape)."""
+CARRIAGE_INERTIA = 1e-7
+"""Principal moments of inertia of a carriage [kg m^2]."""
+GIMBAL_MASS = 0.001
+"""Mass of a gimbal's middle link [kg] (no collision shape; the smallest that keeps pybullet's
+articulated solve well conditioned next to the 12 g segments)."""
+GIMBAL_INERTIA = 1e-8
+"""Principal moments of inertia of a gimbal's middle link [kg m^2] (a 1 g, 5 mm cube's is 4e-9)."""
+PITCH_LIMIT = 0.35
+"""Travel of a segment about y either way [rad]: half the largest wedge the tissue held (0.45
+rad) plus headroom."""
+YAW_LIMIT = 0.3
+"""Travel of a segment about z either way [rad]: where a 13 mm wide segment's back edge would
+meet the core across the 2 mm boss."""
+SPRING_POSITION_GAIN = 0.5
+"""The spring motor's position gain: the share of its angle a free joint is driven back per step
+at most (pybullet's rhs = gain * (0 - q) / dt; <= 1, so rest is never overshot)."""
+
+
+class SegmentedFingers:
+    """Layout, building and per-step springs of the segmented fingers of one :class:`GraspScene`.
+
+    Usage (scene.py): ``extend_links(links, client)`` appends the carriage, gimbal and segment
+    links to the gripper's createMultiBody lists before it is created, ``attach(...)`` then gears
+    the carriages to the cores and sets friction, limits, inertias and the motors, and
+    ``apply_springs()`` runs before every physics step. Joints 0 and 1 stay the prismatic
+    fingers."""
+
+    def __init__(self, config: SceneConfig) -> None:
+        self.config = cfg = config
+        n = cfg.finger_segments
+        fh = cfg.finger_half_extents
+        width = (2.0 * fh[1] - (n - 1) * SEGMENT_GAP) / n
+        if width <= 0.0:
+            raise ValueError(f"SceneConfig.finger_segments={n} leaves no width for a segment on a "
+                             f"{2 * fh[1] * 1000:.0f} mm face")  # fmt: skip
+        self.half_extents = (0.5 * SEGMENT_THICKNESS, 0.5 * width, fh[2])
+        self.segment_mass = SEGMENT_DENSITY * SEGMENT_THICKNESS * width * 2.0 * fh[2]
+        self.centres_y = [-fh[1] + 0.5 * width + i * (width + SEGMENT_GAP) for i in range(n)]
+        # Link indices. pybullet orders a multibody's links depth first, so segments hanging off
+        # core 0 would push core 1 to joint 1 + 2n: instead each finger's segments hang off a
+        # carriage, a base child listed after both cores that slides on the core's own axis and
+        # is geared to it 1:1 (see attach). Order: cores 0, 1; then per finger its carriage and,
+        # per segment, a gimbal link (pitch joint) and the segment link (yaw joint).
+        self.carriage_links = [2, 3 + 2 * n]
+        self.gimbal_links = [[c + 1 + 2 * i for i in range(n)] for c in self.carriage_links]
+        self.segment_links = [[g + 1 for g in row] for row in self.gimbal_links]
+        self.finger_links: tuple[tuple[int, ...], tuple[int, ...]] = (
+            (0, *self.segment_links[0]),
+            (1, *self.segment_links[1]),
+        )
+        """Links whose contacts with the cylinder count as each finger's (core first)."""
+        self.pitch_joints = [j for row in self.gimbal_links for j in row]
+        self.yaw_joints = [j for row in self.segment_links for j in row]
+        self.joints = self.pitch_joints + self.yaw_joints
+        """The passive joints (pitch first, then yaw)."""
+        self._k = np.array([cfg.segment_stiffness_pitch] * len(self.pitch_joints)
+                           + [cfg.segment_stiffness_yaw] * len(self.yaw_joints))  # fmt: skip
+        self._c = np.array([cfg.segment_damping_pitch] * len(self.pitch_joints)
+                           + [cfg.segment_damping_yaw] * len(self.yaw_joints))  # fmt: skip
+        self.carriage_gears: list[int] = []
+        self.client: BulletClient | None = None
+        self.gripper = -1
+
+    # --- building --------------------------------------------------------------------------------
+
+    def extend_links(self, links: dict[str, list], client: BulletClient) -> None:
+        """Append the carriages, gimbals and segments to the gripper's createMultiBody link lists
+        (which hold the two cores)."""
+        if len(links["linkMasses"]) != 2:
+            raise ValueError("the segmented fingers' links go right after the two finger cores")
+        fh = self.config.finger_half_extents
+        seg_col = client.createCollisionShape(p.GEOM_BOX, halfExtents=self.half_extents)
+        seg_vis = client.createVisualShape(p.GEOM_BOX, halfExtents=self.half_extents, rgbaColor=[0.2, 0.6, 0.75, 1.0])
+        # pivot depth in front of the core's centre: the inner face, the boss, half a segment
+        depth = fh[0] + SEGMENT_STANDOFF + 0.5 * SEGMENT_THICKNESS
+        for k, inward in ((0, 1.0), (1, -1.0)):  # the left core's inner face is +x, the right's -x
+            carriage = self.carriage_links[k]
+            assert len(links["linkMasses"]) == carriage
+            # the carriage: where its core is, on the core's joint axis, from the base
+            self._add(links, CARRIAGE_MASS, -1, -1, list(links["linkPositions"][k]), orn=list(links["linkOrientations"][k]),
+                      parent=0, joint=p.JOINT_PRISMATIC, axis=list(links["linkJointAxis"][k]))  # fmt: skip
+            for i, y in enumerate(self.centres_y):
+                gimbal = self.gimbal_links[k][i]
+                assert len(links["linkMasses"]) == gimbal
+                self._add(links, GIMBAL_MASS, -1, -1, [inward * depth, y, 0.0], parent=carriage + 1,
+                          joint=p.JOINT_REVOLUTE, axis=[0.0, 1.0, 0.0])  # fmt: skip
+                self._add(links, self.segment_mass, seg_col, seg_vis, [0.0, 0.0, 0.0], parent=gimbal + 1,
+                          joint=p.JOINT_REVOLUTE, axis=[0.0, 0.0, 1.0])  # fmt: skip
+
+    @staticmethod
+    def _add(links, mass, col, vis, pos, *, parent, joint, axis, orn=(0.0, 0.0, 0.0, 1.0)) -> None:
+        links["linkMasses"].append(mass)
+        links["linkCollisionShapeIndices"].append(col)
+        links["linkVisualShapeIndices"].append(vis)
+        links["linkPositions"].append(pos)
+        links["linkOrientations"].append(list(orn))
+        links["linkInertialFramePositions"].append([0.0, 0.0, 0.0])
+        links["linkInertialFrameOrientations"].append([0.0, 0.0, 0.0, 1.0])
+        links["linkParentIndices"].append(parent)  # createMultiBody: 0 is the base, j + 1 link j
+        links["linkJointTypes"].append(joint)
+        links["linkJointAxis"].append(axis)
+
+    def attach(self, client: BulletClient, gripper: int, *, gear_force: float, gear_erp: float) -> None:
+        """After createMultiBody: check the link order, gear each carriage to its core, set segment
+        friction, inertias, joint limits, and replace the passive joints' default velocity motors
+        by the spring motors."""
+        self.client = c = client
+        self.gripper = g = gripper
+        cfg = self.config
+        for j, kind in [(0, p.JOINT_PRISMATIC), (1, p.JOINT_PRISMATIC)] + [(j, p.JOINT_PRISMATIC) for j in self.carriage_links] \
+                + [(j, p.JOINT_REVOLUTE) for j in self.joints]:  # fmt: skip
+            if c.getJointInfo(g, j)[2] != kind:
+                raise RuntimeError(f"gripper joint {j} is not of the type the segmented fingers were laid out with")
+        for k, carriage in enumerate(self.carriage_links):
+            # q_carriage = q_core (gear ratio -1 is pybullet's "equal" as for the finger gear):
+            # the squeeze goes from the segments through this gear into the core's motor
+            gear = c.createConstraint(g, k, g, carriage, p.JOINT_GEAR, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+            c.changeConstraint(gear, gearRatio=-1.0, maxForce=gear_force, erp=gear_erp)
+            self.carriage_gears.append(gear)
+            c.changeDynamics(g, carriage, jointLowerLimit=0.0, jointUpperLimit=cfg.finger_max_opening)
+        mu = cfg.tissue.friction_static
+        for link in self.segment_links[0] + self.segment_links[1]:
+            # friction in a call of its own (pybullet drops a whole changeDynamics call on a link
+            # that also sets damping), and checked
+            c.changeDynamics(g, link, lateralFriction=mu)
+            if c.getDynamicsInfo(g, link)[1] != mu:
+                raise RuntimeError(f"pybullet did not take the friction of segment link {link}")
+        # links without a collision shape get no rotational inertia from pybullet
+        for link in self.carriage_links:
+            c.changeDynamics(g, link, localInertiaDiagonal=[CARRIAGE_INERTIA] * 3)
+        for link in self.pitch_joints:
+            c.changeDynamics(g, link, localInertiaDiagonal=[GIMBAL_INERTIA] * 3)
+        for j in self.pitch_joints:
+            c.changeDynamics(g, j, jointLowerLimit=-PITCH_LIMIT, jointUpperLimit=PITCH_LIMIT)
+        for j in self.yaw_joints:
+            c.changeDynamics(g, j, jointLowerLimit=-YAW_LIMIT, jointUpperLimit=YAW_LIMIT)
+        # pybullet gives every joint a velocity motor (target 0) with a force limit by default: it
+        # would hold the carriages and the passive joints still. The carriages follow their cores
+        # through the gear alone; the passive joints get only the springs below.
+        free = self.carriage_links + self.joints
+        c.setJointMotorControlArray(g, free, p.VELOCITY_CONTROL, forces=[0.0] * len(free))
+        self.apply_springs()
+
+    # --- every step ------------------------------------------------------------------------------
+
+    def joint_states(self) -> tuple[np.ndarray, np.ndarray]:
+        """Angles [rad] and rates [rad/s] of the passive joints (pitch joints first, then yaw)."""
+        states = self.client.getJointStates(self.gripper, self.joints)
+        return np.array([s[0] for s in states]), np.array([s[1] for s in states])
+
+    def apply_springs(self) -> None:
+        """Set this step's spring-damper torque tau = -(k q + c q') on every passive joint (see the
+        module docstring for why through a re-limited motor)."""
+        q, v = self.joint_states()
+        tau = -(self._k * q + self._c * v)
+        c = self.client
+        n = len(self.joints)
+        if self.config.segment_spring == "torque":
+            c.setJointMotorControlArray(self.gripper, self.joints, p.TORQUE_CONTROL, forces=tau.tolist())
+            return
+        # The motor pushes toward rest; while the damper outweighs the spring on the way back
+        # (tau points away from rest) it gets no force: the row cannot push away from its target.
+        limit = np.where(tau * q <= 0.0, np.abs(tau), 0.0)
+        c.setJointMotorControlArray(
+            self.gripper, self.joints, p.POSITION_CONTROL, targetPositions=[0.0] * n, targetVelocities=[0.0] * n,
+            positionGains=[SPRING_POSITION_GAIN] * n, velocityGains=[1.0] * n, forces=limit.tolist(),
+        )  # fmt: skip
+
+    # --- queries ---------------------------------------------------------------------------------
+
+    def is_finite(self) -> bool:
+        q, v = self.joint_states()
+        return bool(np.isfinite(q).all() and np.isfinite(v).all())
+
+
+__all__ = ["SegmentedFingers"]
