@@ -47,8 +47,12 @@ class TissueConfig:
     out by ``extrude`` along the direction from the core's centre of mass.
     """
 
-    density: float = 10_000.0
-    """Attached particles per square metre of core surface [1/m^2]; 10,000/m^2 is ~10 mm spacing."""
+    density: float = 4_000.0
+    """Attached particles per square metre of core surface [1/m^2]; 4,000/m^2 is ~16 mm spacing (30
+    particles on a finger's inner face and tip). Chosen on the speed/accuracy chart
+    (benchmarks/methods.py): against 10,000/m^2 the grasp penetrates less (0.095 mm vs 0.69 mm at
+    3 iterations: bigger particles, fewer contacts to resolve) at 1.4x the steps/s, and the hold
+    bound stays within 3 % of Coulomb's (10,000: -4 %)."""
     extrude: float = 0.008
     """Distance from an attached particle to its outer partner [m] (thesis 5.2.1 *extrude*)."""
     group_size: int = 8
@@ -97,10 +101,11 @@ class SimConfig:
     """Physics step [s]; one tissue step and one pybullet step per world step."""
     iterations: int = 3
     """Gauss-Seidel iterations over the shape-matching groups and contacts per step. Measured on the
-    scripted grasp (deepest penetration over every step, thesis coupling): 1 -> 2.7 mm, 2 -> 0.97
-    mm, 3 -> 0.50 mm, 4 -> 0.19 mm; at dt / 2, 1 iteration gives 0.13 mm but the ramp breakaway
-    comes 15 % early, 2 give 0.06 mm. 3 is the fewest at 1/240 s that meets every accuracy target
-    (README, Measured); each iteration costs roughly 80 us of the step."""
+    scripted grasp at the default tissue (deepest penetration over every step, thesis coupling):
+    1 -> 3.05 mm, 2 -> 0.81 mm, 3 -> 0.095 mm, 4 -> 0.034 mm; at dt / 2, 1 iteration gives 0.11 mm
+    but the ramp breakaway comes 15 % early, 2 give 0.04 mm. 3 is the fewest at 1/240 s that meets
+    every accuracy target (README, Measured); with the default 60 particles an iteration costs a
+    few per cent of the step, most of which is pybullet's."""
     rotation_iterations: int = 1
     """Most warm-started rotation-extraction sweeps per group solve (Mueller et al. 2016); stops
     early once the correction is below 1e-10 rad. One sweep per solve suffices with the warm start
@@ -169,10 +174,11 @@ class SceneConfig:
     """How the segments' springs are made in pybullet: 'motor' - a force-limited position motor
     re-limited every step to the spring-damper torque (stable at any dt); 'torque' - the explicit
     torque -(k q + c q') every step (unstable at these inertias; kept to measure it)."""
-    tissue_faces: str = "all"
-    """Which faces of a finger core get tissue: 'all', or 'contact' - only the inner face and the
-    tip, where the fingers can touch the cylinder (36 % of the particles; the rest of the core
-    meets the world through pybullet's contacts)."""
+    tissue_faces: str = "contact"
+    """Which faces of a finger core get tissue: 'contact' (default) - only the inner face and the
+    tip, where the fingers can touch the cylinder (the rest of the core meets the world through
+    pybullet's contacts); or 'all' - every face (2.5x the particles, the same grasp: penetration
+    0.098 mm vs 0.095, at 0.6x the steps/s). Model no more than the scene needs."""
     cylinder_radius: float = 0.03
     """Cylinder radius [m]."""
     cylinder_height: float = 0.10
@@ -193,7 +199,7 @@ class SceneConfig:
     core-cylinder contact takes over."""
     finger_speed: float = 0.1
     """Maximum closing speed of a finger [m/s]. The deepest tissue penetration of the grasp comes
-    the moment the fingers meet the cylinder: 0.50 mm at 0.1 m/s, 0.12 mm at 0.05 m/s (thesis
+    the moment the fingers meet the cylinder: 0.095 mm at 0.1 m/s, 0.058 mm at 0.05 m/s (thesis
     coupling)."""
     finger_max_opening: float = 0.06
     """Largest distance of a finger core's inner face from the gripper centre [m]."""

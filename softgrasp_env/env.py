@@ -256,8 +256,9 @@ class SoftGraspEnv(gym.Env):
 
         if preset not in presets.PRESETS:
             raise ValueError(f"preset must be one of {tuple(presets.PRESETS)}, got {preset!r}")
-        p_tissue, p_sim, p_scene = presets.tissue_and_sim(preset)
-        tissue_faces = tissue_faces if tissue_faces is not None else p_scene.get("tissue_faces", "all")
+        p_cfg = presets.scene_config(preset)
+        p_tissue, p_sim = p_cfg.tissue, p_cfg.sim
+        tissue_faces = tissue_faces if tissue_faces is not None else p_cfg.tissue_faces
         tissue = tissue if tissue is not None else p_tissue
         if not isinstance(tissue, TissueConfig):
             raise ValueError(f"tissue must be a TissueConfig, got {type(tissue).__name__}")

@@ -1,15 +1,20 @@
-"""Named settings of the soft fingers, chosen from the speed/accuracy chart (benchmarks/methods.py;
-docs/RESULTS.md has the figures): model no more than the scene needs.
+"""Named settings of the soft fingers, chosen at the knee of the speed/accuracy chart
+(benchmarks/methods.py; docs/RESULTS.md has the figures): model no more than the scene needs.
+Every preset covers only the faces where the fingers can touch the cylinder (each core's inner
+face and tip, ``SceneConfig.tissue_faces='contact'``); the backs and sides meet the world through
+pybullet's contacts.
 
-- ``fast``: tissue only where the fingers can touch the cylinder (each core's inner face and tip),
-  coarse (4,000 particles per m^2 of face: 60 particles in all), 4 iterations. It meets every
-  accuracy target of the defaults' tests except that its pads are coarse.
-- ``default``: the defaults of SceneConfig / SimConfig / TissueConfig: the whole core covered
-  (352 particles), 10,000 per m^2, 3 iterations at 1/240 s.
+- ``fast``: 2,500 particles per m^2 of face (32 particles in all, 20 mm spacing), 2 iterations at
+  1/240 s: 1.3x the default's steps/s; the hold bound is 6-7 % under Coulomb's (default: 3 %),
+  penetration 0.03 mm.
+- ``default``: the defaults of SceneConfig / SimConfig / TissueConfig: 4,000 per m^2 (60
+  particles), 3 iterations at 1/240 s; meets every accuracy target of the defaults' tests.
 - ``accurate``: the default tissue at half the time step (dt 1/480 s) with 2 iterations: smaller
-  steps converge faster than more iterations (penetration 0.06 mm, half the in-hand sag).
+  steps converge faster than more iterations (pose error against a converged run 0.17 mm vs 0.80,
+  in-hand motion 0.39 mm vs 1.15, penetration 0.04 mm vs 0.10), at half the simulated seconds per
+  wall second. Its hold bound sits 5 % under Coulomb's, 2 % further than the default's.
 
-``scene_config(name, **overrides)`` gives the SceneConfig; the env takes ``preset=name``.
+``scene_config(name)`` gives the SceneConfig; the env takes ``preset=name``.
 """
 
 from __future__ import annotations
@@ -17,10 +22,10 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
-from .config import SceneConfig, SimConfig, TissueConfig
+from .config import SceneConfig
 
 PRESETS: dict[str, dict[str, Any]] = {
-    "fast": dict(tissue_faces="contact", tissue=dict(density=4_000.0), sim=dict(iterations=4)),
+    "fast": dict(tissue=dict(density=2_500.0), sim=dict(iterations=2)),
     "default": dict(),
     "accurate": dict(sim=dict(dt=1.0 / 480.0, iterations=2)),
 }
@@ -37,10 +42,3 @@ def scene_config(name: str, *, base: SceneConfig | None = None) -> SceneConfig:
     tissue = replace(base.tissue, **spec.pop("tissue", {}))
     sim = replace(base.sim, **spec.pop("sim", {}))
     return replace(base, tissue=tissue, sim=sim, **spec)
-
-
-def tissue_and_sim(name: str) -> tuple[TissueConfig, SimConfig, dict[str, Any]]:
-    """(TissueConfig, SimConfig, other SceneConfig fields) of preset ``name`` on the defaults."""
-    cfg = scene_config(name)
-    rest = {k: v for k, v in PRESETS[name].items() if k not in ("tissue", "sim")}
-    return cfg.tissue, cfg.sim, rest

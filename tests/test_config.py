@@ -22,7 +22,8 @@ def test_defaults_construct():
 
 
 def test_spacing_follows_density():
-    assert TissueConfig().spacing == pytest.approx(0.01)
+    assert TissueConfig().spacing == pytest.approx(0.0158, rel=1e-3)  # 4,000 per m^2
+    assert TissueConfig(density=10_000.0).spacing == pytest.approx(0.01)
     assert TissueConfig(density=40_000.0).spacing == pytest.approx(0.005)
     assert TissueConfig(density=2_500.0).spacing == pytest.approx(0.02)
 

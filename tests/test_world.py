@@ -53,10 +53,10 @@ def test_combined_body_free_fall_matches_semi_implicit_euler(coupling):
         client.disconnect()
 
 
-# Deepest penetration (every step) at the defaults, measured: thesis 0.50 mm, the moment the fingers
-# meet the cylinder at their full 0.1 m/s (0.08 mm while holding); consistent 0.13 mm. Outer
-# particles into their own core: 0.038 mm and 0.000 mm.
-PENETRATION_BOUND = {"thesis": (0.6e-3, 0.1e-3), "consistent": (0.2e-3, 0.05e-3)}
+# Deepest penetration (every step) at the defaults, measured: thesis 0.095 mm, consistent 0.122 mm
+# (the moment the fingers meet the cylinder at their full 0.1 m/s). Outer particles into their own
+# core: 0.000 mm both (checked to 1 um).
+PENETRATION_BOUND = {"thesis": (0.25e-3, 0.001e-3), "consistent": (0.3e-3, 0.001e-3)}
 
 
 @pytest.mark.parametrize("coupling", ["thesis", "consistent"])
@@ -76,8 +76,8 @@ def test_scripted_lift_with_soft_fingers(coupling):
 @pytest.mark.parametrize("kind", ["thesis", "consistent", "rigid"])
 def test_held_cylinder_stays_held_for_a_minute(kind):
     """The scripted grasp, then 60 s of holding at the defaults (longer than any episode): the
-    cylinder neither turns nor slips in the fingers. Measured over the 60 s: slip 0.005 / 0.005 /
-    0.000 mm, tilt below 0.05 deg (before anchored friction it tilted 13 deg after 22 s and fell
+    cylinder neither turns nor slips in the fingers. Measured over the 60 s: slip 0.012 / 0.021 /
+    0.001 mm, tilt at most 0.041 / 0.033 / 0.006 deg (before anchored friction it tilted 13 deg after 22 s and fell
     out after 29 s; the rigid pair drifted 2.5 cm sideways before the fingers were geared)."""
     plan = GraspPlan(hold=60.0)
     cfg = SceneConfig(fingers="rigid") if kind == "rigid" else SceneConfig(sim=SimConfig(coupling=kind))
@@ -89,7 +89,7 @@ def test_held_cylinder_stays_held_for_a_minute(kind):
         scene.close()
     assert res.held(plan)
     assert res.hold_slip < 0.05e-3, f"slipped {res.hold_slip * 1000:.3f} mm"
-    assert math.degrees(res.max_tilt) < 0.5, f"tilted {math.degrees(res.max_tilt):.2f} deg"
+    assert math.degrees(res.max_tilt) < 0.15, f"tilted {math.degrees(res.max_tilt):.2f} deg"
     assert abs(closing[0] - closing[1]) < 1e-4  # the geared fingers stay centred
 
 
@@ -136,8 +136,8 @@ def test_restore_returns_bodies_and_tissue_to_the_snapshot():
 def test_hold_bound_is_coulombs(kind):
     """The heaviest cylinder the fingers hold at 3 N each is within 5 % of 2 mu_s F / g: held
     without slipping at 0.95 of it, slipping at 1.05, at the default mu_s 0.9 > mu_k 0.7. The lift
-    is slow (4 s) so that the test is of the static bound. Bisection measured: thesis +0.9 %,
-    consistent +2.6 %, rigid twin -0.0 % (before: -14.5 %, +37 %, -45 %)."""
+    is slow (4 s) so that the test is of the static bound. Bisection measured: thesis -3.0 %,
+    consistent -2.6 %, rigid twin -0.0 % (before the accuracy work: -14.5 %, +37 %, -45 %)."""
     plan = GraspPlan(lift=4.0, hold=3.0)
     base = SceneConfig(fingers="rigid" if kind == "rigid" else "tissue", sim=SimConfig(coupling="consistent" if kind == "consistent" else "thesis"))
     bound = coulomb_hold_bound(base.tissue.friction_static, base.finger_force, base.sim.gravity)
@@ -152,20 +152,20 @@ def test_hold_bound_is_coulombs(kind):
     assert not outcome[1.05].holds_without_slip(plan), "held 1.05 times the Coulomb bound"
 
 
-def test_tissue_on_the_contact_faces_only_still_grasps():
-    """SceneConfig(tissue_faces='contact'): tissue on each core's inner face and tip only (128
-    particles instead of 352); the scripted grasp holds. Measured: penetration 0.69 mm, slip in
-    a 5 s hold 0.015 mm."""
+def test_tissue_on_every_face_still_grasps():
+    """SceneConfig(tissue_faces='all'): tissue on every face of each core (152 particles instead of
+    the default's 60 on the inner face and tip); the scripted grasp holds. Measured: penetration
+    0.098 mm, slip in a 5 s hold 0.006 mm."""
     plan = GraspPlan(hold=5.0)
-    scene = GraspScene(SceneConfig(tissue_faces="contact"))
+    scene = GraspScene(SceneConfig(tissue_faces="all"))
     try:
         res = run_grasp(scene, plan)
         count = scene.world.model.particle_count
     finally:
         scene.close()
-    assert count == 128
-    assert res.held(plan) and res.hold_slip < 0.1e-3
-    assert res.max_penetration < 1e-3
+    assert count == 152
+    assert res.held(plan) and res.hold_slip < 0.02e-3
+    assert res.max_penetration < 0.25e-3
 
 
 def test_presets_build_and_the_env_takes_them():
@@ -179,7 +179,7 @@ def test_presets_build_and_the_env_takes_them():
             counts[name] = scene.world.model.particle_count
         finally:
             scene.close()
-    assert counts == {"fast": 60, "default": 352, "accurate": 352}
+    assert counts == {"fast": 32, "default": 60, "accurate": 60}
     assert presets.scene_config("default") == SceneConfig()
     assert presets.scene_config("accurate").sim.dt == pytest.approx(1 / 480)
     with pytest.raises(ValueError, match="preset must be one of"):
