@@ -101,6 +101,10 @@ MAX_STEP_DAMPING = 0.5
 """Largest damping the spring motor applies, as b = c_applied dt / I per step (I the joint's
 effective inertia): the saturated motor is an explicit spring-damper, stable iff b < 2 and
 k dt^2 / I + 2 b < 4 (module docstring)."""
+DIVERGED_JOINT_RATE = 90.0
+"""A passive joint turning faster than this [rad/s] has diverged: pybullet clamps joint rates at
+100 rad/s (its maxJointVelocity), where the explicit 'torque' springs end up within 5 steps; the
+motor springs stayed below 40 rad/s in the grasps measured (tests/test_segmented.py)."""
 
 
 class SegmentedFingers:
@@ -278,6 +282,15 @@ class SegmentedFingers:
     def is_finite(self) -> bool:
         q, v = self.joint_states()
         return bool(np.isfinite(q).all() and np.isfinite(v).all())
+
+    def diverged(self) -> bool:
+        """Non-finite joint states, or a passive joint faster than DIVERGED_JOINT_RATE: a segment
+        blown up between its joint limits stays finite and never shows in the cores' or the
+        cylinder's velocities, which is all the env checked before."""
+        q, v = self.joint_states()
+        if not (np.isfinite(q).all() and np.isfinite(v).all()):
+            return True
+        return bool(np.abs(v).max() > DIVERGED_JOINT_RATE)
 
 
 __all__ = ["SegmentedFingers"]
