@@ -167,9 +167,10 @@ class SceneConfig:
     segment_stiffness_yaw: float = 0.03
     """Spring stiffness of a segment's yaw joint (about z) [N m/rad]."""
     segment_damping_pitch: float = 0.002
-    """Damping of a segment's pitch joint [N m s/rad]."""
+    """Damping of a segment's pitch joint [N m s/rad] ('motor' springs apply at most 0.5 I / dt of
+    it, I the joint's inertia: 4.5e-4 at 3 segments and 1/240 s; segmented.py says why)."""
     segment_damping_yaw: float = 0.0002
-    """Damping of a segment's yaw joint [N m s/rad]."""
+    """Damping of a segment's yaw joint [N m s/rad] (capped likewise: 2.4e-5 at the defaults)."""
     segment_spring: str = "motor"
     """How the segments' springs are made in pybullet: 'motor' - a force-limited position motor
     re-limited every step to the spring-damper torque (stable at any dt); 'torque' - the explicit

@@ -116,7 +116,7 @@ class SoftGraspEnv(gym.Env):
     - Terminated: the cylinder tilts more than ``max_tilt`` (knocked over), leaves the workspace
       (more than 15 cm from the origin horizontally, below the ground or above 50 cm), or the
       simulation diverges (non-finite numbers, a body faster than 20 m/s, tissue torn more than
-      3 cm from its core): then ``info["diverged"] = True``, the reward is 0 and the observation is
+      3 cm from its core, a finger segment turning faster than 90 rad/s): then ``info["diverged"] = True``, the reward is 0 and the observation is
       the last finite one, never a NaN.
     - Truncated: by the registered time limit (100 steps = 5 s at 20 Hz).
 
@@ -481,6 +481,8 @@ class SoftGraspEnv(gym.Env):
     def _diverged(self) -> bool:
         w = self.scene.world
         if not w.is_finite():
+            return True
+        if self.scene.segments is not None and self.scene.segments.diverged():
             return True
         col = w.colliders
         if np.abs(col.rigid_v).max() > 20.0 or np.abs(col.rigid_w).max() > 500.0:

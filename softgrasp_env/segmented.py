@@ -29,15 +29,29 @@ grips the cylinder:
   every physics step to the spring-damper torque |k q + c q'|** (``SceneConfig.segment_spring =
   'motor'``, the default). pybullet has no spring joints for multibodies. An explicit torque
   -(k q + c q') (``'torque'``: TORQUE_CONTROL each step) is unstable here: a segment's inertia
-  about its yaw axis is ~2e-7 kg m^2, so even k = 0.05 N m/rad gives omega dt = 2.1 at 1/240 s.
+  about its yaw axis is ~2e-7 kg m^2, so even k = 0.05 N m/rad gives omega dt = 2.1 at 1/240 s,
+  and at the defaults the damper alone (c dt / I = 4.1 > 2) throws a joint kicked by 0.01 rad to
+  pybullet's 100 rad/s joint-rate clamp within 5 steps (tests/test_segmented.py).
   A plain POSITION_CONTROL motor with a fixed force limit is no spring either: it is a hard
   velocity constraint that holds the rest angle exactly until its limit, then gives way at a
   constant torque. Re-limiting the motor to the spring torque each step keeps both good parts:
   blocked by a contact (the case that matters, holding), the motor row saturates and pushes back
   with exactly k q + c q' - the static stiffness is k at any dt; free, it drives the joint toward
   rest at no more than ``SPRING_POSITION_GAIN`` of the angle per step, so it can never overshoot
-  rest and never gain energy (stable at every dt; free motion is over-damped where a real spring
-  of that stiffness would ring faster than dt can resolve).
+  rest and never gain energy (free motion is over-damped where a real spring of that stiffness
+  would ring faster than dt can resolve).
+- **Loaded but not blocked** (a torque the segment can give way to, e.g. a contact that slides),
+  the saturated row is an explicit spring-damper: with a = k dt^2 / I and b = c dt / I (I the
+  joint's effective inertia, 1 / (M^-1)_jj from pybullet's mass matrix) it settles iff b < 2 and
+  a + 2 b < 4, decaying by sqrt(1 - b) per step. The default dampers are near critical, b = 4.1
+  (yaw) and 2.2 (pitch) at 1/240 s, outside that: the joint fell into a period-2 cycle (q, q/2, q,
+  ...: 30 % off k q = tau under a constant 3e-3 N m on a yaw joint, and 0.065 <-> 0.13 rad
+  chatter of a yaw joint holding the cylinder under a 0.1 rad wedge). So the damping the row
+  carries is capped at ``MAX_STEP_DAMPING`` = b <= 0.5 (``damping_applied``): then a constant
+  torque settles at exactly tau / k (1e-15) for a < 3. At the defaults a = 2.6 (yaw) / 1.4
+  (pitch) with 3 segments; narrower segments have less yaw inertia (a = 5.8 at 4, 31 at 8, see
+  ``step_stiffness``), where a free load still makes them chatter - only a blocking contact
+  (the holding case) gives k exactly there.
 
 Segment friction is ``tissue.friction_static`` like the rigid twin's links (pybullet has one
 coefficient), set in a changeDynamics call of its own and checked. Links of one multibody do not
@@ -83,6 +97,14 @@ meet the core across the 2 mm boss."""
 SPRING_POSITION_GAIN = 0.5
 """The spring motor's position gain: the share of its angle a free joint is driven back per step
 at most (pybullet's rhs = gain * (0 - q) / dt; <= 1, so rest is never overshot)."""
+MAX_STEP_DAMPING = 0.5
+"""Largest damping the spring motor applies, as b = c_applied dt / I per step (I the joint's
+effective inertia): the saturated motor is an explicit spring-damper, stable iff b < 2 and
+k dt^2 / I + 2 b < 4 (module docstring)."""
+DIVERGED_JOINT_RATE = 90.0
+"""A passive joint turning faster than this [rad/s] has diverged: pybullet clamps joint rates at
+100 rad/s (its maxJointVelocity), where the explicit 'torque' springs end up within 5 steps; the
+motor springs stayed below 40 rad/s in the grasps measured (tests/test_segmented.py)."""
 
 
 class SegmentedFingers:
@@ -126,6 +148,10 @@ class SegmentedFingers:
                            + [cfg.segment_stiffness_yaw] * len(self.yaw_joints))  # fmt: skip
         self._c = np.array([cfg.segment_damping_pitch] * len(self.pitch_joints)
                            + [cfg.segment_damping_yaw] * len(self.yaw_joints))  # fmt: skip
+        self.inertia = np.zeros(len(self.joints))
+        """Effective inertia of each passive joint, 1 / (M^-1)_jj at rest [kg m^2] (set by attach)."""
+        self.damping_applied = self._c.copy()
+        """Damping the 'motor' springs apply [N m s/rad]: c, capped at MAX_STEP_DAMPING I / dt."""
         self.carriage_gears: list[int] = []
         self.client: BulletClient | None = None
         self.gripper = -1
@@ -208,6 +234,15 @@ class SegmentedFingers:
         # through the gear alone; the passive joints get only the springs below.
         free = self.carriage_links + self.joints
         c.setJointMotorControlArray(g, free, p.VELOCITY_CONTROL, forces=[0.0] * len(free))
+        # the joints' effective inertias (the response of a joint to its own torque, the others
+        # free), for the damping cap; the gimbals sit at the segments' centres, so they hardly
+        # change with the angles
+        n = c.getNumJoints(g)
+        mass = np.array(c.calculateMassMatrix(g, [c.getJointState(g, j)[0] for j in range(n)]))
+        base = mass.shape[0] - n  # pybullet puts the free base's 6 dofs first
+        inv_diag = np.diag(np.linalg.inv(mass))
+        self.inertia = np.array([1.0 / inv_diag[base + j] for j in self.joints])
+        self.damping_applied = np.minimum(self._c, MAX_STEP_DAMPING * self.inertia / cfg.sim.dt)
         self.apply_springs()
 
     # --- every step ------------------------------------------------------------------------------
@@ -221,12 +256,14 @@ class SegmentedFingers:
         """Set this step's spring-damper torque tau = -(k q + c q') on every passive joint (see the
         module docstring for why through a re-limited motor)."""
         q, v = self.joint_states()
-        tau = -(self._k * q + self._c * v)
         c = self.client
         n = len(self.joints)
         if self.config.segment_spring == "torque":
+            tau = -(self._k * q + self._c * v)
             c.setJointMotorControlArray(self.gripper, self.joints, p.TORQUE_CONTROL, forces=tau.tolist())
             return
+        # The damper as far as the explicit row stays stable (damping_applied, module docstring).
+        tau = -(self._k * q + self.damping_applied * v)
         # The motor pushes toward rest; while the damper outweighs the spring on the way back
         # (tau points away from rest) it gets no force: the row cannot push away from its target.
         limit = np.where(tau * q <= 0.0, np.abs(tau), 0.0)
@@ -237,9 +274,23 @@ class SegmentedFingers:
 
     # --- queries ---------------------------------------------------------------------------------
 
+    def step_stiffness(self) -> np.ndarray:
+        """a = k dt^2 / I of each passive joint (pitch first): the saturated motor spring settles
+        under a free load for a < 3 (module docstring)."""
+        return self._k * self.config.sim.dt**2 / self.inertia
+
     def is_finite(self) -> bool:
         q, v = self.joint_states()
         return bool(np.isfinite(q).all() and np.isfinite(v).all())
+
+    def diverged(self) -> bool:
+        """Non-finite joint states, or a passive joint faster than DIVERGED_JOINT_RATE: a segment
+        blown up between its joint limits stays finite and never shows in the cores' or the
+        cylinder's velocities, which is all the env checked before."""
+        q, v = self.joint_states()
+        if not (np.isfinite(q).all() and np.isfinite(v).all()):
+            return True
+        return bool(np.abs(v).max() > DIVERGED_JOINT_RATE)
 
 
 __all__ = ["SegmentedFingers"]
