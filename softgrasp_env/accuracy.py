@@ -84,6 +84,7 @@ class GraspRecord:
     seconds: float
     """Wall time of the physics steps alone [s]."""
     finite: bool
+    """False if the run diverged (GraspScene.diverged: non-finite, or far past any physical speed)."""
     trace: np.ndarray | None = None
     """With ``run_grasp(..., trace=True)``: (steps, 8) rows [t, cylinder x, y, z, qx, qy, qz, qw]
     after every step, for comparing runs (pose_error)."""
@@ -181,7 +182,7 @@ def run_grasp(
             tic = time.perf_counter()
             scene.step()
             seconds += time.perf_counter() - tic
-            if not world.is_finite():
+            if scene.diverged():
                 finite = False
                 break
             pen, intr = scene.penetration()

@@ -479,20 +479,7 @@ class SoftGraspEnv(gym.Env):
         return False
 
     def _diverged(self) -> bool:
-        w = self.scene.world
-        if not w.is_finite():
-            return True
-        if self.scene.segments is not None and self.scene.segments.diverged():
-            return True
-        col = w.colliders
-        if np.abs(col.rigid_v).max() > 20.0 or np.abs(col.rigid_w).max() > 500.0:
-            return True
-        if w.state is not None:
-            if np.abs(w.state.particle_v).max() > 20.0:
-                return True
-            if w.tissue_deviation() > 0.03:
-                return True
-        return False
+        return self.scene.diverged()
 
     def _observe(self) -> np.ndarray:
         sc = self.scene

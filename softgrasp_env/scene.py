@@ -182,6 +182,25 @@ class GraspScene:
             self.segments.apply_springs()
         self.world.step()
 
+    def diverged(self) -> bool:
+        """True once the simulation has blown up: a non-finite value, a body faster than 20 m/s or
+        500 rad/s, a particle faster than 20 m/s or 3 cm from its core, a finger segment turning
+        faster than its limit (segmented.py). The env and the accuracy measurements share it."""
+        w = self.world
+        if not w.is_finite():
+            return True
+        if self.segments is not None and self.segments.diverged():
+            return True
+        col = w.colliders
+        if np.abs(col.rigid_v).max() > 20.0 or np.abs(col.rigid_w).max() > 500.0:
+            return True
+        if w.state is not None:
+            if np.abs(w.state.particle_v).max() > 20.0:
+                return True
+            if w.tissue_deviation() > 0.03:
+                return True
+        return False
+
     def finger_forces(self) -> np.ndarray:
         """Normal force each finger (left, right) pressed on the cylinder with in the last physics
         step [N]: the tissue's contacts plus pybullet's contacts of the finger's own links (a core
