@@ -13,8 +13,9 @@ from typing import Literal
 
 CouplingMode = Literal["thesis", "consistent"]
 COUPLING_MODES: tuple[str, ...] = ("thesis", "consistent")
-FINGER_KINDS: tuple[str, ...] = ("tissue", "rigid", "segmented")
+FINGER_KINDS: tuple[str, ...] = ("tissue", "rigid", "segmented", "fem")
 SEGMENT_SPRINGS: tuple[str, ...] = ("motor", "torque")
+FEM_RESOLUTIONS: tuple[str, ...] = ("coarse", "fine")
 TISSUE_FACES: tuple[str, ...] = ("all", "contact")
 
 
@@ -157,7 +158,8 @@ class SceneConfig:
     body, wrapped in oriented-particle tissue (the thesis); 'rigid' - the bare cores, through
     pybullet's own contacts (the rigid-only twin); 'segmented' - each core carries
     ``finger_segments`` rigid segments on sprung two-axis gimbals that form its contact face (the
-    thesis' "traditional" fix, softgrasp_env/segmented.py)."""
+    thesis' "traditional" fix, softgrasp_env/segmented.py); 'fem' - each core carries a fully
+    deformable pad (inner face and tip) simulated by pybullet's FEM soft bodies (softgrasp_env/fem.py)."""
     finger_segments: int = 3
     """Segments per finger (fingers='segmented'), side by side along the face's 40 mm: 3 gives
     13 mm wide segments, narrower than the cylinder's flat-contact zone, so one of them always
@@ -175,6 +177,18 @@ class SceneConfig:
     """How the segments' springs are made in pybullet: 'motor' - a force-limited position motor
     re-limited every step to the spring-damper torque (stable at any dt); 'torque' - the explicit
     torque -(k q + c q') every step (unstable at these inertias; kept to measure it)."""
+    fem_resolution: str = "coarse"
+    """Tetrahedral mesh of the 'fem' pads, one of FEM_RESOLUTIONS: 'coarse' - one hex cell (6 tets)
+    through the 8 mm pad, about 8-10 mm cells along it; 'fine' - two, about 4 mm cells
+    (fem.FEM_CELLS_THROUGH)."""
+    fem_substeps: int = 8
+    """pybullet steps per world step (``sim.dt``) for fingers='fem', each ``sim.dt / fem_substeps``
+    long. pybullet's deformable world integrates the elastic forces explicitly (only the damping
+    and the constraints are implicit). Measured with the coarse pads, scripted grasp of the default
+    cylinder: 1 substep (1/240 s) blew up at first contact (nodes 25 mm inside the cylinder, which
+    was thrown off at 6 m/s); 2 still gave 7 mm of penetration at the impact; 4 lifted it but it
+    slid 17 mm down the pads in the 2 s hold (14-41 mm of lift left, depending on a 0.2 mm start
+    offset); 8 holds it (0.11 mm of slip) at half the speed of 4."""
     tissue_faces: str = "contact"
     """Which faces of a finger core get tissue: 'contact' (default) - only the inner face and the
     tip, where the fingers can touch the cylinder (the rest of the core meets the world through
@@ -227,6 +241,9 @@ class SceneConfig:
         o = "SceneConfig"
         if self.fingers not in FINGER_KINDS:
             raise ValueError(f"SceneConfig.fingers must be one of {FINGER_KINDS}, got {self.fingers!r}")
+        if self.fem_resolution not in FEM_RESOLUTIONS:
+            raise ValueError(f"SceneConfig.fem_resolution must be one of {FEM_RESOLUTIONS}, got {self.fem_resolution!r}")
+        _check_int(o, "fem_substeps", self.fem_substeps, 1, 64)
         if self.tissue_faces not in TISSUE_FACES:
             raise ValueError(f"SceneConfig.tissue_faces must be one of {TISSUE_FACES}, got {self.tissue_faces!r}")
         _check_int(o, "finger_segments", self.finger_segments, 1, 8)
@@ -277,6 +294,7 @@ def field_names(cls: type) -> tuple[str, ...]:
 
 __all__ = [
     "COUPLING_MODES",
+    "FEM_RESOLUTIONS",
     "FINGER_KINDS",
     "SEGMENT_SPRINGS",
     "TISSUE_FACES",

@@ -124,8 +124,10 @@ class SoftGraspEnv(gym.Env):
     ``gym.make("SoftGrasp-v0", **kwargs)``; all keyword-only except ``render_mode``:
 
     - ``soft`` (True): tissue on the fingers, or rigid-only fingers; ``fingers`` ('tissue' |
-      'rigid', overrides ``soft``) names the finger kind; ``tissue_faces`` ('all' | 'contact':
-      only the inner face and tip of each core get tissue).
+      'rigid' | 'segmented' | 'fem', overrides ``soft``) names the finger kind; ``tissue_faces``
+      ('all' | 'contact': only the inner face and tip of each core get tissue);
+      ``fem_resolution`` ('coarse' | 'fine') the pads' mesh for fingers='fem' (pybullet's FEM;
+      measured 0.025x real time coarse, fine several times slower: softgrasp_env/fem.py).
     - ``preset`` ('fast' | 'default' | 'accurate', softgrasp_env/presets.py): the tissue and
       solver settings to start from; ``tissue``, ``sim``, ``tissue_faces`` and the tissue
       arguments below override them.
@@ -198,6 +200,7 @@ class SoftGraspEnv(gym.Env):
         soft: bool = True,
         fingers: str | None = None,
         tissue_faces: str | None = None,
+        fem_resolution: str = "coarse",
         preset: str = "default",
         reward_type: str = "dense",
         control_frequency: float = 20.0,
@@ -274,7 +277,7 @@ class SoftGraspEnv(gym.Env):
             raise ValueError(f"control_frequency must divide the physics rate 1/sim.dt = {1.0 / sim.dt:g} Hz, "
                              f"got {control_frequency!r}")  # fmt: skip
         # The base scene, validated now so that bad sizes fail at construction, not at reset.
-        self._base = SceneConfig(fingers=fingers, tissue_faces=tissue_faces, cylinder_radius=cylinder_radius, cylinder_height=cylinder_height,
+        self._base = SceneConfig(fingers=fingers, tissue_faces=tissue_faces, fem_resolution=fem_resolution, cylinder_radius=cylinder_radius, cylinder_height=cylinder_height,
                                  cylinder_mass=cylinder_mass, finger_force=finger_force, tissue=tissue, sim=sim)  # fmt: skip
         if cylinder_radius - cylinder_radius_range < 0.005:
             raise ValueError(f"cylinder_radius - cylinder_radius_range must be >= 0.005 m, got "

@@ -17,6 +17,7 @@ import pybullet as p
 from pybullet_utils.bullet_client import BulletClient
 
 from .config import SceneConfig
+from .fem import FemPads, fem_ground_shape
 from .segmented import SegmentedFingers
 from .sim.bullet import RigidRef, connect
 from .sim.world import ShapeSpec, TissueSpec, World
@@ -46,6 +47,10 @@ class GraspScene:
         self.config = cfg = config if config is not None else SceneConfig()
         if client is None:
             client = connect(gui=gui)
+            if cfg.fingers == "fem":  # --- fem hook: pybullet's deformable world (fem.py)
+                client.resetSimulation(p.RESET_USE_DEFORMABLE_WORLD)
+        elif cfg.fingers == "fem":  # --- fem hook: every rebuild asks for the deformable world again
+            client.resetSimulation(p.RESET_USE_DEFORMABLE_WORLD)
         else:
             client.resetSimulation()
         self.client = c = client
@@ -53,9 +58,16 @@ class GraspScene:
         c.setGravity(0.0, 0.0, -sim.gravity)
         # One pybullet step per world step, no substeps: the tissue and the rigid bodies share dt.
         c.setPhysicsEngineParameter(fixedTimeStep=sim.dt, numSubSteps=0, deterministicOverlappingPairs=1)
+        # --- fem hook: the pads take fem_substeps pybullet steps per world step (see step()). Set
+        # before any motor command: pybullet turns a motor's force limit into an impulse limit with
+        # the time step current when the command is sent.
+        self.bullet_steps = cfg.fem_substeps if cfg.fingers == "fem" else 1
+        if self.bullet_steps > 1:
+            c.setPhysicsEngineParameter(fixedTimeStep=sim.dt / self.bullet_steps)
 
         # --- ground
-        plane = c.createCollisionShape(p.GEOM_PLANE)
+        # --- fem hook: pybullet's deformable world cannot collide soft bodies with a plane (fem.py)
+        plane = fem_ground_shape(c) if cfg.fingers == "fem" else c.createCollisionShape(p.GEOM_PLANE)
         self.ground = c.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=plane)
         c.changeDynamics(self.ground, -1, lateralFriction=cfg.ground_friction)
 
@@ -173,6 +185,8 @@ class GraspScene:
                 body = build_combined_body(core, cfg.tissue, shape_offset=offset, faces=faces[link])
                 tissue.append(TissueSpec(body, shape_index))
         self.world = World(c, sim, rigid, shapes, tissue)
+        # --- fem hook: FEM pads on the cores, anchored to the finger links (fem.py)
+        self.fem = FemPads(c, cfg, g, self.cylinder) if cfg.fingers == "fem" else None
 
     # --- stepping --------------------------------------------------------------------------------
 
@@ -180,6 +194,8 @@ class GraspScene:
         """One physics step of the whole scene (``world.step()``: tissue, then pybullet)."""
         if self.segments is not None:
             self.segments.apply_springs()
+        for _ in range(self.bullet_steps - 1):  # --- fem hook: the pads' substeps (no tissue here)
+            self.client.stepSimulation()
         self.world.step()
 
     def diverged(self) -> bool:
@@ -213,6 +229,8 @@ class GraspScene:
                     f[k] += pt[9]
         if self.world.solver is not None:
             f += self.world.solver.contact_normal_force(CYLINDER_SHAPE)
+        if self.fem is not None:  # --- fem hook: the pads' contacts (fem.py)
+            f += self.fem.contact_normal_force()
         return f
 
     def penetration(self) -> tuple[float, float]:
@@ -225,6 +243,9 @@ class GraspScene:
         for other in (self.cylinder, self.ground):
             for pt in c.getContactPoints(bodyA=self.gripper, bodyB=other):
                 pen = max(pen, -pt[8])
+        if self.fem is not None:  # --- fem hook: the pads' nodes (fem.py)
+            fem_pen, fem_intrusion = self.fem.penetration()
+            pen, intrusion = max(pen, fem_pen), max(intrusion, fem_intrusion)
         return pen, intrusion
 
     # --- control ---------------------------------------------------------------------------------

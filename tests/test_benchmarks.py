@@ -27,8 +27,10 @@ def test_methods_chart_has_every_method_and_ours_converges_with_the_time_step(tm
     from softgrasp_env.config import FINGER_KINDS
     from softgrasp_env.presets import PRESETS
 
+    from benchmarks.methods import TINY_SKIP
+
     families = {r["method"] for r in rows}
-    assert {k for k in FINGER_KINDS if k != "tissue"} <= families and "tissue, thesis" in families
+    assert {k for k in FINGER_KINDS if k not in ("tissue", *TINY_SKIP)} <= families and "tissue, thesis" in families
     assert {r["setting"] for r in rows if r["method"] == "preset"} == set(PRESETS)
     by = {(r["method"], r["setting"]): r for r in rows}
     assert all(r["held"] == "True" for r in rows), [(r["method"], r["setting"]) for r in rows if r["held"] != "True"]
@@ -45,9 +47,11 @@ def test_stability_map_sees_rigid_fingers_fail_where_the_tissue_holds(tmp_path):
     run("stability_map.py", "--tiny", out=tmp_path)
     rows = list(csv.DictReader(open(tmp_path / "stability_map.csv")))
     outcome = {(r["method"], float(r["row_value"])): r["label"] for r in rows}
+    from benchmarks.stability_map import TINY_SKIP
     from softgrasp_env.config import FINGER_KINDS
 
-    assert {r["method"] for r in rows} >= {k for k in FINGER_KINDS if k != "tissue"} | {"tissue, thesis", "tissue, consistent"}
+    kinds = {k for k in FINGER_KINDS if k not in ("tissue", *TINY_SKIP)}
+    assert {r["method"] for r in rows} >= kinds | {"tissue, thesis", "tissue, consistent"}
     assert outcome["rigid", 0.0] == "held" and outcome["rigid", 0.1] != "held"
     assert outcome["tissue, thesis", 0.1] == "held" and outcome["tissue, consistent", 0.1] == "held"
     assert (tmp_path / "stability_map.png").stat().st_size > 5_000
