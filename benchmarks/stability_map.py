@@ -118,7 +118,7 @@ def main() -> None:
     parser.add_argument("--methods", default="", help="comma-separated subset of the methods")
     parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args()
-    chosen = methods(tiny=args.tiny)
+    chosen = methods(tiny=args.tiny and not args.methods)  # named explicitly, fem runs even in --tiny
     if args.methods:
         names = args.methods.split(",")
         unknown = set(names) - set(chosen)
