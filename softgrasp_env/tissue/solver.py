@@ -226,9 +226,9 @@ class TissueSolver:
         self._counts = np.zeros(2, dtype=np.int64)
         self._sizes = {"n": n, "contacts": 4 * n + 16, "pairs": 4 * n + 16, "shapes": 0, "patches": 0}
         self._scratch: dict[str, np.ndarray] = {}
+        self._args_for: tuple | None = None
         self._pack(tuple(self._sizes))
         self._rigid_buffers_for = -1
-        self._args_for: tuple | None = None
 
     def _pack(self, resized: tuple[str, ...]) -> None:
         """(Re)build the packed scratch buffers for ``self._sizes``. Arrays sized by an entry of
@@ -257,6 +257,7 @@ class TissueSolver:
             bufs.append(buf)
         self._scratch = new
         self._packed = (*bufs, layout)
+        self._args_for = None
 
     def _rigid_buffers(self, count: int) -> None:
         if self._rigid_buffers_for != count:
@@ -276,45 +277,49 @@ class TissueSolver:
             self._pack(("shapes", "patches"))
             self._args_for = None
 
-    def _fixed_args(self) -> tuple[tuple, tuple]:
-        """The arguments of _step that do not change from step to step (the model's arrays, the
-        rigid outputs, the packed scratch; the parameters), as tuples: one splat per call instead of
-        ~60 attribute loads. Rebuilt whenever a buffer, the model or the config is replaced."""
+    def _fixed_args(self) -> None:
+        """The arguments of _step that do not change from step to step (the model's arrays; the
+        rigid outputs, the packed scratch and the parameters), as two tuples: one splat per call
+        instead of ~60 attribute loads. Rebuilt whenever a buffer, the model or the config is
+        replaced (``_args_for`` is reset then, or no longer matches)."""
         m = self.model
         sim = self.sim
-        key = (m, sim, self._packed, self._rig_x)
-        if self._args_for is None or any(a is not b for a, b in zip(key, self._args_for)):
-            coupling = COUPLING_CONSISTENT if sim.coupling == "consistent" else COUPLING_THESIS
-            self._model_args = (
-                m.particle_rest_x, m.particle_rest_q, self._rest_moment, self._inertia, m.particle_radii,
-                m.particle_mass, m.particle_inv_mass, m.particle_body, m.particle_attached, m.group_offsets,
-                m.group_members, self._g_pack, m.body_particle_offsets, m.body_core_shape, m.body_stiffness,
-                m.body_friction,
-            )  # fmt: skip
-            self._tail_args = (
-                self._rig_x, self._rig_q, self._imp_lin, self._imp_ang, self._coupling_imp,
-                *self._packed,
-                sim.dt, sim.iterations, sim.rotation_iterations, 0.0, 0.0, -sim.gravity, sim.damping, coupling,
-                sim.contact_margin, self._counts,
-            )  # fmt: skip
-            self._args_for = key
-        return self._model_args, self._tail_args
+        coupling = COUPLING_CONSISTENT if sim.coupling == "consistent" else COUPLING_THESIS
+        self._model_args = (
+            m.particle_rest_x, m.particle_rest_q, self._rest_moment, self._inertia, m.particle_radii,
+            m.particle_mass, m.particle_inv_mass, m.particle_body, m.particle_attached, m.group_offsets,
+            m.group_members, self._g_pack, m.body_particle_offsets, m.body_core_shape, m.body_stiffness,
+            m.body_friction,
+        )  # fmt: skip
+        self._tail_args = (
+            self._rig_x, self._rig_q, self._imp_lin, self._imp_ang, self._coupling_imp,
+            *self._packed,
+            sim.dt, sim.iterations, sim.rotation_iterations, 0.0, 0.0, -sim.gravity, sim.damping, coupling,
+            sim.contact_margin, self._counts,
+        )  # fmt: skip
+        self._args_for = (m, sim)
 
     def step(self, state: TissueState, col: Colliders) -> StepOutput:
         """Advance ``state`` by one step of ``sim.dt`` in place; returns predicted rigid poses and
         the impulses the tissue put on each rigid body (to be applied by the rigid simulation)."""
-        self._rigid_buffers(col.rigid_count)
-        self._shape_buffer(col.shape_count)
+        # Per-step Python work is a noticeable share of a ~100 us tissue step: the checks below are
+        # inline (col.rigid_count and friends are properties), the fixed arguments come from tuples.
+        if col.rigid_inv_mass.shape[0] != self._rigid_buffers_for:
+            self._rigid_buffers(col.rigid_inv_mass.shape[0])
+        if col.shape_kind.shape[0] != self._sizes["shapes"]:
+            self._shape_buffer(col.shape_kind.shape[0])
         while True:
-            model_args, tail_args = self._fixed_args()
+            key = self._args_for
+            if key is None or key[0] is not self.model or key[1] is not self.sim:
+                self._fixed_args()
             code = _step(
-                *model_args,
+                *self._model_args,
                 state.particle_x, state.particle_v, state.particle_q, state.particle_omega, state.group_q,
                 state.particle_anchor_shape, state.particle_anchor_x, state.particle_anchor_slide,
                 col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w, col.rigid_inv_mass, col.rigid_inv_inertia,
                 col.rigid_axis, col.rigid_force, col.rigid_gravity, col.rigid_in_solve, col.shape_kind,
                 col.shape_params, col.shape_rigid, col.shape_local_x, col.shape_local_q,
-                *tail_args,
+                *self._tail_args,
             )  # fmt: skip
             if code == 0:
                 break
@@ -327,15 +332,10 @@ class TissueSolver:
                 self._sizes["pairs"] = int(2 * self._counts[1])
                 grown.append("pairs")
             self._pack(tuple(grown))
-        return StepOutput(
-            rigid_pred_x=self._rig_x,
-            rigid_pred_q=self._rig_q,
-            rigid_impulse=self._imp_lin,
-            rigid_angular_impulse=self._imp_ang,
-            coupling_impulse=self._coupling_imp,
-            contact_count=int(self._counts[0]),
-            pair_count=int(self._counts[1]),
-        )
+        contact_count, pair_count = self._counts.tolist()
+        # positional: StepOutput's fields in order (keywords cost ~1 us a step here)
+        return StepOutput(self._rig_x, self._rig_q, self._imp_lin, self._imp_ang, self._coupling_imp, contact_count,
+                          pair_count)  # fmt: skip
 
     def contact_normal_force(self, shape: int) -> np.ndarray:
         """Normal force each tissue body pressed on shape ``shape`` with during the last step [N],
