@@ -83,11 +83,27 @@ _F_SCRATCH = (
 _I_SCRATCH = (("c_particle", "contacts", 0), ("c_shape", "contacts", 0), ("c_patch", "contacts", 0),
               ("pair_i", "pairs", 0), ("pair_j", "pairs", 0))  # fmt: skip  (int32)
 _B_SCRATCH = (("c_inner", "contacts", 0), ("patch_slide", "patches", 0), ("patch_change", "patches", 0))  # bool
-_SCRATCH = _F_SCRATCH + _I_SCRATCH + _B_SCRATCH
+# the model's arrays, copied in once (TissueModel is frozen; the solver reads it at construction,
+# as it does for the rest moments and group data it derives from it)
+_F_MODEL = (("rest_x", "n", 3), ("rest_q", "n", 4), ("rest_moment", "n", 9), ("inertia", "n", 3), ("radii", "n", 3),
+            ("mass", "n", 0), ("inv_mass", "n", 0), ("g_pack", "members", 8), ("body_stiffness", "bodies", 0),
+            ("body_friction", "bodies", 2))  # fmt: skip
+_I_MODEL = (("p_body", "n", 0), ("g_off", "groups", 0), ("g_mem", "members", 0), ("body_off", "body_offsets", 0),
+            ("body_core_shape", "bodies", 0))  # fmt: skip
+_B_MODEL = (("attached", "n", 0),)
+_F_PACK = _F_SCRATCH + _F_MODEL
+_I_PACK = _I_SCRATCH + _I_MODEL
+_B_PACK = _B_SCRATCH + _B_MODEL
+_PACK = _F_PACK + _I_PACK + _B_PACK
 # their rows in `layout` (numba reads module-level ints as compile-time constants)
 (_XP, _QP, _Q_PRED, _VD, _WD, _MOMENT, _SPIN_KICK, _G_FRAME, _G_TORQUE, _C_LAMBDA, _C_NORMAL, _C_RN, _C_FRICTION,
  _C_FRICTION_GOAL, _C_ANCHOR, _C_POINT, _PAIR_LAMBDA, _PAIR_LAMBDA_T, _PAIR_NORMAL, _SHAPE_POSE, _PATCH,
- _C_PARTICLE, _C_SHAPE, _C_PATCH, _PAIR_I, _PAIR_J, _C_INNER, _PATCH_SLIDE, _PATCH_CHANGE) = range(len(_SCRATCH))  # fmt: skip
+ _REST_X, _REST_Q, _REST_MOMENT, _INERTIA, _RADII, _MASS, _INV_MASS, _G_PACK, _BODY_STIFFNESS, _BODY_FRICTION,
+ _C_PARTICLE, _C_SHAPE, _C_PATCH, _PAIR_I, _PAIR_J,
+ _P_BODY, _G_OFF, _G_MEM, _BODY_OFF, _BODY_CORE_SHAPE,
+ _C_INNER, _PATCH_SLIDE, _PATCH_CHANGE,
+ _ATTACHED) = range(len(_PACK))  # fmt: skip
+assert [name for name, _, _ in _PACK][_ATTACHED] == "attached" and _PACK[_P_BODY][0] == "p_body"
 
 
 @nb.njit(cache=True, inline="always")
@@ -112,38 +128,43 @@ def _view1(buf, layout, k):
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _step(
-    # model
-    rest_x, rest_q, rest_moment, inertia, radii, mass, inv_mass, p_body, attached, g_off, g_mem, g_pack, body_off,
-    body_core_shape, body_stiffness, body_friction,
     # state (updated in place on success)
     x, v, q, omega, group_q, anchor_shape, anchor_x, anchor_slide,
     # colliders (read only) and rigid outputs
     rig_x0, rig_q0, rig_v, rig_w, rig_inv_mass, rig_inv_inertia, rig_axis, rig_force, rig_gravity, rig_move, shape_kind,
     shape_params,
     shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, imp_lin, imp_ang, coupling_imp,
-    # scratch: every scratch array of the step, packed (see TissueSolver._pack and _view)
-    f_scratch, i_scratch, b_scratch, layout,
+    # the model's arrays and every scratch array of the step, packed (see TissueSolver._pack and _view)
+    f_pack, i_pack, b_pack, layout,
     # parameters
     dt, iterations, rot_iters, gx, gy, gz, damping, coupling, margin, counts,
 ):  # fmt: skip
     """One tissue step. Returns 0, or 1 if a contact buffer was too small (``counts`` then holds
     the sizes needed and the state is untouched, so the caller can grow the buffers and retry)."""
-    # The scratch arrays arrive packed in three flat buffers: numba unboxes every array argument
-    # on each call (~0.1 us apiece), and ~30 separate scratch arrays cost ~3 us a step.
-    xp, qp, q_pred = _view(f_scratch, layout, _XP), _view(f_scratch, layout, _QP), _view(f_scratch, layout, _Q_PRED)
-    vd, wd, moment = _view(f_scratch, layout, _VD), _view(f_scratch, layout, _WD), _view(f_scratch, layout, _MOMENT)
-    spin_kick, g_frame = _view(f_scratch, layout, _SPIN_KICK), _view(f_scratch, layout, _G_FRAME)
-    g_torque, c_lambda = _view(f_scratch, layout, _G_TORQUE), _view1(f_scratch, layout, _C_LAMBDA)
-    c_normal, c_rn = _view(f_scratch, layout, _C_NORMAL), _view1(f_scratch, layout, _C_RN)
-    c_friction, c_friction_goal = _view(f_scratch, layout, _C_FRICTION), _view(f_scratch, layout, _C_FRICTION_GOAL)
-    c_anchor, c_point = _view(f_scratch, layout, _C_ANCHOR), _view(f_scratch, layout, _C_POINT)
-    pair_lambda, pair_lambda_t = _view1(f_scratch, layout, _PAIR_LAMBDA), _view1(f_scratch, layout, _PAIR_LAMBDA_T)
-    pair_normal, shape_pose = _view(f_scratch, layout, _PAIR_NORMAL), _view(f_scratch, layout, _SHAPE_POSE)
-    patch = _view(f_scratch, layout, _PATCH)
-    c_particle, c_shape, c_patch = _view1(i_scratch, layout, _C_PARTICLE), _view1(i_scratch, layout, _C_SHAPE), _view1(i_scratch, layout, _C_PATCH)
-    pair_i, pair_j = _view1(i_scratch, layout, _PAIR_I), _view1(i_scratch, layout, _PAIR_J)
-    c_inner, patch_slide = _view1(b_scratch, layout, _C_INNER), _view1(b_scratch, layout, _PATCH_SLIDE)
-    patch_change = _view1(b_scratch, layout, _PATCH_CHANGE)
+    # The model's and the scratch arrays arrive packed in three flat buffers: numba unboxes every
+    # array argument on each call (~0.1 us apiece), and ~45 separate arrays cost ~5 us a step.
+    rest_x, rest_q = _view(f_pack, layout, _REST_X), _view(f_pack, layout, _REST_Q)
+    rest_moment, inertia = _view(f_pack, layout, _REST_MOMENT), _view(f_pack, layout, _INERTIA)
+    radii, mass, inv_mass = _view(f_pack, layout, _RADII), _view1(f_pack, layout, _MASS), _view1(f_pack, layout, _INV_MASS)
+    g_pack, body_stiffness = _view(f_pack, layout, _G_PACK), _view1(f_pack, layout, _BODY_STIFFNESS)
+    body_friction = _view(f_pack, layout, _BODY_FRICTION)
+    p_body, g_off, g_mem = _view1(i_pack, layout, _P_BODY), _view1(i_pack, layout, _G_OFF), _view1(i_pack, layout, _G_MEM)
+    body_off, body_core_shape = _view1(i_pack, layout, _BODY_OFF), _view1(i_pack, layout, _BODY_CORE_SHAPE)
+    attached = _view1(b_pack, layout, _ATTACHED)
+    xp, qp, q_pred = _view(f_pack, layout, _XP), _view(f_pack, layout, _QP), _view(f_pack, layout, _Q_PRED)
+    vd, wd, moment = _view(f_pack, layout, _VD), _view(f_pack, layout, _WD), _view(f_pack, layout, _MOMENT)
+    spin_kick, g_frame = _view(f_pack, layout, _SPIN_KICK), _view(f_pack, layout, _G_FRAME)
+    g_torque, c_lambda = _view(f_pack, layout, _G_TORQUE), _view1(f_pack, layout, _C_LAMBDA)
+    c_normal, c_rn = _view(f_pack, layout, _C_NORMAL), _view1(f_pack, layout, _C_RN)
+    c_friction, c_friction_goal = _view(f_pack, layout, _C_FRICTION), _view(f_pack, layout, _C_FRICTION_GOAL)
+    c_anchor, c_point = _view(f_pack, layout, _C_ANCHOR), _view(f_pack, layout, _C_POINT)
+    pair_lambda, pair_lambda_t = _view1(f_pack, layout, _PAIR_LAMBDA), _view1(f_pack, layout, _PAIR_LAMBDA_T)
+    pair_normal, shape_pose = _view(f_pack, layout, _PAIR_NORMAL), _view(f_pack, layout, _SHAPE_POSE)
+    patch = _view(f_pack, layout, _PATCH)
+    c_particle, c_shape, c_patch = _view1(i_pack, layout, _C_PARTICLE), _view1(i_pack, layout, _C_SHAPE), _view1(i_pack, layout, _C_PATCH)
+    pair_i, pair_j = _view1(i_pack, layout, _PAIR_I), _view1(i_pack, layout, _PAIR_J)
+    c_inner, patch_slide = _view1(b_pack, layout, _C_INNER), _view1(b_pack, layout, _PATCH_SLIDE)
+    patch_change = _view1(b_pack, layout, _PATCH_CHANGE)
     # --- predict rigid bodies: semi-implicit Euler, as pybullet will integrate them (thesis 5.2.2)
     predict_rigid(rig_x0, rig_q0, rig_v, rig_w, rig_gravity, rig_move, rig_inv_mass, rig_force, gx, gy, gz, dt, rig_x,
                   rig_q, imp_lin, imp_ang, coupling_imp)  # fmt: skip
@@ -220,14 +241,25 @@ class TissueSolver:
         self.model = model
         self.sim = sim
         n = model.particle_count
-        self._rest_moment = rest_moments(model)
-        self._g_pack = group_pack(model)
-        self._inertia = np.ascontiguousarray(model.particle_inertia_local())
         self._counts = np.zeros(2, dtype=np.int64)
-        self._sizes = {"n": n, "contacts": 4 * n + 16, "pairs": 4 * n + 16, "shapes": 0, "patches": 0}
+        model_arrays = {
+            "rest_x": model.particle_rest_x, "rest_q": model.particle_rest_q, "rest_moment": rest_moments(model),
+            "inertia": model.particle_inertia_local(), "radii": model.particle_radii, "mass": model.particle_mass,
+            "inv_mass": model.particle_inv_mass, "g_pack": group_pack(model), "body_stiffness": model.body_stiffness,
+            "body_friction": model.body_friction, "p_body": model.particle_body, "g_off": model.group_offsets,
+            "g_mem": model.group_members, "body_off": model.body_particle_offsets,
+            "body_core_shape": model.body_core_shape, "attached": model.particle_attached,
+        }  # fmt: skip
+        self._sizes = {"n": n, "contacts": 4 * n + 16, "pairs": 4 * n + 16, "shapes": 0, "patches": 0,
+                       "members": model.group_members.shape[0], "groups": model.group_offsets.shape[0],
+                       "bodies": model.body_count, "body_offsets": model.body_particle_offsets.shape[0]}  # fmt: skip
         self._scratch: dict[str, np.ndarray] = {}
         self._args_for: tuple | None = None
         self._pack(tuple(self._sizes))
+        for name, a in model_arrays.items():
+            if self._scratch[name].shape != a.shape:
+                raise ValueError(f"TissueModel array {name!r} has shape {a.shape}, expected {self._scratch[name].shape}")
+            self._scratch[name][...] = a
         self._rigid_buffers_for = -1
 
     def _pack(self, resized: tuple[str, ...]) -> None:
@@ -236,11 +268,11 @@ class TissueSolver:
         contents. The arrays stay reachable from Python as views (``self._scratch[name]``)."""
         old = self._scratch
         sizes = self._sizes
-        layout = np.zeros((len(_SCRATCH), 3), dtype=np.int64)
+        layout = np.zeros((len(_PACK), 3), dtype=np.int64)
         new: dict[str, np.ndarray] = {}
         bufs = []
         k = 0
-        for table, dtype in ((_F_SCRATCH, np.float64), (_I_SCRATCH, np.int32), (_B_SCRATCH, np.bool_)):
+        for table, dtype in ((_F_PACK, np.float64), (_I_PACK, np.int32), (_B_PACK, np.bool_)):
             total = sum(sizes[size] * max(cols, 1) for _, size, cols in table)
             buf = np.zeros(max(total, 1), dtype=dtype)  # never empty: a 0-size buffer is one too
             o = 0
@@ -278,26 +310,19 @@ class TissueSolver:
             self._args_for = None
 
     def _fixed_args(self) -> None:
-        """The arguments of _step that do not change from step to step (the model's arrays; the
-        rigid outputs, the packed scratch and the parameters), as two tuples: one splat per call
-        instead of ~60 attribute loads. Rebuilt whenever a buffer, the model or the config is
-        replaced (``_args_for`` is reset then, or no longer matches)."""
-        m = self.model
+        """The arguments of _step that do not change from step to step (the rigid outputs, the packed
+        model and scratch arrays, the parameters) as one tuple: one splat per call instead of ~20
+        attribute loads. Rebuilt whenever a buffer or the config is replaced (``_args_for`` is
+        reset then, or is no longer ``self.sim``)."""
         sim = self.sim
         coupling = COUPLING_CONSISTENT if sim.coupling == "consistent" else COUPLING_THESIS
-        self._model_args = (
-            m.particle_rest_x, m.particle_rest_q, self._rest_moment, self._inertia, m.particle_radii,
-            m.particle_mass, m.particle_inv_mass, m.particle_body, m.particle_attached, m.group_offsets,
-            m.group_members, self._g_pack, m.body_particle_offsets, m.body_core_shape, m.body_stiffness,
-            m.body_friction,
-        )  # fmt: skip
         self._tail_args = (
             self._rig_x, self._rig_q, self._imp_lin, self._imp_ang, self._coupling_imp,
             *self._packed,
             sim.dt, sim.iterations, sim.rotation_iterations, 0.0, 0.0, -sim.gravity, sim.damping, coupling,
             sim.contact_margin, self._counts,
         )  # fmt: skip
-        self._args_for = (m, sim)
+        self._args_for = sim
 
     def step(self, state: TissueState, col: Colliders) -> StepOutput:
         """Advance ``state`` by one step of ``sim.dt`` in place; returns predicted rigid poses and
@@ -309,11 +334,9 @@ class TissueSolver:
         if col.shape_kind.shape[0] != self._sizes["shapes"]:
             self._shape_buffer(col.shape_kind.shape[0])
         while True:
-            key = self._args_for
-            if key is None or key[0] is not self.model or key[1] is not self.sim:
+            if self._args_for is not self.sim:
                 self._fixed_args()
             code = _step(
-                *self._model_args,
                 state.particle_x, state.particle_v, state.particle_q, state.particle_omega, state.group_q,
                 state.particle_anchor_shape, state.particle_anchor_x, state.particle_anchor_slide,
                 col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w, col.rigid_inv_mass, col.rigid_inv_inertia,
