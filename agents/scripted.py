@@ -3,8 +3,8 @@
 Move the grip point over the cylinder (horizontally first: from above, the open fingers would
 otherwise come down on its top), down onto its centre, close the fingers, and once both fingers
 press on the cylinder, lift to a little above the success height and hold there. Works for the vector
-observation of SoftGrasp-v0 / SoftGraspRigid-v0 / SoftGraspSparse-v0 and for the ``observation``
-entry of SoftGraspGoal-v0's dict.
+observation of SoftGrasp-v1 / SoftGraspRigid-v1 / SoftGraspSparse-v1 and for the ``observation``
+entry of SoftGraspGoal-v1's dict.
 """
 
 from __future__ import annotations

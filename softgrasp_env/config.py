@@ -233,7 +233,14 @@ class SceneConfig:
     about its face's long (y) axis, the gap wider at the top for a positive wedge, so a rigid
     face meets the cylinder along a short edge instead of a line."""
     cylinder_xy: tuple[float, float] = (0.0, 0.0)
-    """Where the cylinder stands on the ground [m]; the gripper starts above the origin."""
+    """Where the cylinder stands on the ground [m]."""
+    gripper_xy: tuple[float, float] = (0.0, 0.0)
+    """Where the grip point (the palm's centre line) starts horizontally [m]; ``lateral_offset``
+    adds to its y."""
+    start_height: float = 0.05
+    """Height of the grip point (the finger centres) above the cylinder's mid height at the start
+    [m]. 0.05 starts the open fingers around the top of the default cylinder; the reach task
+    starts them above it (``cylinder_height / 2 + finger half height + clearance``)."""
     tissue: TissueConfig = field(default_factory=TissueConfig)
     sim: SimConfig = field(default_factory=SimConfig)
 
@@ -271,10 +278,13 @@ class SceneConfig:
         _check_range(o, "lateral_offset", self.lateral_offset, -0.1, 0.1)
         _check_range(o, "yaw", self.yaw, -math.pi / 4, math.pi / 4)
         _check_range(o, "jaw_wedge", self.jaw_wedge, -math.pi / 6, math.pi / 6)
-        if len(self.cylinder_xy) != 2:
-            raise ValueError(f"SceneConfig.cylinder_xy must have 2 entries, got {self.cylinder_xy!r}")
-        for i, v in enumerate(self.cylinder_xy):
-            _check_range(o, f"cylinder_xy[{i}]", v, -0.1, 0.1)
+        for name, lim in (("cylinder_xy", 0.1), ("gripper_xy", 0.15)):
+            xy = getattr(self, name)
+            if len(xy) != 2:
+                raise ValueError(f"SceneConfig.{name} must have 2 entries, got {xy!r}")
+            for i, v in enumerate(xy):
+                _check_range(o, f"{name}[{i}]", v, -lim, lim)
+        _check_range(o, "start_height", self.start_height, 0.0, 0.3)
         if not isinstance(self.tissue, TissueConfig):
             raise ValueError(f"SceneConfig.tissue must be a TissueConfig, got {type(self.tissue).__name__}")
         if not isinstance(self.sim, SimConfig):

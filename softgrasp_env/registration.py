@@ -8,15 +8,21 @@ MAX_EPISODE_STEPS = 100
 """5 s at the default 20 Hz control frequency."""
 
 _SPECS: dict[str, tuple[str, dict]] = {
-    "SoftGrasp-v0": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "dense"}),
-    "SoftGraspRigid-v0": ("softgrasp_env.env:SoftGraspEnv", {"soft": False, "reward_type": "dense"}),
-    "SoftGraspSparse-v0": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "sparse"}),
-    "SoftGraspGoal-v0": ("softgrasp_env.env:SoftGraspGoalEnv", {"soft": True}),
+    "SoftGrasp-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "dense"}),
+    "SoftGraspRigid-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": False, "reward_type": "dense"}),
+    "SoftGraspSparse-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "sparse"}),
+    "SoftGraspGoal-v1": ("softgrasp_env.env:SoftGraspGoalEnv", {"soft": True}),
+    "SoftGraspEasy-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "dense", "task": "easy"}),
+    "SoftGraspEasyRigid-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": False, "reward_type": "dense", "task": "easy"}),
 }
 
 ENV_IDS: tuple[str, ...] = tuple(_SPECS)
-"""Soft fingers with the dense lift reward; the rigid-only twin; the sparse-reward variant; the
-goal-conditioned variant (dict observations, ``compute_reward`` for HER)."""
+"""The reach task (``task="reach"``: approach from above and away, misaligned fingers) with soft
+fingers and the dense lift reward; its rigid-only twin; the sparse-reward variant; the
+goal-conditioned variant (dict observations, ``compute_reward`` for HER); and the gentle start of
+v0 (``task="easy"``: the open fingers around the cylinder's top, aligned), soft and rigid, for
+debugging a policy or the physics. v0 (the gentle start as the only task, on the physics before
+the accuracy work) is gone: its results cannot be reproduced by this code."""
 
 
 def register_envs() -> None:

@@ -93,7 +93,7 @@ class GraspScene:
         fin_vis = c.createVisualShape(p.GEOM_BOX, halfExtents=fh, rgbaColor=[0.3, 0.3, 0.8, 1.0])
         open_x = cfg.finger_max_opening + fh[0]  # finger centre when fully open
         # Jaw wedge: each finger tilted by half the wedge about y, the left (-x) one by -w/2 and the
-        # right one by +w/2 (faces open downward for w > 0). A prismatic joint's axis is given in
+        # right one by +w/2 (the gap wider at the top for w > 0, measured: inner faces 6.3 cm from the centre at the top, 5.7 at the bottom for w = 0.2). A prismatic joint's axis is given in
         # the link frame, so it is turned back by the tilt to keep both fingers closing along the
         # palm's x axis.
         half = 0.5 * cfg.jaw_wedge
@@ -101,7 +101,8 @@ class GraspScene:
         tilt_right = c.getQuaternionFromEuler([0.0, half, 0.0])
         axis_left = [math.cos(half), 0.0, -math.sin(half)]  # R_y(-half)^T (+x)
         axis_right = [-math.cos(half), 0.0, -math.sin(half)]  # R_y(+half)^T (-x)
-        self.start_palm = np.array([0.0, cfg.lateral_offset, self.grasp_height + self.palm_offset + 0.05])
+        self.start_palm = np.array([cfg.gripper_xy[0], cfg.gripper_xy[1] + cfg.lateral_offset,
+                                    self.grasp_height + self.palm_offset + cfg.start_height])  # fmt: skip
         self.start_yaw = cfg.yaw
         links = dict(
             linkMasses=[cfg.finger_mass, cfg.finger_mass],

@@ -61,13 +61,13 @@ def _rollout(env, seed: int, steps: int, action_seed: int) -> list:
 
 
 def test_ids_are_registered_with_time_limits():
-    assert len(ENV_IDS) == 4
+    assert len(ENV_IDS) == 6
     gym.register_envs(softgrasp_env)  # the documented idiom is accepted
     for env_id in ENV_IDS:
         spec = gym.spec(env_id)
         assert spec.max_episode_steps == 100
-    assert gym.spec("SoftGrasp-v0").kwargs["soft"] is True
-    assert gym.spec("SoftGraspRigid-v0").kwargs["soft"] is False
+    assert gym.spec("SoftGrasp-v1").kwargs["soft"] is True
+    assert gym.spec("SoftGraspRigid-v1").kwargs["soft"] is False
 
 
 def test_register_envs_is_idempotent():
@@ -121,7 +121,7 @@ def test_same_seed_bit_identical_and_reset_restores_everything(env_id):
 
 
 def test_different_seeds_give_different_starts():
-    env = gym.make("SoftGraspRigid-v0")
+    env = gym.make("SoftGraspRigid-v1")
     o1, _ = env.reset(seed=1)
     o2, _ = env.reset(seed=2)
     assert not np.array_equal(o1, o2)
@@ -159,7 +159,7 @@ def test_thousand_random_steps_stay_finite(env_id):
 
 
 def test_action_validation():
-    env = gym.make("SoftGraspRigid-v0").unwrapped
+    env = gym.make("SoftGraspRigid-v1").unwrapped
     with pytest.raises(RuntimeError, match="reset"):
         env.step(np.zeros(4, dtype=np.float32))
     env.reset(seed=0)
@@ -176,8 +176,8 @@ def test_action_validation():
 
 def test_out_of_range_actions_are_clipped_and_reported():
     big = np.array([5.0, -3.0, 2.0, 9.0])
-    a = gym.make("SoftGrasp-v0")
-    b = gym.make("SoftGrasp-v0")
+    a = gym.make("SoftGrasp-v1")
+    b = gym.make("SoftGrasp-v1")
     a.reset(seed=4)
     b.reset(seed=4)
     for _ in range(5):
@@ -212,7 +212,7 @@ def test_bad_arguments_raise_naming_the_argument():
 
 
 def test_reset_options_fix_the_randomised_quantities():
-    env = gym.make("SoftGraspRigid-v0").unwrapped
+    env = gym.make("SoftGraspRigid-v1").unwrapped
     env.reset(seed=0, options={"cylinder_xy": (0.004, -0.003), "yaw": 0.05, "lateral_offset": 0.002,
                                "jaw_wedge": 0.02, "cylinder_mass": 0.2, "cylinder_radius": 0.025})  # fmt: skip
     cfg = env.scene.config
@@ -225,7 +225,7 @@ def test_reset_options_fix_the_randomised_quantities():
 
 
 def test_nan_in_the_tissue_ends_the_episode_with_a_finite_observation():
-    env = gym.make("SoftGrasp-v0")
+    env = gym.make("SoftGrasp-v1")
     obs0, _ = env.reset(seed=0)
     obs1, *_ = env.step(np.zeros(4, dtype=np.float32))
     env.unwrapped.scene.world.state.particle_x[7, 0] = np.nan
@@ -243,7 +243,7 @@ def test_nan_in_the_tissue_ends_the_episode_with_a_finite_observation():
 
 
 def test_runaway_velocity_is_divergence():
-    env = gym.make("SoftGraspRigid-v0")
+    env = gym.make("SoftGraspRigid-v1")
     env.reset(seed=0)
     sc = env.unwrapped.scene
     sc.client.resetBaseVelocity(sc.cylinder, [0.0, 0.0, 300.0], [0.0, 0.0, 0.0])
@@ -253,7 +253,7 @@ def test_runaway_velocity_is_divergence():
 
 
 def test_knocked_over_cylinder_terminates():
-    env = gym.make("SoftGraspRigid-v0")
+    env = gym.make("SoftGraspRigid-v1")
     env.reset(seed=0)
     sc = env.unwrapped.scene
     sc.client.resetBasePositionAndOrientation(sc.cylinder, [0.03, 0.0, 0.03], p.getQuaternionFromEuler([1.5, 0, 0]))
@@ -265,9 +265,9 @@ def test_knocked_over_cylinder_terminates():
 # --- physics seen through the env -----------------------------------------------------------------
 
 
-@pytest.mark.parametrize("env_id", ["SoftGrasp-v0", "SoftGraspRigid-v0"])
+@pytest.mark.parametrize("env_id", ["SoftGraspEasy-v1", "SoftGraspEasyRigid-v1"])
 def test_scripted_policy_lifts_and_fingers_press_with_the_motor_force(env_id):
-    """With the default misalignment the scripted grasp lifts the cylinder 5 cm in every seed, and
+    """From the gentle start (aligned fingers: the rigid twin holds too) the scripted grasp lifts the cylinder 5 cm in every seed, and
     in the held state each finger's normal force equals its motor's force limit (3 N): the motor
     pushes, the tissue (or the rigid contact) pushes back. Measured: rigid 3.00 N; soft 2.83 /
     2.84 N at every iteration count (1-8): the default pad's particles sit 16 mm apart on a 3 cm
@@ -290,13 +290,13 @@ def test_scripted_policy_lifts_and_fingers_press_with_the_motor_force(env_id):
 
 
 def test_dense_and_sparse_rewards_follow_their_definitions():
-    dense = gym.make("SoftGrasp-v0")
-    sparse = gym.make("SoftGraspSparse-v0")
+    dense = gym.make("SoftGrasp-v1")
+    sparse = gym.make("SoftGraspSparse-v1")
     policy = ScriptedGraspPolicy()
     od, _ = dense.reset(seed=2)
     os_, _ = sparse.reset(seed=2)
     seen_success = False
-    for _ in range(60):
+    for _ in range(100):  # the reach task: over to the cylinder, down, grip, lift
         od, rd, *_, infd = dense.step(policy(od))
         os_, rs, *_, infs = sparse.step(policy(os_))
         _assert_same(od, os_)  # the reward type changes nothing else
@@ -312,7 +312,7 @@ def test_dense_and_sparse_rewards_follow_their_definitions():
 
 
 def test_goal_env_compute_reward_is_vectorised_and_matches_step():
-    env = gym.make("SoftGraspGoal-v0")
+    env = gym.make("SoftGraspGoal-v1")
     obs, _ = env.reset(seed=0)
     u = env.unwrapped
     policy = ScriptedGraspPolicy(lift_to=obs["desired_goal"][2] - 0.05)
@@ -333,7 +333,7 @@ def test_goal_env_compute_reward_is_vectorised_and_matches_step():
 def test_her_trains_on_the_goal_env():
     from stable_baselines3 import SAC, HerReplayBuffer
 
-    env = gym.make("SoftGraspGoal-v0", max_episode_steps=20)
+    env = gym.make("SoftGraspGoal-v1", max_episode_steps=20)
     model = SAC("MultiInputPolicy", env, replay_buffer_class=HerReplayBuffer,
                 replay_buffer_kwargs={"n_sampled_goal": 2, "goal_selection_strategy": "future"},
                 learning_starts=40, batch_size=32, seed=0, device="cpu")  # fmt: skip
@@ -356,8 +356,8 @@ def _tissue_pixels(img: np.ndarray) -> int:
 
 
 def test_rgb_array_shows_the_tissue():
-    soft = gym.make("SoftGrasp-v0", render_mode="rgb_array", render_width=160, render_height=120)
-    rigid = gym.make("SoftGraspRigid-v0", render_mode="rgb_array", render_width=160, render_height=120)
+    soft = gym.make("SoftGrasp-v1", render_mode="rgb_array", render_width=160, render_height=120)
+    rigid = gym.make("SoftGraspRigid-v1", render_mode="rgb_array", render_width=160, render_height=120)
     soft.reset(seed=0)
     rigid.reset(seed=0)
     img_s = soft.render()
@@ -375,8 +375,8 @@ def test_rgb_array_shows_the_tissue():
 
 
 def test_rendering_does_not_change_the_trajectory():
-    a = gym.make("SoftGrasp-v0", render_mode="rgb_array", render_width=64, render_height=48)
-    b = gym.make("SoftGrasp-v0")
+    a = gym.make("SoftGrasp-v1", render_mode="rgb_array", render_width=64, render_height=48)
+    b = gym.make("SoftGrasp-v1")
     ra = [a.reset(seed=1)]
     rb = [b.reset(seed=1)]
     rng = np.random.default_rng(0)
@@ -401,7 +401,7 @@ def test_human_mode_without_display_is_a_clear_error(monkeypatch):
 
 
 def test_render_without_mode_warns_and_returns_none():
-    env = gym.make("SoftGraspRigid-v0")
+    env = gym.make("SoftGraspRigid-v1")
     env.reset(seed=0)
     with pytest.warns(UserWarning, match="render_mode"):
         assert env.unwrapped.render() is None
@@ -410,7 +410,7 @@ def test_render_without_mode_warns_and_returns_none():
 
 def test_record_video_writes_an_episode(tmp_path):
     pytest.importorskip("moviepy")
-    env = gym.make("SoftGrasp-v0", render_mode="rgb_array", render_width=96, render_height=64, max_episode_steps=8)
+    env = gym.make("SoftGrasp-v1", render_mode="rgb_array", render_width=96, render_height=64, max_episode_steps=8)
     env = gym.wrappers.RecordVideo(env, str(tmp_path / "videos"), episode_trigger=lambda e: True, disable_logger=True)
     env.reset(seed=0)
     done = False
@@ -426,7 +426,7 @@ def test_record_video_writes_an_episode(tmp_path):
 
 
 def test_pickled_fresh_env_behaves_like_the_original():
-    env = gym.make("SoftGrasp-v0")
+    env = gym.make("SoftGrasp-v1")
     twin = pickle.loads(pickle.dumps(env))
     _assert_same(env.reset(seed=0), twin.reset(seed=0))
     act = np.array([0.3, -0.2, -0.5, 0.1], dtype=np.float32)
@@ -436,7 +436,7 @@ def test_pickled_fresh_env_behaves_like_the_original():
     twin.close()
 
 
-@pytest.mark.parametrize("env_id", ["SoftGrasp-v0", "SoftGraspGoal-v0"])
+@pytest.mark.parametrize("env_id", ["SoftGrasp-v1", "SoftGraspGoal-v1"])
 def test_deepcopy_mid_episode_is_exact(env_id):
     env = gym.make(env_id)
     env.reset(seed=5)
@@ -463,7 +463,7 @@ def test_create_and_close_100_envs_leaves_no_client_connected():
     before = _connected_clients()
     ids = []
     for k in range(100):
-        env = gym.make("SoftGrasp-v0", render_mode="rgb_array", render_width=32, render_height=24)
+        env = gym.make("SoftGrasp-v1", render_mode="rgb_array", render_width=32, render_height=24)
         env.reset(seed=k)
         if k % 10 == 0:
             env.render()
@@ -473,7 +473,7 @@ def test_create_and_close_100_envs_leaves_no_client_connected():
     assert _connected_clients() == before
     assert not set(ids) & before
     # an env closed before any reset, and closed twice
-    env = gym.make("SoftGrasp-v0")
+    env = gym.make("SoftGrasp-v1")
     env.close()
     env.close()
 
@@ -485,7 +485,7 @@ def test_jaw_wedge_defeats_rigid_fingers_but_not_soft_ones():
     options = {"jaw_wedge": 0.1, "yaw": 0.1, "lateral_offset": 0.005, "cylinder_xy": (0.0, 0.0)}
     policy = ScriptedGraspPolicy()
     outcome = {}
-    for env_id in ("SoftGraspRigid-v0", "SoftGrasp-v0"):
+    for env_id in ("SoftGraspRigid-v1", "SoftGrasp-v1"):
         env = gym.make(env_id)
         obs, _ = env.reset(seed=0, options=options)
         for _ in range(100):
@@ -494,16 +494,16 @@ def test_jaw_wedge_defeats_rigid_fingers_but_not_soft_ones():
                 break
         outcome[env_id] = (term, info["is_success"], float(obs[OBS_NAMES.index("cyl_axis_z")]))
         env.close()
-    rigid_term, rigid_success, rigid_axis_z = outcome["SoftGraspRigid-v0"]
+    rigid_term, rigid_success, rigid_axis_z = outcome["SoftGraspRigid-v1"]
     assert rigid_term and not rigid_success and rigid_axis_z < math.cos(math.pi / 4)
-    soft_term, soft_success, soft_axis_z = outcome["SoftGrasp-v0"]
+    soft_term, soft_success, soft_axis_z = outcome["SoftGrasp-v1"]
     assert not soft_term and soft_success and soft_axis_z > math.cos(0.1)
 
 
 @pytest.mark.skipif(not softgrasp_env.env._display_available(), reason="needs a display (CI runs under xvfb-run)")
 def test_human_mode_runs_the_gui_with_the_particles_shown():
-    env = gym.make("SoftGrasp-v0", render_mode="human")
-    ref = gym.make("SoftGrasp-v0")
+    env = gym.make("SoftGrasp-v1", render_mode="human")
+    ref = gym.make("SoftGrasp-v1")
     obs, _ = env.reset(seed=0)
     ref_obs, _ = ref.reset(seed=0)
     policy = ScriptedGraspPolicy()
