@@ -165,7 +165,8 @@ def _kwargs_dict(parser: argparse.ArgumentParser, flag: str, pairs: list[tuple[s
     try:
         json.dumps(out)
     except TypeError as exc:  # e.g. a set literal: run.json must be able to record it
-        parser.error(f"{flag}: values must be numbers, strings, booleans, None, lists/tuples or dicts ({exc})")
+        parser.error(f"{flag}: values must be numbers, strings, booleans, None, lists/tuples or dicts, "
+                     f"to be recorded in run.json ({exc})")
     return out
 
 
@@ -189,7 +190,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="save model, replay buffer and VecNormalize stats every N timesteps to checkpoints/")
     parser.add_argument("--resume", type=Path, default=None, metavar="PATH",
                         help="continue the run at PATH (its directory, model.zip or a checkpoint zip): model, "
-                             "replay buffer and observation statistics; the timestep count goes on")  # fmt: skip
+                             "replay buffer and observation statistics, with its settings, writing back into that run "
+                             "directory (--out is not used); the timestep count goes on")  # fmt: skip
     parser.add_argument("--no-progress", action="store_true", help="no progress bar (CI, log files)")
     parser.add_argument("--out", type=Path, default=Path("runs"))
     ns = parser.parse_args(argv)

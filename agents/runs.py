@@ -133,7 +133,7 @@ class LoadedRun:
         """A fresh env as the run made it (same id and kwargs); raw observations."""
         return make_env(self.meta, **extra)
 
-    def make_vec_env(self, n_envs: int = 1) -> VecEnv:
+    def make_vec_env(self, *, n_envs: int = 1) -> VecEnv:
         """A ``DummyVecEnv`` of the run's env with the frozen statistics applied (for SB3's own
         ``evaluate_policy``): observations come out normalised, rewards do not."""
         venv: VecEnv = DummyVecEnv([self.make_env] * n_envs)
