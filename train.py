@@ -122,7 +122,9 @@ def read_progress(path: Path, *, up_to: int) -> list[dict]:
     if not path.exists():
         return []
     rows = []
-    for r in csv.DictReader(open(path)):
+    with open(path, newline="") as f:
+        table = list(csv.DictReader(f))
+    for r in table:
         row = {k: float(v) for k, v in r.items()}
         row["timesteps"], row["diverged"] = int(row["timesteps"]), int(row["diverged"])
         if row["timesteps"] <= up_to:
@@ -165,8 +167,10 @@ def _kwargs_dict(parser: argparse.ArgumentParser, flag: str, pairs: list[tuple[s
     try:
         json.dumps(out)
     except TypeError as exc:  # e.g. a set literal: run.json must be able to record it
-        parser.error(f"{flag}: values must be numbers, strings, booleans, None, lists/tuples or dicts, "
-                     f"to be recorded in run.json ({exc})")
+        parser.error(
+            f"{flag}: values must be numbers, strings, booleans, None, lists/tuples or dicts, "
+            f"to be recorded in run.json ({exc})"
+        )
     return out
 
 
@@ -186,8 +190,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--eval-every", type=int, default=10_000, help="timesteps between evaluations")
     parser.add_argument("--eval-episodes", type=int, default=10)
     parser.add_argument("--learning-starts", type=int, default=None, help="override the preset (off-policy algos)")
-    parser.add_argument("--checkpoint-every", type=int, default=None, metavar="N",
-                        help="save model, replay buffer and VecNormalize stats every N timesteps to checkpoints/")
+    parser.add_argument(
+        "--checkpoint-every",
+        type=int,
+        default=None,
+        metavar="N",
+        help="save model, replay buffer and VecNormalize stats every N timesteps to checkpoints/",
+    )
     parser.add_argument("--resume", type=Path, default=None, metavar="PATH",
                         help="continue the run at PATH (its directory, model.zip or a checkpoint zip): model, "
                              "replay buffer and observation statistics, with its settings, writing back into that run "
@@ -265,7 +274,9 @@ def main(argv: list[str] | None = None) -> int:
     else:
         if not goal:
             if not files.vecnormalize.exists():
-                parser.error(f"--resume: no observation statistics {str(files.vecnormalize)!r} for {str(files.model)!r}")
+                parser.error(
+                    f"--resume: no observation statistics {str(files.vecnormalize)!r} for {str(files.model)!r}"
+                )
             venv = norm = VecNormalize.load(str(files.vecnormalize), venv)
             norm.training, norm.norm_reward = True, False
         model = model_class(algo).load(str(files.model), env=venv, device="cpu")

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import gymnasium as gym
 import numpy as np
 
-import softgrasp_env  # noqa: F401  (registers the ids)
+import softgrasp_env
 
 
 @dataclass

@@ -14,8 +14,8 @@ import shutil
 import numpy as np
 import pytest
 
-import agents.runs as runs
 import train
+from agents import runs
 from agents.evaluate import main as evaluate_main
 from softgrasp_env.env import SoftGraspEnv
 
@@ -146,7 +146,8 @@ def test_resume_continues_model_stats_and_timestep_count(tiny_run, tmp_path):
     meta = json.loads((run / "run.json").read_text())
     assert meta["num_timesteps"] == 128 and meta["env_kwargs"] == {"cylinder_mass": 0.2}
     assert meta["sessions"][0]["at_timesteps"] == 64
-    rows = list(csv.DictReader(open(run / "progress.csv")))
+    with open(run / "progress.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
     assert [int(r["timesteps"]) for r in rows] == [64, 128]
     # 128 steps of a 100-step episode: one has ended, so the training success rate is logged.
     header = (run / "logs" / "progress_from_64.csv").read_text().splitlines()[0].split(",")
@@ -189,7 +190,7 @@ def test_evaluate_and_train_apply_the_same_observation_statistics(tiny_run):
         # train.py evaluates on seed 10_000; the same seed here meets the same episode.
         assert evaluate_main(["--policy", str(run), "--episodes", "1", "--seed", "10000"]) == 0
     assert eval_pairs and len(train_pairs) >= len(eval_pairs)
-    last = train_pairs[-len(eval_pairs):]  # train.py's final evaluation, with the saved statistics
+    last = train_pairs[-len(eval_pairs) :]  # train.py's final evaluation, with the saved statistics
     for (raw_t, norm_t), (raw_e, norm_e) in zip(last, eval_pairs, strict=True):
         np.testing.assert_array_equal(raw_t, raw_e)
         np.testing.assert_array_equal(norm_t, norm_e)
