@@ -3,126 +3,325 @@
     python train.py --env SoftGrasp-v0 --algo sac --timesteps 100000
     python train.py --env SoftGraspGoal-v0               # HER + SAC by default for the goal env
     python train.py --env SoftGraspRigid-v0 --algo ppo --n-envs 2
+    python train.py --env SoftGrasp-v0 --env-kwargs cylinder_mass=0.2 fingers="'segmented'"
+    python train.py --resume runs/SoftGrasp-v0_sac_0 --timesteps 50000   # 50k more steps
 
 Writes ``<out>/<env>_<algo>_<seed>/``: ``model.zip``, ``vecnormalize.pkl`` (observation statistics,
-except for HER), ``run.json`` (the arguments), ``monitor*.csv`` (per episode: return, length,
-is_success) and ``progress.csv`` (per evaluation: timesteps, success rate, mean return, mean final
-lift, wall time). Evaluate a saved model with ``python -m agents.evaluate --policy <dir>/model.zip``.
+except for HER), ``replay_buffer.pkl`` (off-policy algos, for --resume), ``run.json`` (the
+arguments, env kwargs included, and the sessions), ``monitor*.csv`` (per episode: return, length,
+is_success), ``progress.csv`` (per evaluation: timesteps, success rate, mean return, mean final lift,
+wall time), ``logs/`` (SB3's logger: ``progress.csv`` and tensorboard events with
+``rollout/success_rate`` of the training episodes and ``eval/*``; a resumed session writes
+``progress_from_<N>.csv`` and adds events) and, with ``--checkpoint-every``, ``checkpoints/``.
+Evaluate a saved model with ``python -m agents.evaluate --policy <dir>`` (same env, same kwargs).
 """
 
 from __future__ import annotations
 
 import argparse
+import ast
 import csv
 import json
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
-import numpy as np
-from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common import logger as sb3_logger
+from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.callbacks import BaseCallback, CheckpointCallback
 from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNormalize
+from tqdm import tqdm
 
 import softgrasp_env
-from agents.baselines import ALGOS, default_algo, make_model
+from agents.baselines import ALGOS, default_algo, make_model, model_class
 from agents.evaluate import evaluate
+from agents.runs import CHECKPOINT_PREFIX, deterministic_policy, make_env, run_files
+
+
+def _log(message: str) -> None:
+    tqdm.write(message)  # prints above a running progress bar instead of through it
+    sys.stdout.flush()
+
+
+class ProgressBar(BaseCallback):
+    """A tqdm bar over the session's timesteps, counting from the model's total (so a resumed run
+    shows ``60000/110000``). SB3's own ``progress_bar=True`` needs rich (``tqdm.rich``, experimental)
+    on top of tqdm; this needs only tqdm."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.bar: tqdm | None = None
+
+    def _on_training_start(self) -> None:
+        self.bar = tqdm(total=self.locals["total_timesteps"], initial=self.model.num_timesteps, unit="step",
+                        mininterval=1.0, dynamic_ncols=True)  # fmt: skip
+
+    def _on_step(self) -> bool:
+        assert self.bar is not None
+        self.bar.update(self.model.num_timesteps - self.bar.n)
+        return True
+
+    def _on_training_end(self) -> None:
+        if self.bar is not None:
+            self.bar.update(self.model.num_timesteps - self.bar.n)
+            self.bar.close()
 
 
 class EvalProgress(BaseCallback):
-    """Every ``every`` timesteps: success rate of the deterministic policy on ``episodes`` fixed
-    seeds of a separate env, appended to progress.csv."""
+    """At every multiple of ``every`` timesteps: success rate of the deterministic policy on
+    ``episodes`` fixed seeds of a separate env (made like the training envs), appended to
+    progress.csv and recorded as ``eval/*`` in SB3's logger (csv, tensorboard)."""
 
-    def __init__(self, env_id: str, every: int, episodes: int, path: Path, norm: VecNormalize | None) -> None:
+    def __init__(self, env: gym.Env, every: int, episodes: int, path: Path, norm: VecNormalize | None, *,
+                 rows: list[dict] | None = None) -> None:  # fmt: skip
         super().__init__()
-        self.env = gym.make(env_id)
-        self.every, self.episodes, self.path, self.norm = every, episodes, path, norm
+        self.env, self.every, self.episodes, self.path, self.norm = env, every, episodes, path, norm
+        self.rows: list[dict] = list(rows or [])
+        self.wall_offset = float(self.rows[-1]["wall_seconds"]) if self.rows else 0.0
         self.next_at = every
         self.start = time.perf_counter()
-        self.rows: list[dict] = []
 
-    def _policy(self, obs):
-        if self.norm is not None:
-            obs = self.norm.normalize_obs(obs)
-        return self.model.predict(obs, deterministic=True)[0]
+    def _on_training_start(self) -> None:
+        self.next_at = (self.model.num_timesteps // self.every + 1) * self.every
+        self.start = time.perf_counter()
 
     def evaluate_now(self) -> dict:
-        ev = evaluate(self.env, self._policy, episodes=self.episodes, seed=10_000)
-        if self.rows and self.rows[-1]["timesteps"] == self.num_timesteps:
+        steps = self.model.num_timesteps
+        ev = evaluate(self.env, deterministic_policy(self.model, self.norm), episodes=self.episodes, seed=10_000)
+        if self.rows and self.rows[-1]["timesteps"] == steps:
             self.rows.pop()  # the final evaluation supersedes one taken at the same step count
-        row = {"timesteps": self.num_timesteps, "success_rate": ev.success_rate, "mean_return": ev.mean_return,
+        row = {"timesteps": steps, "success_rate": ev.success_rate, "mean_return": ev.mean_return,
                "mean_final_lift": ev.mean_final_lift, "diverged": ev.diverged,
-               "wall_seconds": time.perf_counter() - self.start}  # fmt: skip
+               "wall_seconds": self.wall_offset + time.perf_counter() - self.start}  # fmt: skip
         self.rows.append(row)
         with open(self.path, "w", newline="") as f:
             w = csv.DictWriter(f, fieldnames=list(row))
             w.writeheader()
             w.writerows(self.rows)
-        print(f"[{row['timesteps']:>8d} steps, {row['wall_seconds']:7.0f} s] success {ev.success_rate:.0%}, "
-              f"return {ev.mean_return:.2f}, final lift {ev.mean_final_lift * 100:.2f} cm", flush=True)  # fmt: skip
+        for key in ("success_rate", "mean_return", "mean_final_lift", "diverged"):
+            self.logger.record(f"eval/{key}", row[key])
+        self.logger.dump(steps)
+        _log(f"[{steps:>8d} steps, {row['wall_seconds']:7.0f} s] success {ev.success_rate:.0%}, "
+             f"return {ev.mean_return:.2f}, final lift {ev.mean_final_lift * 100:.2f} cm")  # fmt: skip
         return row
 
     def _on_step(self) -> bool:
         if self.num_timesteps >= self.next_at:
-            self.next_at += self.every
+            self.next_at = (self.num_timesteps // self.every + 1) * self.every
             self.evaluate_now()
         return True
 
-    def _on_training_end(self) -> None:
-        self.env.close()
+
+def read_progress(path: Path, *, up_to: int) -> list[dict]:
+    """The rows of an earlier session's progress.csv taken at most ``up_to`` timesteps (a resume
+    from an earlier checkpoint drops the evaluations after it)."""
+    if not path.exists():
+        return []
+    rows = []
+    with open(path, newline="") as f:
+        table = list(csv.DictReader(f))
+    for r in table:
+        row = {k: float(v) for k, v in r.items()}
+        row["timesteps"], row["diverged"] = int(row["timesteps"]), int(row["diverged"])
+        if row["timesteps"] <= up_to:
+            rows.append(row)
+    return rows
+
+
+def make_logger(folder: Path, csv_name: str) -> sb3_logger.Logger:
+    """SB3's logger writing ``folder/csv_name`` and tensorboard events into ``folder``. Tensorboard
+    is a dependency; an install without it still logs the csv (and says so)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    formats: list[sb3_logger.KVWriter] = [sb3_logger.CSVOutputFormat(str(folder / csv_name))]
+    if sb3_logger.SummaryWriter is not None:
+        formats.append(sb3_logger.TensorBoardOutputFormat(str(folder)))
+    else:
+        _log("note: tensorboard is not installed; logging to csv only (pip install tensorboard)")
+    return sb3_logger.Logger(folder=str(folder), output_formats=formats)
+
+
+def parse_kwarg(item: str) -> tuple[str, Any]:
+    """``key=value`` -> (key, value): the value as a Python literal (``0.2``, ``False``,
+    ``(0.05, 0.08)``, ``'segmented'``), else the text itself (``fingers=segmented``)."""
+    key, sep, text = item.partition("=")
+    key = key.strip()
+    if not sep or not key.isidentifier():
+        raise argparse.ArgumentTypeError(f"expected key=value with key a Python name, got {item!r}")
+    try:
+        value = ast.literal_eval(text)
+    except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
+        value = text
+    return key, value
+
+
+def _kwargs_dict(parser: argparse.ArgumentParser, flag: str, pairs: list[tuple[str, Any]] | None) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in pairs or []:
+        if key in out:
+            parser.error(f"{flag}: {key!r} given twice")
+        out[key] = value
+    try:
+        json.dumps(out)
+    except TypeError as exc:  # e.g. a set literal: run.json must be able to record it
+        parser.error(
+            f"{flag}: values must be numbers, strings, booleans, None, lists/tuples or dicts, "
+            f"to be recorded in run.json ({exc})"
+        )
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python train.py", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
-    parser.add_argument("--env", default="SoftGrasp-v0", choices=softgrasp_env.ENV_IDS)
+    parser.add_argument("--env", default=None, choices=softgrasp_env.ENV_IDS, help="default: SoftGrasp-v0")
+    parser.add_argument("--env-kwargs", nargs="+", type=parse_kwarg, default=None, metavar="KEY=VALUE",
+                        help="keyword arguments of gym.make (values as Python literals, else strings), "
+                             "recorded in run.json; e.g. cylinder_mass=0.2 soft=False")  # fmt: skip
     parser.add_argument("--algo", choices=ALGOS, default=None, help="default: her-sac for the goal env, else sac")
-    parser.add_argument("--timesteps", type=int, default=100_000)
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--n-envs", type=int, default=1, help="parallel envs (subprocesses when > 1)")
+    parser.add_argument("--algo-kwargs", nargs="+", type=parse_kwarg, default=None, metavar="KEY=VALUE",
+                        help="override the algo preset (any keyword of the SB3 class), e.g. n_steps=256")  # fmt: skip
+    parser.add_argument("--timesteps", type=int, default=100_000, help="steps to train (more steps with --resume)")
+    parser.add_argument("--seed", type=int, default=None, help="default 0 (with --resume: the run's seed + its steps)")
+    parser.add_argument("--n-envs", type=int, default=None, help="parallel envs (subprocesses when > 1); default 1")
     parser.add_argument("--eval-every", type=int, default=10_000, help="timesteps between evaluations")
     parser.add_argument("--eval-episodes", type=int, default=10)
     parser.add_argument("--learning-starts", type=int, default=None, help="override the preset (off-policy algos)")
+    parser.add_argument(
+        "--checkpoint-every",
+        type=int,
+        default=None,
+        metavar="N",
+        help="save model, replay buffer and VecNormalize stats every N timesteps to checkpoints/",
+    )
+    parser.add_argument("--resume", type=Path, default=None, metavar="PATH",
+                        help="continue the run at PATH (its directory, model.zip or a checkpoint zip): model, "
+                             "replay buffer and observation statistics, with its settings, writing back into that run "
+                             "directory (--out is not used); the timestep count goes on")  # fmt: skip
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar (CI, log files)")
     parser.add_argument("--out", type=Path, default=Path("runs"))
     ns = parser.parse_args(argv)
-    algo = ns.algo or default_algo(ns.env)
-    goal = ns.env == "SoftGraspGoal-v0"
+    env_kwargs = _kwargs_dict(parser, "--env-kwargs", ns.env_kwargs)
+    algo_kwargs = _kwargs_dict(parser, "--algo-kwargs", ns.algo_kwargs)
+    for name in ("timesteps", "n_envs", "eval_every", "eval_episodes", "checkpoint_every"):
+        if getattr(ns, name) is not None and getattr(ns, name) < 1:
+            parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(ns, name)}")
+
+    files = None
+    if ns.resume is not None:
+        try:
+            files = run_files(ns.resume)
+        except ValueError as exc:
+            parser.error(f"--resume: {exc}")
+        meta = files.meta
+        given = {"env": ns.env, "algo": ns.algo, "env_kwargs": ns.env_kwargs and env_kwargs,
+                 "algo_kwargs": ns.algo_kwargs and algo_kwargs, "n_envs": ns.n_envs,
+                 "learning_starts": ns.learning_starts}  # fmt: skip
+        for name, value in given.items():
+            if value is not None and value != meta.get(name):
+                parser.error(f"--{name.replace('_', '-')} {value!r} differs from the resumed run's "
+                             f"{meta.get(name)!r}: a resumed run keeps its settings")  # fmt: skip
+        env_id, algo, n_envs = meta["env"], meta["algo"], meta["n_envs"]
+        env_kwargs, algo_kwargs = meta.get("env_kwargs", {}), meta.get("algo_kwargs", {})
+        run = files.run_dir
+    else:
+        env_id = ns.env or "SoftGrasp-v0"
+        algo = ns.algo or default_algo(env_id)
+        n_envs = ns.n_envs or 1
+        seed = 0 if ns.seed is None else ns.seed
+        meta = {"env": env_id, "env_kwargs": env_kwargs, "algo": algo, "algo_kwargs": algo_kwargs, "seed": seed,
+                "n_envs": n_envs, "timesteps": ns.timesteps, "eval_every": ns.eval_every,
+                "eval_episodes": ns.eval_episodes, "learning_starts": ns.learning_starts,
+                "checkpoint_every": ns.checkpoint_every, "out": str(ns.out),
+                "softgrasp_env": softgrasp_env.__version__}  # fmt: skip
+        run = ns.out / f"{env_id}_{algo}_{seed}"
+    goal = env_id == "SoftGraspGoal-v0"
     if algo == "her-sac" and not goal:
         parser.error("--algo her-sac needs the goal-conditioned env (SoftGraspGoal-v0)")
-    for name in ("timesteps", "n_envs", "eval_every", "eval_episodes"):
-        if getattr(ns, name) < 1:
-            parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(ns, name)}")
-    if algo == "her-sac" and ns.n_envs != 1:
+    if algo == "her-sac" and n_envs != 1:
         parser.error("--algo her-sac runs with --n-envs 1")
 
-    run = ns.out / f"{ns.env}_{algo}_{ns.seed}"
+    # The evaluation env is made first, in this process: a bad --env-kwargs fails here with the
+    # env's own message (naming the key) rather than inside a subprocess, and before any file is written.
+    try:
+        eval_env = make_env(meta)
+    except (TypeError, ValueError) as exc:
+        if not env_kwargs:
+            raise
+        parser.error(f"--env-kwargs {env_kwargs}: {exc}")
     run.mkdir(parents=True, exist_ok=True)
-    (run / "run.json").write_text(json.dumps({**vars(ns), "out": str(ns.out), "algo": algo,
-                                              "softgrasp_env": softgrasp_env.__version__}, indent=2))  # fmt: skip
-    vec_cls = SubprocVecEnv if ns.n_envs > 1 else DummyVecEnv
-    venv = make_vec_env(ns.env, n_envs=ns.n_envs, seed=ns.seed, vec_env_cls=vec_cls, monitor_dir=str(run),
-                        monitor_kwargs={"info_keywords": ("is_success",)})  # fmt: skip
+    if files is None:
+        (run / "run.json").write_text(json.dumps(meta, indent=2))
+
+    vec_cls = SubprocVecEnv if n_envs > 1 else DummyVecEnv
+    venv = make_vec_env(env_id, n_envs=n_envs, seed=meta["seed"], vec_env_cls=vec_cls, env_kwargs=env_kwargs,
+                        monitor_dir=str(run), monitor_kwargs={"info_keywords": ("is_success",)})  # fmt: skip
     # Positions (cm), velocities and forces (N) differ by orders of magnitude: normalise the
     # observations. HER relabels goals inside its buffer, so the goal env runs unnormalised.
-    norm = None
-    if not goal:
-        venv = norm = VecNormalize(venv, norm_obs=True, norm_reward=False)
-    overrides = {} if ns.learning_starts is None or algo == "ppo" else {"learning_starts": ns.learning_starts}
-    model = make_model(algo, venv, seed=ns.seed, **overrides)
-    progress = EvalProgress(ns.env, ns.eval_every, ns.eval_episodes, run / "progress.csv", norm)
+    norm: VecNormalize | None = None
+    model: BaseAlgorithm
+    if files is None:
+        if not goal:
+            venv = norm = VecNormalize(venv, norm_obs=True, norm_reward=False)
+        overrides = dict(algo_kwargs)
+        if ns.learning_starts is not None and algo != "ppo":
+            overrides["learning_starts"] = ns.learning_starts
+        model = make_model(algo, venv, seed=seed, **overrides)
+        start = 0
+    else:
+        if not goal:
+            if not files.vecnormalize.exists():
+                parser.error(
+                    f"--resume: no observation statistics {str(files.vecnormalize)!r} for {str(files.model)!r}"
+                )
+            venv = norm = VecNormalize.load(str(files.vecnormalize), venv)
+            norm.training, norm.norm_reward = True, False
+        model = model_class(algo).load(str(files.model), env=venv, device="cpu")
+        start = model.num_timesteps
+        if isinstance(model, OffPolicyAlgorithm):
+            if files.replay_buffer.exists():
+                model.load_replay_buffer(str(files.replay_buffer))
+            else:
+                _log(f"note: no replay buffer {files.replay_buffer.name} beside {files.model.name}; "
+                     "continuing with an empty one")  # fmt: skip
+        # Fresh episode starts: re-using the run's seed would replay its first episodes.
+        seed = meta["seed"] + start if ns.seed is None else ns.seed
+        venv.seed(seed)
+        model.set_random_seed(seed)
+        meta.setdefault("sessions", []).append({"resumed_from": str(files.model), "at_timesteps": start,
+                                                "timesteps": ns.timesteps, "seed": seed})  # fmt: skip
+    model.set_logger(make_logger(run / "logs", "progress.csv" if start == 0 else f"progress_from_{start}.csv"))
+
+    progress = EvalProgress(eval_env, ns.eval_every, ns.eval_episodes, run / "progress.csv", norm,
+                            rows=read_progress(run / "progress.csv", up_to=start) if start else None)  # fmt: skip
+    callbacks: list[BaseCallback] = [progress]
+    if ns.checkpoint_every is not None:
+        callbacks.append(CheckpointCallback(save_freq=max(ns.checkpoint_every // n_envs, 1),
+                                            save_path=str(run / "checkpoints"), name_prefix=CHECKPOINT_PREFIX,
+                                            save_replay_buffer=True, save_vecnormalize=True))  # fmt: skip
+    if not ns.no_progress:
+        callbacks.append(ProgressBar())
     tic = time.perf_counter()
-    model.learn(total_timesteps=ns.timesteps, callback=progress)
+    # log_interval=1: SB3 records rollout/success_rate (from Monitor's is_success) at every dump:
+    # every rollout for PPO, every episode for SAC (its default, 4 episodes, skips short runs).
+    model.learn(total_timesteps=ns.timesteps, callback=callbacks, log_interval=1, reset_num_timesteps=files is None)
     seconds = time.perf_counter() - tic
     model.save(run / "model.zip")
     if norm is not None:
         norm.save(str(run / "vecnormalize.pkl"))
-    progress.env = gym.make(ns.env)
+    if isinstance(model, OffPolicyAlgorithm):
+        model.save_replay_buffer(str(run / "replay_buffer.pkl"))
     final = progress.evaluate_now()
-    progress.env.close()
+    model.logger.close()
+    eval_env.close()
     venv.close()
-    print(f"trained {ns.timesteps} steps in {seconds:.0f} s ({ns.timesteps / seconds:.0f} steps/s); "
-          f"final success {final['success_rate']:.0%}; saved to {run}")  # fmt: skip
+    meta["num_timesteps"] = model.num_timesteps
+    (run / "run.json").write_text(json.dumps(meta, indent=2))
+    _log(f"trained {model.num_timesteps - start} steps in {seconds:.0f} s ({(model.num_timesteps - start) / seconds:.0f} "
+         f"steps/s, {model.num_timesteps} in all); final success {final['success_rate']:.0%}; saved to {run}")  # fmt: skip
     return 0
 
 

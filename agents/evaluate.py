@@ -1,7 +1,7 @@
 """Evaluate a policy on a SoftGrasp environment: success rate, return, lift.
 
     python -m agents.evaluate --env SoftGrasp-v0 --policy scripted --episodes 20
-    python -m agents.evaluate --env SoftGrasp-v0 --policy runs/SoftGrasp-v0_sac_0/model.zip
+    python -m agents.evaluate --policy runs/SoftGrasp-v0_sac_0       # the run's env, kwargs and stats
 
 Episodes use seeds ``seed, seed + 1, ...`` so two policies meet the same starts.
 """
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import gymnasium as gym
 import numpy as np
 
-import softgrasp_env  # noqa: F401  (registers the ids)
+import softgrasp_env
 
 
 @dataclass
@@ -51,64 +51,49 @@ def evaluate(env: gym.Env, policy: Callable[[object], np.ndarray], *, episodes: 
 
 
 def load_policy(spec: str, env: gym.Env) -> Callable[[object], np.ndarray]:
-    """``"scripted"``, ``"random"`` or the path of a model saved by train.py (its VecNormalize
-    statistics are picked up from beside it)."""
+    """``"scripted"``, ``"random"`` or a run saved by train.py (its directory, model.zip or a
+    checkpoint zip), loaded by :func:`agents.runs.load_run` (observation statistics applied there)."""
     if spec == "scripted":
         from agents.scripted import ScriptedGraspPolicy
 
         return ScriptedGraspPolicy()
     if spec == "random":
         return lambda obs: env.action_space.sample()
-    import json
-    from pathlib import Path
+    from agents.runs import load_run
 
-    from agents.baselines import model_class
-
-    path = Path(spec)
-    if not path.exists():
-        raise ValueError(f"policy must be 'scripted', 'random' or a saved model file; {spec!r} does not exist")
-    meta = path.parent / "run.json"
-    if not meta.exists():
-        raise ValueError(f"no run.json beside {spec!r}; was it saved by train.py?")
-    algo = json.loads(meta.read_text())["algo"]
-    kwargs = {"env": env} if algo == "her-sac" else {}  # HER's buffer needs the env to load
-    model = model_class(algo).load(str(path), device="cpu", **kwargs)
-    norm = _load_obs_normaliser(path.parent / "vecnormalize.pkl")
-
-    def act(obs):
-        action, _ = model.predict(norm(obs), deterministic=True)
-        return action
-
-    return act
-
-
-def _load_obs_normaliser(path) -> Callable[[object], object]:
-    if not path.exists():
-        return lambda obs: obs
-    import pickle
-
-    with open(path, "rb") as f:
-        vn = pickle.load(f)
-    return vn.normalize_obs
+    return load_run(spec, env=env).policy
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m agents.evaluate", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
-    parser.add_argument("--env", default="SoftGrasp-v0", choices=softgrasp_env.ENV_IDS)
-    parser.add_argument("--policy", default="scripted", help="'scripted', 'random' or a model.zip from train.py")
+    parser.add_argument("--env", default=None, choices=softgrasp_env.ENV_IDS,
+                        help="default: the run's env (with its env kwargs) for a saved model, else SoftGrasp-v0")
+    parser.add_argument("--policy", default="scripted",
+                        help="'scripted', 'random' or a run from train.py (its directory, model.zip or a checkpoint)")
     parser.add_argument("--episodes", type=int, default=10)
     parser.add_argument("--seed", type=int, default=1000)
     ns = parser.parse_args(argv)
-    env = gym.make(ns.env)
+    env = None
     try:
-        policy = load_policy(ns.policy, env)
+        if ns.policy in ("scripted", "random"):
+            env = gym.make(ns.env or "SoftGrasp-v0")
+            policy = load_policy(ns.policy, env)
+        else:
+            from agents.runs import load_run, make_env, run_files
+
+            # The env is re-created as the run made it: same id (unless --env says otherwise), same kwargs.
+            meta = run_files(ns.policy).meta
+            env = make_env(meta, env_id=ns.env)
+            ns.env = env.spec.id if env.spec is not None else meta["env"]
+            policy = load_run(ns.policy, env=env).policy
         env.action_space.seed(ns.seed)
         ev = evaluate(env, policy, episodes=ns.episodes, seed=ns.seed)
     except ValueError as exc:
         parser.error(str(exc))
     finally:
-        env.close()
+        if env is not None:
+            env.close()
     print(f"{ns.env} / {ns.policy}: success {ev.success_rate:.0%} over {ev.episodes} episodes, mean return "
           f"{ev.mean_return:.2f}, mean final lift {ev.mean_final_lift * 100:.2f} cm, diverged {ev.diverged}")  # fmt: skip
     return 0

@@ -59,8 +59,19 @@ def test_train_writes_a_run_that_evaluate_can_load(tmp_path, env_id, algo, steps
     assert all(np.isfinite(float(r["mean_return"])) for r in rows)
     monitor = list(run.glob("*.monitor.csv"))
     assert monitor and "is_success" in monitor[0].read_text().splitlines()[1]
+    assert (run / "replay_buffer.pkl").exists() == (algo != "ppo")  # for --resume
+    # The training episodes' success rate (Monitor's is_success), on the on- and off-policy paths.
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    header = (run / "logs" / "progress.csv").read_text().splitlines()[0].split(",")
+    acc = EventAccumulator(str(run / "logs"))
+    acc.Reload()
+    for key in ("rollout/success_rate", "eval/success_rate"):
+        assert key in header and key in acc.Tags()["scalars"]
     capsys.readouterr()
     assert evaluate_main(["--env", env_id, "--policy", str(run / "model.zip"), "--episodes", "1"]) == 0
+    assert "success" in capsys.readouterr().out
+    assert evaluate_main(["--policy", str(run), "--episodes", "1"]) == 0  # the run's env from run.json
     assert "success" in capsys.readouterr().out
 
 

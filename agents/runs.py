@@ -1,0 +1,159 @@
+"""The files of a train.py run, and loading them back: the one place where a run's observation
+statistics (VecNormalize) are applied for evaluation, by train.py and by ``agents.evaluate`` alike.
+
+A run directory holds ``run.json`` (env id, env kwargs, algo, seed, ...), ``model.zip``,
+``vecnormalize.pkl`` (not for HER), ``replay_buffer.pkl`` (off-policy algos) and, with
+``--checkpoint-every``, ``checkpoints/model_<N>_steps.zip`` with ``model_vecnormalize_<N>_steps.pkl``
+and ``model_replay_buffer_<N>_steps.pkl`` beside it (SB3's CheckpointCallback names).
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import pickle
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecNormalize
+
+import softgrasp_env  # noqa: F401  (registers the ids)
+
+CHECKPOINT_PREFIX = "model"
+_CHECKPOINT = re.compile(rf"^{CHECKPOINT_PREFIX}_(\d+)_steps\.zip$")
+
+
+@dataclass(frozen=True)
+class RunFiles:
+    """Where a run's pieces are, for a model saved at the end (``model.zip``) or at a checkpoint."""
+
+    run_dir: Path
+    model: Path
+    vecnormalize: Path
+    """May not exist (HER runs keep raw observations)."""
+    replay_buffer: Path
+    """May not exist (PPO; runs saved before buffers were kept)."""
+
+    @property
+    def meta(self) -> dict[str, Any]:
+        return json.loads((self.run_dir / "run.json").read_text())
+
+
+def run_files(path: str | Path) -> RunFiles:
+    """The files of the run at ``path``: a run directory, its ``model.zip`` or one of its
+    checkpoints (``checkpoints/model_<N>_steps.zip``). Raises ``ValueError`` when there is no model
+    or no ``run.json`` for it."""
+    path = Path(path)
+    if path.is_dir():
+        path = path / "model.zip"
+    if not path.exists():
+        raise ValueError(f"no saved model at {str(path)!r}: give a run directory, its model.zip or a checkpoint zip")
+    match = _CHECKPOINT.match(path.name)
+    if match:
+        steps = match.group(1)
+        vecnormalize = path.with_name(f"{CHECKPOINT_PREFIX}_vecnormalize_{steps}_steps.pkl")
+        replay_buffer = path.with_name(f"{CHECKPOINT_PREFIX}_replay_buffer_{steps}_steps.pkl")
+    else:
+        vecnormalize, replay_buffer = path.with_name("vecnormalize.pkl"), path.with_name("replay_buffer.pkl")
+    for run_dir in (path.parent, path.parent.parent):  # a checkpoint sits one level down
+        if (run_dir / "run.json").exists():
+            return RunFiles(run_dir, path, vecnormalize, replay_buffer)
+    raise ValueError(f"no run.json beside {str(path)!r} (or one level up); was it saved by train.py?")
+
+
+def make_env(meta: dict[str, Any], *, env_id: str | None = None, **extra: Any) -> gym.Env:
+    """The env a run trained on: ``gym.make(meta["env"], **meta["env_kwargs"])`` (``env_id``
+    replaces the id, e.g. to try a soft-trained policy on the rigid fingers; ``extra`` adds kwargs
+    such as ``render_mode``)."""
+    return gym.make(env_id or meta["env"], **{**meta.get("env_kwargs", {}), **extra})
+
+
+def frozen(stats: VecNormalize) -> VecNormalize:
+    """A copy of ``stats`` that normalises observations and never updates: ``training=False``,
+    ``norm_reward=False`` (evaluation reports the env's own reward)."""
+    # Only the statistics are copied: not the envs under them, nor what depends on them (what
+    # VecNormalize.__getstate__ leaves out; an unpickled one lacks them, so deepcopy would recurse).
+    state = {k: copy.deepcopy(v) for k, v in vars(stats).items() if k not in ("venv", "class_attributes", "returns")}
+    out = VecNormalize.__new__(VecNormalize)
+    out.__setstate__(state)
+    out.training, out.norm_reward = False, False
+    return out
+
+
+def load_stats(path: str | Path) -> VecNormalize | None:
+    """The observation statistics saved by ``VecNormalize.save`` (frozen), or ``None`` when the file
+    does not exist."""
+    path = Path(path)
+    if not path.exists():
+        return None
+    with open(path, "rb") as f:
+        stats = pickle.load(f)
+    return frozen(stats)
+
+
+def normalizer(stats: VecNormalize | None) -> Callable[[Any], Any]:
+    """``obs -> the obs the policy saw in training``: the only function evaluation uses to apply
+    observation statistics (identity without them). Reads ``stats`` live, so train.py's periodic
+    evaluation follows the statistics as they are updated."""
+    if stats is None:
+        return lambda obs: obs
+    return stats.normalize_obs
+
+
+def deterministic_policy(model: BaseAlgorithm, stats: VecNormalize | None) -> Callable[[Any], np.ndarray]:
+    """``obs -> action`` of ``model``'s deterministic policy, observations normalised by ``stats``."""
+    norm = normalizer(stats)
+
+    def act(obs):
+        return model.predict(norm(obs), deterministic=True)[0]
+
+    return act
+
+
+@dataclass
+class LoadedRun:
+    files: RunFiles
+    meta: dict[str, Any]
+    model: BaseAlgorithm
+    stats: VecNormalize | None
+    """Frozen observation statistics (``None`` for HER runs)."""
+
+    @property
+    def policy(self) -> Callable[[Any], np.ndarray]:
+        """The deterministic policy on raw env observations (normalised inside)."""
+        return deterministic_policy(self.model, self.stats)
+
+    def make_env(self, **extra: Any) -> gym.Env:
+        """A fresh env as the run made it (same id and kwargs); raw observations."""
+        return make_env(self.meta, **extra)
+
+    def make_vec_env(self, *, n_envs: int = 1) -> VecEnv:
+        """A ``DummyVecEnv`` of the run's env with the frozen statistics applied (for SB3's own
+        ``evaluate_policy``): observations come out normalised, rewards do not."""
+        venv: VecEnv = DummyVecEnv([self.make_env] * n_envs)
+        if self.stats is None:
+            return venv
+        wrapped = frozen(self.stats)
+        wrapped.set_venv(venv)
+        return wrapped
+
+
+def load_run(path: str | Path, *, env: gym.Env | VecEnv | None = None) -> LoadedRun:
+    """Model, metadata and frozen observation statistics of the run at ``path`` (see
+    :func:`run_files`). HER needs an env to load its buffer; one is made from ``run.json`` unless
+    ``env`` is given."""
+    from agents.baselines import model_class
+
+    files = run_files(path)
+    meta = files.meta
+    kwargs: dict[str, Any] = {}
+    if meta["algo"] == "her-sac":
+        kwargs["env"] = env if env is not None else DummyVecEnv([lambda: make_env(meta)])
+    model = model_class(meta["algo"]).load(str(files.model), device="cpu", **kwargs)
+    return LoadedRun(files, meta, model, load_stats(files.vecnormalize))
