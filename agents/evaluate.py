@@ -1,7 +1,7 @@
 """Evaluate a policy on a SoftGrasp environment: success rate, return, lift.
 
-    python -m agents.evaluate --env SoftGrasp-v0 --policy scripted --episodes 20
-    python -m agents.evaluate --policy runs/SoftGrasp-v0_sac_0       # the run's env, kwargs and stats
+    python -m agents.evaluate --env SoftGrasp-v1 --policy scripted --episodes 20
+    python -m agents.evaluate --policy runs/SoftGrasp-v1_sac_0       # the run's env, kwargs and stats
 
 Episodes use seeds ``seed, seed + 1, ...`` so two policies meet the same starts.
 """
@@ -68,7 +68,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m agents.evaluate", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     parser.add_argument("--env", default=None, choices=softgrasp_env.ENV_IDS,
-                        help="default: the run's env (with its env kwargs) for a saved model, else SoftGrasp-v0")
+                        help="default: the run's env (with its env kwargs) for a saved model, else SoftGrasp-v1")
     parser.add_argument("--policy", default="scripted",
                         help="'scripted', 'random' or a run from train.py (its directory, model.zip or a checkpoint)")
     parser.add_argument("--episodes", type=int, default=10)
@@ -77,7 +77,7 @@ def main(argv: list[str] | None = None) -> int:
     env = None
     try:
         if ns.policy in ("scripted", "random"):
-            env = gym.make(ns.env or "SoftGrasp-v0")
+            env = gym.make(ns.env or "SoftGrasp-v1")
             policy = load_policy(ns.policy, env)
         else:
             from agents.runs import load_run, make_env, run_files

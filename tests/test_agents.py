@@ -18,7 +18,7 @@ from agents.scripted import ScriptedGraspPolicy
 
 
 def test_scripted_policy_succeeds_where_random_actions_do_not():
-    env = gym.make("SoftGraspRigid-v0")
+    env = gym.make("SoftGraspEasyRigid-v1")  # the evaluator, quickly: rigid twin, gentle start
     scripted = evaluate(env, ScriptedGraspPolicy(), episodes=3, seed=100)
     env.action_space.seed(0)
     random = evaluate(env, load_policy("random", env), episodes=3, seed=100)
@@ -28,9 +28,9 @@ def test_scripted_policy_succeeds_where_random_actions_do_not():
 
 
 def test_default_algos_and_presets():
-    assert default_algo("SoftGraspGoal-v0") == "her-sac"
-    assert default_algo("SoftGrasp-v0") == "sac"
-    env = gym.make("SoftGraspRigid-v0")
+    assert default_algo("SoftGraspGoal-v1") == "her-sac"
+    assert default_algo("SoftGrasp-v1") == "sac"
+    env = gym.make("SoftGraspRigid-v1")
     for algo in ("ppo", "sac"):
         model = make_model(algo, env, seed=0, **({"n_steps": 64, "batch_size": 64} if algo == "ppo" else {}))
         assert model.gamma == 0.98
@@ -40,9 +40,9 @@ def test_default_algos_and_presets():
     assert set(ALGOS) == {"ppo", "sac", "her-sac"}
 
 
-@pytest.mark.parametrize(("env_id", "algo", "steps"), [("SoftGraspRigid-v0", "sac", 300),
-                                                       ("SoftGraspRigid-v0", "ppo", 1024),
-                                                       ("SoftGraspGoal-v0", "her-sac", 230)])  # fmt: skip
+@pytest.mark.parametrize(("env_id", "algo", "steps"), [("SoftGraspRigid-v1", "sac", 300),
+                                                       ("SoftGraspRigid-v1", "ppo", 1024),
+                                                       ("SoftGraspGoal-v1", "her-sac", 230)])  # fmt: skip
 def test_train_writes_a_run_that_evaluate_can_load(tmp_path, env_id, algo, steps, capsys):
     import train
 
@@ -79,8 +79,8 @@ def test_train_rejects_bad_arguments(tmp_path):
     import train
 
     with pytest.raises(SystemExit):
-        train.main(["--env", "SoftGrasp-v0", "--algo", "her-sac", "--out", str(tmp_path)])
+        train.main(["--env", "SoftGrasp-v1", "--algo", "her-sac", "--out", str(tmp_path)])
     with pytest.raises(SystemExit):
-        train.main(["--env", "SoftGrasp-v0", "--timesteps", "0", "--out", str(tmp_path)])
+        train.main(["--env", "SoftGrasp-v1", "--timesteps", "0", "--out", str(tmp_path)])
     with pytest.raises(SystemExit):
         evaluate_main(["--policy", str(tmp_path / "missing.zip")])

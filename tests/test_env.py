@@ -356,8 +356,8 @@ def _tissue_pixels(img: np.ndarray) -> int:
 
 
 def test_rgb_array_shows_the_tissue():
-    soft = gym.make("SoftGrasp-v1", render_mode="rgb_array", render_width=160, render_height=120)
-    rigid = gym.make("SoftGraspRigid-v1", render_mode="rgb_array", render_width=160, render_height=120)
+    soft = gym.make("SoftGraspEasy-v1", render_mode="rgb_array", render_width=160, render_height=120)
+    rigid = gym.make("SoftGraspEasyRigid-v1", render_mode="rgb_array", render_width=160, render_height=120)
     soft.reset(seed=0)
     rigid.reset(seed=0)
     img_s = soft.render()

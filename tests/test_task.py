@@ -1,6 +1,6 @@
 """The task (``task="reach"``, the -v1 ids): it needs a closed-loop policy. The gripper starts above
-the cylinder's top, 4-10 cm from the origin in a random direction, the cylinder anywhere within
-+-4 cm, the fingers misaligned (jaw wedge up to +-0.15 rad, yaw up to +-pi/4)."""
+the cylinder's top, 4-14 cm from the origin in a random direction, the cylinder anywhere within
++-7 cm, the fingers misaligned (jaw wedge up to +-0.15 rad, yaw up to +-pi/4)."""
 
 from __future__ import annotations
 
@@ -12,18 +12,12 @@ import softgrasp_env  # noqa: F401
 from agents.scripted import ScriptedGraspPolicy
 
 
-def _open_loop(name: str) -> list[list[float]]:
-    """Constant action sequences a policy without feedback might try (100 steps each)."""
-    down_close_up = [[0, 0, -1, -1]] * 14 + [[0, 0, 0, 1]] * 10
-    seqs = {
-        # the issue's: it solved every v0 episode (the fingers started around the cylinder)
-        "close 15, then up": [[0, 0, 0, 1]] * 15 + [[0, 0, 1, 1]] * 85,
-        "down, close, up": down_close_up + [[0, 0, 1, 1]] * 76,
-        # the best of twelve tried (benchmark below): along +x for 5 steps first
-        "+x 5, down, close, up": [[1, 0, 0, -1]] * 5 + down_close_up + [[0, 0, 1, 1]] * 71,
-        "+x+y 5, down, close, up": [[0.7, 0.7, 0, -1]] * 5 + down_close_up + [[0, 0, 1, 1]] * 71,
-    }
-    return seqs[name]
+def _open_loop(move: tuple[float, float], steps: int) -> list[list[float]]:
+    """A constant action sequence a policy without feedback might try (100 steps): move
+    ``steps`` steps along ``move`` with the fingers open, down 14 steps (the start height), close
+    for 10, then lift."""
+    seq = [[move[0], move[1], 0, -1]] * steps + [[0, 0, -1, -1]] * 14 + [[0, 0, 0, 1]] * 10
+    return seq + [[0, 0, 1, 1]] * (100 - len(seq))
 
 
 def _success_rate(env, policy_or_actions, seeds) -> float:
@@ -40,17 +34,39 @@ def _success_rate(env, policy_or_actions, seeds) -> float:
     return ok / len(seeds)
 
 
-@pytest.mark.parametrize("name", ["close 15, then up", "down, close, up", "+x 5, down, close, up", "+x+y 5, down, close, up"])
+ISSUE_SEQUENCE = [[0, 0, 0, 1]] * 15 + [[0, 0, 1, 1]] * 85
+"""'Close the fingers for 15 steps, then move up': it solved every v0 episode (the fingers
+started around the cylinder)."""
+
+
+@pytest.mark.parametrize("name", ["close 15, then up", "down, close, up"])
 def test_open_loop_actions_rarely_succeed(name):
-    """No constant action sequence solves the task: measured over 40 seeds on the soft env, the
-    twelve tried succeed in 0-2 of 40 (at most 5 %; the rigid twin: at most 3 of 40). Asserted
-    here on 20 seeds: at most 2 (10 %)."""
+    """The task needs feedback: measured over seeds 0-39 on the soft env, 'close 15, then up'
+    succeeds in 0 of 40, 'down, close, up' in 1 of 40. Asserted on 20 other seeds: at most 10 %."""
+    seq = ISSUE_SEQUENCE if name == "close 15, then up" else _open_loop((0.0, 0.0), 0)
     env = gym.make("SoftGrasp-v1")
     try:
-        rate = _success_rate(env, _open_loop(name), range(1000, 1020))
+        rate = _success_rate(env, seq, range(1000, 1020))
     finally:
         env.close()
     assert rate <= 0.10, f"open-loop {name!r} succeeded in {rate:.0%}"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("move,steps", [((0.7, 0.7), 5), ((0.7, 0.7), 9), ((-0.7, -0.7), 9), ((1.0, 0.0), 9),
+                                        ((0.0, 1.0), 9), ((0.7, -0.7), 9)])  # fmt: skip
+def test_no_constant_move_finds_the_cylinder_often(move, steps):
+    """Move a fixed way first, then down, close, lift. Measured over seeds 0-39 (soft), eighteen
+    such sequences: 0-4 of 40 each; the best, along +x+y for 5 or 9 steps, 4 of 40 - at the
+    bound (and 6 of 60 over seeds 0-59): the start and the cylinder are spread as widely as the
+    workspace allows, and the soft fingers, wide open, still catch a cylinder that lies within
+    about 2.5 cm of where they come down."""
+    env = gym.make("SoftGrasp-v1")
+    try:
+        rate = _success_rate(env, _open_loop(move, steps), range(40))
+    finally:
+        env.close()
+    assert rate <= 0.10, f"open-loop move {move} x{steps} succeeded in {rate:.0%}"
 
 
 def test_scripted_policy_solves_the_soft_task():
@@ -73,8 +89,9 @@ def test_reach_start_is_above_and_away_and_options_fix_it():
             sc = env.unwrapped.scene
             cfg = sc.config
             d = np.hypot(*np.subtract(cfg.gripper_xy, (0.0, 0.0)))
-            assert 0.04 - 1e-12 <= d <= 0.10 + 1e-12
-            assert abs(cfg.cylinder_xy[0]) <= 0.04 and abs(cfg.cylinder_xy[1]) <= 0.04
+            assert 0.04 - 1e-12 <= d <= 0.14 + 1e-12
+            assert abs(cfg.cylinder_xy[0]) <= 0.07 and abs(cfg.cylinder_xy[1]) <= 0.07
+            assert abs(cfg.jaw_wedge) <= 0.15 and abs(cfg.yaw) <= np.pi / 4
             tips = sc.start_palm[2] - sc.palm_offset - cfg.finger_half_extents[2]
             assert tips == pytest.approx(cfg.cylinder_height + 0.02)  # 2 cm above its top
         env.reset(seed=0, options={"gripper_xy": (0.05, -0.02), "cylinder_xy": (0.0, 0.0), "jaw_wedge": 0.1})
