@@ -18,6 +18,17 @@ SEGMENT_SPRINGS: tuple[str, ...] = ("motor", "torque")
 FEM_RESOLUTIONS: tuple[str, ...] = ("coarse", "fine")
 TISSUE_FACES: tuple[str, ...] = ("all", "contact")
 
+PALM_HALF_EXTENTS = (0.09, 0.03, 0.01)
+"""Half extents of the gripper's palm box [m]."""
+FINGER_DROP = 0.04
+"""Gap between the palm's underside and the top of a finger core [m] (the finger's upper part is
+not modelled: only the fingertip segment touches anything)."""
+SEGMENT_DEPTH = 0.008
+"""How far a segmented finger's segments stand in front of its core (2 mm boss + 6 mm segment,
+segmented.py) [m]: the pad depth of that kind, as ``TissueConfig.extrude`` is the tissue's."""
+GEOMETRY_MARGIN = 0.001
+"""Clearance the start geometry must leave between the cylinder and the open fingers or palm [m]."""
+
 
 def _check_range(
     owner: str, name: str, value: float, lo: float, hi: float, *, lo_open: bool = False, hi_open: bool = False
@@ -289,7 +300,43 @@ class SceneConfig:
             raise ValueError(f"SceneConfig.tissue must be a TissueConfig, got {type(self.tissue).__name__}")
         if not isinstance(self.sim, SimConfig):
             raise ValueError(f"SceneConfig.sim must be a SimConfig, got {type(self.sim).__name__}")
+        self._check_geometry()
 
+    def _check_geometry(self) -> None:
+        """The scene as a whole: the cylinder fits between the open fingers with their pads on, and
+        the start puts no finger and no palm inside it. Each clash is a ValueError naming the
+        settings and the limit."""
+        fh = self.finger_half_extents
+        pad = {"tissue": self.tissue.extrude, "fem": self.tissue.extrude, "segmented": SEGMENT_DEPTH}.get(self.fingers, 0.0)
+        # narrowest half gap of the open fingers: a wedge turns one edge of each face inwards
+        gap = self.finger_max_opening - pad - fh[2] * math.sin(0.5 * abs(self.jaw_wedge))
+        r = self.cylinder_radius
+        if r + GEOMETRY_MARGIN > gap:
+            raise ValueError(
+                f"SceneConfig: the cylinder (cylinder_radius={r:g} m) does not fit between the open fingers: "
+                f"finger_max_opening={self.finger_max_opening:g} m less the {self.fingers} pad ({pad:g} m) and the "
+                f"jaw_wedge={self.jaw_wedge:g} rad leave a half gap of {gap:.4f} m; the radius must be at most "
+                f"{gap - GEOMETRY_MARGIN:.4f} m")  # fmt: skip
+        h = self.cylinder_height
+        grip_z = 0.5 * h + self.start_height
+        dx = self.cylinder_xy[0] - self.gripper_xy[0]
+        dy = self.cylinder_xy[1] - self.gripper_xy[1] - self.lateral_offset
+        across = abs(dx * math.cos(self.yaw) + dy * math.sin(self.yaw))  # along the closing axis
+        along = abs(-dx * math.sin(self.yaw) + dy * math.cos(self.yaw))  # along the faces
+        tips = grip_z - fh[2] - pad
+        if tips < h and along < fh[1] + r and across + r + GEOMETRY_MARGIN > gap:
+            raise ValueError(
+                f"SceneConfig: the open fingers start inside the cylinder: their tips ({tips:.3f} m up, start_height="
+                f"{self.start_height:g}) are below its top (cylinder_height={h:g}) and it stands {across:.4f} m across "
+                f"the closing axis from the grip (cylinder_xy={self.cylinder_xy}, gripper_xy={self.gripper_xy}, "
+                f"lateral_offset={self.lateral_offset:g}, yaw={self.yaw:g}); with cylinder_radius={r:g} at most "
+                f"{gap - r - GEOMETRY_MARGIN:.4f} m fits")  # fmt: skip
+        palm_bottom = grip_z + fh[2] + FINGER_DROP
+        if palm_bottom < h + GEOMETRY_MARGIN and across < PALM_HALF_EXTENTS[0] + r and along < PALM_HALF_EXTENTS[1] + r:
+            raise ValueError(
+                f"SceneConfig: the palm starts inside the cylinder: its underside is {palm_bottom:.3f} m up, the "
+                f"cylinder (cylinder_height={h:g}) reaches {h:g} m; raise start_height={self.start_height:g} by "
+                f"{h + GEOMETRY_MARGIN - palm_bottom:.3f} m or lower the cylinder")  # fmt: skip
 
     @property
     def soft(self) -> bool:

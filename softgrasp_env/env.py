@@ -6,6 +6,7 @@ the registered ids.
 
 from __future__ import annotations
 
+import itertools
 import math
 import os
 import sys
@@ -43,6 +44,8 @@ RESET_OPTIONS = ("cylinder_xy", "lateral_offset", "yaw", "jaw_wedge", "friction_
 """Keys ``reset(options=...)`` accepts: each fixes a quantity that is otherwise randomised."""
 
 
+GRIP_TOP = 0.20
+"""Highest the arm takes the grip point [m]."""
 REACH_CLEARANCE = 0.02
 """Task 'reach': the open fingertips start this far above the cylinder's top [m]."""
 
@@ -339,8 +342,19 @@ class SoftGraspEnv(gym.Env):
             raise ValueError(f"control_frequency must divide the physics rate 1/sim.dt = {1.0 / sim.dt:g} Hz, "
                              f"got {control_frequency!r}")  # fmt: skip
         # The base scene, validated now so that bad sizes fail at construction, not at reset.
+        # The start height of the task: reach starts the fingertips above the cylinder's top.
+        _check("cylinder_height", cylinder_height, 0.01, 0.5)
+        fh_z = SceneConfig.__dataclass_fields__["finger_half_extents"].default[2]
+        start_height = 0.5 * cylinder_height + fh_z + REACH_CLEARANCE if task == "reach" else 0.05
+        grip_z = 0.5 * cylinder_height + start_height
+        if grip_z > GRIP_TOP - 0.01:
+            tallest = GRIP_TOP - 0.01 - fh_z - REACH_CLEARANCE if task == "reach" else 2.0 * (GRIP_TOP - 0.01 - 0.05)
+            raise ValueError(f"cylinder_height={cylinder_height:g} m is too tall for task={task!r}: the grip would start "
+                             f"{grip_z:.3f} m up, too near the top of the arm's workspace ({GRIP_TOP:g} m); at most "
+                             f"{tallest:.3f} m")  # fmt: skip
         self._base = SceneConfig(fingers=fingers, tissue_faces=tissue_faces, fem_resolution=fem_resolution, cylinder_radius=cylinder_radius, cylinder_height=cylinder_height,
-                                 cylinder_mass=cylinder_mass, finger_force=finger_force, tissue=tissue, sim=sim)  # fmt: skip
+                                 cylinder_mass=cylinder_mass, finger_force=finger_force, tissue=tissue, sim=sim,
+                                 start_height=start_height)  # fmt: skip
         if cylinder_radius - cylinder_radius_range < 0.005:
             raise ValueError(f"cylinder_radius - cylinder_radius_range must be >= 0.005 m, got "
                              f"{cylinder_radius} - {cylinder_radius_range}")  # fmt: skip
@@ -375,11 +389,13 @@ class SoftGraspEnv(gym.Env):
         self.action_space = spaces.Box(-1.0, 1.0, shape=(4,), dtype=np.float32)
         self.observation_space = spaces.Box(-np.inf, np.inf, shape=(len(OBS_NAMES),), dtype=np.float32)
 
+        self._check_range_extremes()
+
         fh = self._base.finger_half_extents
         # Workspace of the grip point: the fingertips may come down to 3 mm above the ground
         # (the tissue's depth included, for both twins alike) and up to 20 cm.
         self._grip_low = np.array([-0.15, -0.15, fh[2] + tissue.extrude + 0.003])
-        self._grip_high = np.array([0.15, 0.15, 0.20])
+        self._grip_high = np.array([0.15, 0.15, GRIP_TOP])
         self._max_lead = 0.02
         self.scene: GraspScene | None = None
         self._renderer = None
@@ -482,6 +498,25 @@ class SoftGraspEnv(gym.Env):
         self._np_random_seed = state["np_random_seed"]
 
     # --- internals ---------------------------------------------------------------------------------
+
+    def _check_range_extremes(self) -> None:
+        """Every corner of the randomisation ranges must be a scene that starts without overlap
+        (SceneConfig's geometry check): the largest cylinder with the widest wedge, at each corner
+        of its square, against each extreme of lateral offset and yaw. A clash is a ValueError
+        naming the ranges, raised when the env is made, not at some later reset."""
+        rg, b = self.ranges, self._base
+        p, lo, yw, w = rg["cylinder_position"], rg["lateral_offset"], rg["yaw"], rg["jaw_wedge"]
+        r = b.cylinder_radius + rg["cylinder_radius"]
+        start = dict(start_height=0.5 * b.cylinder_height + b.finger_half_extents[2] + REACH_CLEARANCE) if self.task == "reach" else {}
+        for sx, sy, so, syaw, sw in itertools.product((-1.0, 1.0), repeat=5):
+            try:
+                replace(b, cylinder_radius=r, cylinder_xy=(sx * p, sy * p), lateral_offset=so * lo, yaw=syaw * yw,
+                        jaw_wedge=sw * w, **start)  # fmt: skip
+            except ValueError as e:
+                raise ValueError(
+                    f"the randomisation ranges reach a scene that cannot start (cylinder_position_range={p:g}, "
+                    f"lateral_offset_range={lo:g}, yaw_range={yw:g}, jaw_wedge_range={w:g}, cylinder_radius_range="
+                    f"{rg['cylinder_radius']:g}, task={self.task!r}): {e}") from None  # fmt: skip
 
     def _draw(self, options: dict[str, Any]) -> SceneConfig:
         """The episode's scene: fixed options, else draws from np_random (always the same number

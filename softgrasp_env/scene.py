@@ -16,19 +16,15 @@ import numpy as np
 import pybullet as p
 from pybullet_utils.bullet_client import BulletClient
 
-from .config import SceneConfig
+from .config import FINGER_DROP, PALM_HALF_EXTENTS, SceneConfig
 from .fem import FemPads, fem_ground_shape
 from .segmented import SegmentedFingers
 from .sim.bullet import RigidRef, connect
 from .sim.world import ShapeSpec, TissueSpec, World
 from .tissue.builder import build_combined_body, core_shape_from_bullet
 
-PALM_HALF_EXTENTS = (0.09, 0.03, 0.01)
 CYLINDER_SHAPE = 1
 """Index of the cylinder among the shapes the tissue sees (see the ``shapes`` list below)."""
-FINGER_DROP = 0.04
-"""Gap between the palm's underside and the top of a finger core [m] (the finger's upper part is
-not modelled: only the fingertip segment touches anything)."""
 FINGER_GEAR_FORCE = 100.0
 """Force limit of the gear that keeps both fingers' travel equal [N]: far above what the motors
 (``finger_force``) or the tissue can make, so it never gives way."""

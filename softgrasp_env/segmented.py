@@ -69,12 +69,13 @@ import numpy as np
 import pybullet as p
 from pybullet_utils.bullet_client import BulletClient
 
-from .config import SceneConfig
+from .config import SEGMENT_DEPTH, SceneConfig
 
 SEGMENT_THICKNESS = 0.006
 """Thickness of a segment along the closing axis x [m]."""
-SEGMENT_STANDOFF = 0.002
-"""Gap between the core's inner face and a segment's back at rest (the pivot boss) [m]."""
+SEGMENT_STANDOFF = SEGMENT_DEPTH - SEGMENT_THICKNESS
+"""Gap between the core's inner face and a segment's back at rest (the pivot boss): 2 mm [m]
+(config.SEGMENT_DEPTH is the whole depth, which the scene's geometry check uses)."""
 SEGMENT_GAP = 0.001
 """Gap between neighbouring segments along y [m]."""
 SEGMENT_DENSITY = 2700.0

@@ -106,3 +106,39 @@ def test_task_is_validated():
         gym.make("SoftGrasp-v1", task="fly")
     with pytest.raises(ValueError, match="approach_range"):
         gym.make("SoftGrasp-v1", approach_range=(0.05, 0.2))
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(cylinder_radius=0.2), r"does not fit between the open fingers.*at most 0\.0510 m"),
+        (dict(cylinder_radius=0.08), r"does not fit between the open fingers"),
+        (dict(cylinder_height=0.5), r"too tall for task='reach'.*at most 0\.140 m"),
+        (dict(cylinder_height=0.5, task="easy"), r"too tall for task='easy'"),
+        (dict(cylinder_radius=0.05), r"randomisation ranges reach a scene that cannot start.*jaw_wedge_range=0\.15"),
+        (dict(task="easy", cylinder_position_range=0.05), r"cylinder_position_range=0\.05.*fingers start inside the cylinder"),
+    ],
+)
+def test_geometry_that_cannot_start_is_refused_when_the_env_is_made(kwargs, match):
+    """Issue 12's clashes: a cylinder wider than the open fingers (0.08 diverged at step 1, 0.12 and
+    0.2 started inside the fingers), a cylinder taller than the start (the palm inside it), and
+    range extremes that put a finger into the cylinder - each a ValueError naming the settings
+    and the limit, at gym.make, not at some later reset."""
+    with pytest.raises(ValueError, match=match):
+        gym.make("SoftGrasp-v1", **kwargs)
+
+
+def test_scene_geometry_check_names_the_palm_and_allows_an_offset_along_the_faces():
+    from softgrasp_env.config import SceneConfig
+
+    with pytest.raises(ValueError, match="palm starts inside the cylinder"):
+        SceneConfig(cylinder_height=0.3)
+    SceneConfig(lateral_offset=0.03)  # past the face's end along y: no overlap (the stability map's cells)
+    with pytest.raises(ValueError, match="fingers start inside the cylinder"):
+        SceneConfig(cylinder_xy=(0.03, 0.0))
+    with pytest.raises(ValueError, match="reset option|does not fit"):
+        env = gym.make("SoftGrasp-v1")
+        try:
+            env.reset(seed=0, options={"cylinder_radius": 0.06})
+        finally:
+            env.close()
