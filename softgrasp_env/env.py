@@ -409,10 +409,13 @@ class SoftGraspEnv(gym.Env):
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)
+        if options is not None and not isinstance(options, dict):
+            raise TypeError(f"reset options must be a dict (or None), got {type(options).__name__}: {options!r}")
         options = dict(options or {})
         unknown = set(options) - set(RESET_OPTIONS)
         if unknown:
             raise ValueError(f"unknown reset option(s) {sorted(unknown)}; allowed: {RESET_OPTIONS}")
+        options = {k: _option_value(k, v) for k, v in options.items()}
         # What a copy needs to rebuild this episode exactly: the generator before the draws.
         self._reset_record = (self.np_random.bit_generator.state, options)
         self._actions = []
@@ -543,7 +546,7 @@ class SoftGraspEnv(gym.Env):
             phi = math.pi * float(u[9])
             vals["gripper_xy"] = (r * math.cos(phi), r * math.sin(phi))
         for k, v in options.items():
-            vals[k] = tuple(float(x) for x in v) if k in ("cylinder_xy", "gripper_xy") else float(v)
+            vals[k] = v  # checked and converted by _option_value
         fs = vals.pop("friction_scale")
         if not 0.0 < fs <= 10.0:
             raise ValueError(f"friction_scale must be in (0, 10], got {fs!r}")
@@ -713,6 +716,28 @@ class SoftGraspGoalEnv(SoftGraspEnv):
             return -1.0
         fo = self._format_obs(obs)
         return float(self.compute_reward(fo["achieved_goal"], fo["desired_goal"], info))
+
+
+def _real(value) -> bool:
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, (bool, np.bool_))
+
+
+def _option_value(name: str, value):
+    """A reset option as the scene takes it: ``cylinder_xy`` / ``gripper_xy`` two finite numbers
+    (a tuple), every other option one finite number; else a TypeError / ValueError naming it."""
+    if name in ("cylinder_xy", "gripper_xy"):
+        if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__len__") or len(value) != 2 \
+                or not all(_real(x) for x in value):  # fmt: skip
+            raise TypeError(f"reset option {name!r} must be two numbers (x, y) in m, got {value!r}")
+        out = tuple(float(x) for x in value)
+        if not all(math.isfinite(x) for x in out):
+            raise ValueError(f"reset option {name!r} must be finite, got {value!r}")
+        return out
+    if not _real(value):
+        raise TypeError(f"reset option {name!r} must be a number, got {type(value).__name__}: {value!r}")
+    if not math.isfinite(float(value)):
+        raise ValueError(f"reset option {name!r} must be finite, got {value!r}")
+    return float(value)
 
 
 def _check(name: str, value: float, lo: float, hi: float, *, lo_open: bool = False) -> None:

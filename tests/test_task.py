@@ -142,3 +142,29 @@ def test_scene_geometry_check_names_the_palm_and_allows_an_offset_along_the_face
             env.reset(seed=0, options={"cylinder_radius": 0.06})
         finally:
             env.close()
+
+
+@pytest.mark.parametrize(
+    "options, error, match",
+    [
+        ("x", TypeError, "reset options must be a dict"),
+        ({"cylinder_xy": 0.0}, TypeError, "'cylinder_xy' must be two numbers"),
+        ({"gripper_xy": (0.0, "b")}, TypeError, "'gripper_xy' must be two numbers"),
+        ({"yaw": "a"}, TypeError, "'yaw' must be a number, got str"),
+        ({"yaw": True}, TypeError, "'yaw' must be a number, got bool"),
+        ({"jaw_wedge": float("nan")}, ValueError, "'jaw_wedge' must be finite"),
+    ],
+)
+def test_reset_options_of_the_wrong_type_name_the_option_and_leave_the_env_usable(options, error, match):
+    """Issue 12 item 5: a wrong-typed option names itself and the type it wants (it used to be
+    "TypeError: 'float' object is not iterable"); the env still resets and steps afterwards,
+    under gym.make's default checker too."""
+    env = gym.make("SoftGraspEasyRigid-v1")
+    try:
+        with pytest.raises(error, match=match):
+            env.reset(seed=0, options=options)
+        obs, _ = env.reset(seed=0, options={"cylinder_xy": np.array([0.005, 0.0]), "yaw": np.float32(0.05)})
+        obs, *_ = env.step(env.action_space.sample())
+        assert np.isfinite(obs).all()
+    finally:
+        env.close()
