@@ -236,6 +236,7 @@ def main(argv: list[str] | None = None) -> int:
                 "n_envs": n_envs, "timesteps": ns.timesteps, "eval_every": ns.eval_every,
                 "eval_episodes": ns.eval_episodes, "learning_starts": ns.learning_starts,
                 "checkpoint_every": ns.checkpoint_every, "out": str(ns.out),
+                "normalized_observations": env_id != "SoftGraspGoal-v1",  # the goal env runs raw (HER)
                 "softgrasp_env": softgrasp_env.__version__}  # fmt: skip
         run = ns.out / f"{env_id}_{algo}_{seed}"
     goal = env_id == "SoftGraspGoal-v1"

@@ -86,14 +86,24 @@ def frozen(stats: VecNormalize) -> VecNormalize:
     return out
 
 
-def load_stats(path: str | Path) -> VecNormalize | None:
+def load_stats(path: str | Path, *, required: bool = False) -> VecNormalize | None:
     """The observation statistics saved by ``VecNormalize.save`` (frozen), or ``None`` when the file
-    does not exist."""
+    does not exist and is not ``required``. A missing required file, or one that does not unpickle
+    to a VecNormalize, is a ValueError naming it: a policy fed raw observations it was trained on
+    normalised ones for fails silently (100 % vs 0 % success, issue 12)."""
     path = Path(path)
     if not path.exists():
+        if required:
+            raise ValueError(f"observation statistics {str(path)!r} are missing: the run was trained on normalised "
+                             "observations and cannot be evaluated without them")  # fmt: skip
         return None
-    with open(path, "rb") as f:
-        stats = pickle.load(f)
+    try:
+        with open(path, "rb") as f:
+            stats = pickle.load(f)
+    except Exception as exc:  # pickle raises many kinds on a damaged file
+        raise ValueError(f"observation statistics {str(path)!r} cannot be read: {type(exc).__name__}: {exc}") from None
+    if not isinstance(stats, VecNormalize):
+        raise ValueError(f"observation statistics {str(path)!r} hold a {type(stats).__name__}, not a VecNormalize")
     return frozen(stats)
 
 
@@ -156,4 +166,6 @@ def load_run(path: str | Path, *, env: gym.Env | VecEnv | None = None) -> Loaded
     if meta["algo"] == "her-sac":
         kwargs["env"] = env if env is not None else DummyVecEnv([lambda: make_env(meta)])
     model = model_class(meta["algo"]).load(str(files.model), device="cpu", **kwargs)
-    return LoadedRun(files, meta, model, load_stats(files.vecnormalize))
+    # runs from before run.json said so: every algo but HER trained on normalised observations
+    required = bool(meta.get("normalized_observations", meta["algo"] != "her-sac"))
+    return LoadedRun(files, meta, model, load_stats(files.vecnormalize, required=required))

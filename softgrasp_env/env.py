@@ -223,7 +223,7 @@ class SoftGraspEnv(gym.Env):
     finer default pad: 14 % less; the rigid twin: 0.9 %). The env lifts at full speed, so its
     heaviest cylinder is nearer 0.4 kg than 0.55.
 
-    Cost (``benchmarks/throughput.py``, this 2-core machine, quiet): about 4,000 physics steps/s
+    Cost (``benchmarks/throughput.py``, this 2-core machine, quiet): about 4,900 physics steps/s
     with the soft fingers (60 particles on the inner faces and tips), 10,400 with the rigid twin;
     ``preset="fast"`` 5,200; every face covered at 10,000 per m^2 (the previous default) 1,800.
     An env step is 12 physics steps. ``fingers="segmented"`` runs at about half the soft speed,
@@ -510,11 +510,10 @@ class SoftGraspEnv(gym.Env):
         rg, b = self.ranges, self._base
         p, lo, yw, w = rg["cylinder_position"], rg["lateral_offset"], rg["yaw"], rg["jaw_wedge"]
         r = b.cylinder_radius + rg["cylinder_radius"]
-        start = dict(start_height=0.5 * b.cylinder_height + b.finger_half_extents[2] + REACH_CLEARANCE) if self.task == "reach" else {}
         for sx, sy, so, syaw, sw in itertools.product((-1.0, 1.0), repeat=5):
             try:
                 replace(b, cylinder_radius=r, cylinder_xy=(sx * p, sy * p), lateral_offset=so * lo, yaw=syaw * yw,
-                        jaw_wedge=sw * w, **start)  # fmt: skip
+                        jaw_wedge=sw * w)  # fmt: skip
             except ValueError as e:
                 raise ValueError(
                     f"the randomisation ranges reach a scene that cannot start (cylinder_position_range={p:g}, "
@@ -552,8 +551,7 @@ class SoftGraspEnv(gym.Env):
             raise ValueError(f"friction_scale must be in (0, 10], got {fs!r}")
         tissue = replace(b.tissue, friction_static=b.tissue.friction_static * fs,
                          friction_dynamic=b.tissue.friction_dynamic * fs)  # fmt: skip
-        start = dict(start_height=0.5 * b.cylinder_height + b.finger_half_extents[2] + REACH_CLEARANCE) if self.task == "reach" else {}
-        return replace(b, tissue=tissue, ground_friction=b.ground_friction * fs, **start, **vals)
+        return replace(b, tissue=tissue, ground_friction=b.ground_friction * fs, **vals)  # the task's start height is b's
 
     def _build(self, options: dict[str, Any]) -> None:
         cfg = self._draw(options)

@@ -202,3 +202,19 @@ def test_evaluate_and_train_apply_the_same_observation_statistics(tiny_run):
     venv.seed(10_000)
     np.testing.assert_allclose(venv.reset()[0], norm, rtol=1e-6)  # SB3's view: the same numbers
     venv.close()
+
+
+def test_evaluation_refuses_missing_or_damaged_observation_statistics(tiny_run, tmp_path):
+    """A run trained on normalised observations cannot be evaluated without its statistics (it used
+    to run on raw observations without a word: 100 % vs 0 % success), nor with a damaged file."""
+    import shutil
+
+    run = tmp_path / "run"
+    shutil.copytree(tiny_run[0], run)
+    assert runs.load_run(run).stats is not None
+    (run / "vecnormalize.pkl").unlink()
+    with pytest.raises(ValueError, match=r"vecnormalize\.pkl' are missing"):
+        runs.load_run(run)
+    (run / "vecnormalize.pkl").write_bytes(b"not a pickle")
+    with pytest.raises(ValueError, match=r"vecnormalize\.pkl' cannot be read"):
+        runs.load_run(run)
