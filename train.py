@@ -22,6 +22,8 @@ import argparse
 import ast
 import csv
 import json
+import os
+import shlex
 import sys
 import time
 from pathlib import Path
@@ -38,6 +40,7 @@ from tqdm import tqdm
 
 import softgrasp_env
 from agents.baselines import ALGOS, default_algo, make_model, model_class
+from agents.cards import hyperparameters
 from agents.evaluate import evaluate
 from agents.runs import CHECKPOINT_PREFIX, deterministic_policy, make_env, run_files
 
@@ -142,6 +145,22 @@ def make_logger(folder: Path, csv_name: str) -> sb3_logger.Logger:
     else:
         _log("note: tensorboard is not installed; logging to csv only (pip install tensorboard)")
     return sb3_logger.Logger(folder=str(folder), output_formats=formats)
+
+
+def _unwritable(run: Path) -> str | None:
+    """Why the run directory ``run`` cannot be made and written to, or ``None``: checked before
+    anything is built, so a bad ``--out`` costs no training."""
+    for name in ("model.zip", "vecnormalize.pkl", "run.json"):
+        if (run / name).is_dir():
+            return f"{str(run / name)!r} is a directory: the run's {name} cannot be saved there"
+    parent = run
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir():
+        return f"--out: {str(parent)!r} is a file, so {str(run)!r} cannot be made"
+    if not os.access(parent, os.W_OK | os.X_OK):
+        return f"--out: {str(parent)!r} is not writable, so {str(run)!r} cannot be made"
+    return None
 
 
 def parse_kwarg(item: str) -> tuple[str, Any]:
@@ -253,6 +272,10 @@ def main(argv: list[str] | None = None) -> int:
         if not env_kwargs:
             raise
         parser.error(f"--env-kwargs {env_kwargs}: {exc}")
+    problem = _unwritable(run)
+    if problem:
+        eval_env.close()
+        parser.error(problem)
     run.mkdir(parents=True, exist_ok=True)
     if files is None:
         (run / "run.json").write_text(json.dumps(meta, indent=2))
@@ -271,6 +294,7 @@ def main(argv: list[str] | None = None) -> int:
         if ns.learning_starts is not None and algo != "ppo":
             overrides["learning_starts"] = ns.learning_starts
         model = make_model(algo, venv, seed=seed, **overrides)
+        meta["hyperparameters"] = hyperparameters(meta)  # the preset as it stands, with the overrides
         start = 0
     else:
         if not goal:
@@ -310,16 +334,28 @@ def main(argv: list[str] | None = None) -> int:
     # every rollout for PPO, every episode for SAC (its default, 4 episodes, skips short runs).
     model.learn(total_timesteps=ns.timesteps, callback=callbacks, log_interval=1, reset_num_timesteps=files is None)
     seconds = time.perf_counter() - tic
+    saved_at = time.time()
     model.save(run / "model.zip")
     if norm is not None:
         norm.save(str(run / "vecnormalize.pkl"))
     if isinstance(model, OffPolicyAlgorithm):
         model.save_replay_buffer(str(run / "replay_buffer.pkl"))
+    # SB3 saves elsewhere without a word when the name is taken by a folder (model.zip_2): check.
+    for name in ("model.zip",) + (("vecnormalize.pkl",) if norm is not None else ()):
+        written = run / name
+        if not written.is_file() or written.stat().st_mtime < saved_at - 1.0:
+            raise SystemExit(f"train.py: error: {str(written)!r} was not written; the trained model is not saved")
     final = progress.evaluate_now()
     model.logger.close()
     eval_env.close()
     venv.close()
     meta["num_timesteps"] = model.num_timesteps
+    session = {"command": " ".join(["python", "train.py", *map(shlex.quote, sys.argv[1:] if argv is None else argv)]),
+               "timesteps_trained": model.num_timesteps - start, "train_seconds": round(seconds, 1)}  # fmt: skip
+    if files is None:
+        meta.update(session)
+    else:
+        meta["sessions"][-1].update(session)
     (run / "run.json").write_text(json.dumps(meta, indent=2))
     _log(f"trained {model.num_timesteps - start} steps in {seconds:.0f} s ({(model.num_timesteps - start) / seconds:.0f} "
          f"steps/s, {model.num_timesteps} in all); final success {final['success_rate']:.0%}; saved to {run}")  # fmt: skip

@@ -73,6 +73,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="'scripted', 'random' or a run from train.py (its directory, model.zip or a checkpoint)")
     parser.add_argument("--episodes", type=int, default=10)
     parser.add_argument("--seed", type=int, default=1000)
+    parser.add_argument("--other-env", action="store_true",
+                        help="allow --env to differ from the run's env (same spaces), e.g. a soft-trained policy "
+                             "on SoftGraspRigid-v1")  # fmt: skip
     ns = parser.parse_args(argv)
     env = None
     try:
@@ -86,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
             meta = run_files(ns.policy).meta
             env = make_env(meta, env_id=ns.env)
             ns.env = env.spec.id if env.spec is not None else meta["env"]
-            policy = load_run(ns.policy, env=env).policy
+            policy = load_run(ns.policy, env=env, other_env=ns.other_env).policy
         env.action_space.seed(ns.seed)
         ev = evaluate(env, policy, episodes=ns.episodes, seed=ns.seed)
     except ValueError as exc:

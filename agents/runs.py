@@ -13,6 +13,7 @@ import copy
 import json
 import pickle
 import re
+import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,7 +43,41 @@ class RunFiles:
 
     @property
     def meta(self) -> dict[str, Any]:
-        return json.loads((self.run_dir / "run.json").read_text())
+        """``run.json``, checked: a ValueError naming the file when it cannot be read or lacks what
+        loading needs (env id and algo)."""
+        return read_meta(self.run_dir / "run.json")
+
+
+_META_KEYS = {"env": str, "algo": str, "env_kwargs": dict}
+
+
+def read_meta(path: Path) -> dict[str, Any]:
+    try:
+        meta = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{str(path)!r} cannot be read: {type(exc).__name__}: {exc}") from None
+    if not isinstance(meta, dict):
+        raise ValueError(f"{str(path)!r} holds a {type(meta).__name__}, not the object train.py writes")
+    for key, kind in _META_KEYS.items():
+        if not isinstance(meta.get(key, {} if kind is dict else None), kind):
+            raise ValueError(f"{str(path)!r}: {key!r} must be a {kind.__name__}, got {meta.get(key)!r}")
+    return meta
+
+
+def saved_algo(model: Path) -> str | None:
+    """The SB3 algorithm a model zip was saved by ("ppo" or "sac"), told by the attributes each
+    saves in the zip's ``data`` entry (PPO's clip range, SAC's entropy target); ``None`` when the
+    zip says neither."""
+    try:
+        with zipfile.ZipFile(model) as archive:
+            data = json.loads(archive.read("data"))
+    except (OSError, KeyError, zipfile.BadZipFile, json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{str(model)!r} is not a model saved by stable-baselines3: {type(exc).__name__}: {exc}") from None
+    if "clip_range" in data and "n_epochs" in data:
+        return "ppo"
+    if "target_entropy" in data:
+        return "sac"
+    return None
 
 
 def run_files(path: str | Path) -> RunFiles:
@@ -72,6 +107,27 @@ def make_env(meta: dict[str, Any], *, env_id: str | None = None, **extra: Any) -
     replaces the id, e.g. to try a soft-trained policy on the rigid fingers; ``extra`` adds kwargs
     such as ``render_mode``)."""
     return gym.make(env_id or meta["env"], **{**meta.get("env_kwargs", {}), **extra})
+
+
+def check_env_matches(meta: dict[str, Any], env: gym.Env | VecEnv, run_json: Path | str, *,
+                      other_id: bool = False) -> None:
+    """A ValueError naming ``run_json`` and the mismatch when ``env`` is not the env the run
+    trained on: another id (unless ``other_id``, e.g. a soft-trained policy tried on the rigid twin
+    on purpose), or, always, other observation or action spaces (a SoftGrasp model on the goal
+    env's dict observations)."""
+    spec = getattr(env, "spec", None)
+    env_id = spec.id if spec is not None else None
+    if env_id is not None and env_id != meta["env"] and not other_id:
+        raise ValueError(f"the env is {env_id!r} but {str(run_json)!r} trained on {meta['env']!r} "
+                         "(evaluate.py: add --other-env to run it there on purpose)")  # fmt: skip
+    reference = make_env(meta)
+    try:
+        for name in ("observation_space", "action_space"):
+            if getattr(env, name) != getattr(reference, name):
+                raise ValueError(f"the env's {name} {getattr(env, name)} is not the {getattr(reference, name)} "
+                                 f"that {str(run_json)!r} ({meta['env']!r}) trained on")  # fmt: skip
+    finally:
+        reference.close()
 
 
 def frozen(stats: VecNormalize) -> VecNormalize:
@@ -154,14 +210,27 @@ class LoadedRun:
         return wrapped
 
 
-def load_run(path: str | Path, *, env: gym.Env | VecEnv | None = None) -> LoadedRun:
+def load_run(path: str | Path, *, env: gym.Env | VecEnv | None = None, other_env: bool = False) -> LoadedRun:
     """Model, metadata and frozen observation statistics of the run at ``path`` (see
     :func:`run_files`). HER needs an env to load its buffer; one is made from ``run.json`` unless
-    ``env`` is given."""
+    ``env`` is given. A given ``env`` must be the run's (:func:`check_env_matches`; another id
+    with the same spaces only with ``other_env``). ValueErrors name the file and what is wrong: a
+    damaged ``run.json``, a model saved by another algo than it says, missing statistics."""
     from agents.baselines import model_class
 
     files = run_files(path)
     meta = files.meta
+    from agents.baselines import ALGOS
+
+    if meta["algo"] not in ALGOS:
+        raise ValueError(f"{str(files.run_dir / 'run.json')!r} names algo {meta['algo']!r}, not one of {ALGOS}")
+    found = saved_algo(files.model)
+    expected = "sac" if meta["algo"] == "her-sac" else meta["algo"]
+    if found is not None and found != expected:
+        raise ValueError(f"{str(files.model)!r} holds a {found.upper()} model but "
+                         f"{str(files.run_dir / 'run.json')!r} says algo {meta['algo']!r}")  # fmt: skip
+    if env is not None:
+        check_env_matches(meta, env, files.run_dir / "run.json", other_id=other_env)
     kwargs: dict[str, Any] = {}
     if meta["algo"] == "her-sac":
         kwargs["env"] = env if env is not None else DummyVecEnv([lambda: make_env(meta)])

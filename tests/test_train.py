@@ -137,25 +137,25 @@ def test_resume_continues_model_stats_and_timestep_count(tiny_run, tmp_path):
     first = runs.load_run(run)
     assert first.model.num_timesteps == 64
     count = first.stats.obs_rms.count
-    assert train.main(["--resume", str(run), "--timesteps", "64", "--eval-every", "64", "--eval-episodes", "1",
+    assert train.main(["--resume", str(run), "--timesteps", "128", "--eval-every", "64", "--eval-episodes", "1",
                        "--no-progress"]) == 0  # fmt: skip
     resumed = runs.load_run(run)
-    assert resumed.model.num_timesteps == 128
-    # The statistics went on from the saved ones: the resumed session's first reset, then 64 steps.
-    assert resumed.stats.obs_rms.count == pytest.approx(count + 1 + 64)
+    assert resumed.model.num_timesteps == 192
+    # The statistics went on from the saved ones: the resumed session's first reset, then 128 steps.
+    assert resumed.stats.obs_rms.count == pytest.approx(count + 1 + 128)
     meta = json.loads((run / "run.json").read_text())
-    assert meta["num_timesteps"] == 128 and meta["env_kwargs"] == {"cylinder_mass": 0.2}
+    assert meta["num_timesteps"] == 192 and meta["env_kwargs"] == {"cylinder_mass": 0.2}
     assert meta["sessions"][0]["at_timesteps"] == 64
     with open(run / "progress.csv", newline="") as f:
         rows = list(csv.DictReader(f))
-    assert [int(r["timesteps"]) for r in rows] == [64, 128]
-    # 128 steps of a 100-step episode: one has ended, so the training success rate is logged.
+    assert [int(r["timesteps"]) for r in rows] == [64, 128, 192]
+    # 128 steps of fresh 100-step episodes: one has ended, so the training success rate is logged.
     header = (run / "logs" / "progress_from_64.csv").read_text().splitlines()[0].split(",")
     assert "rollout/success_rate" in header and "eval/success_rate" in header
     acc = EventAccumulator(str(run / "logs"))
     acc.Reload()
     steps = [e.step for e in acc.Scalars("eval/success_rate")]
-    assert steps[0] == 64 and steps[-1] == 128
+    assert steps[0] == 64 and steps[-1] == 192
     assert "rollout/success_rate" in acc.Tags()["scalars"]
     # A resumed run keeps its settings.
     with pytest.raises(SystemExit):
@@ -218,3 +218,61 @@ def test_evaluation_refuses_missing_or_damaged_observation_statistics(tiny_run, 
     (run / "vecnormalize.pkl").write_bytes(b"not a pickle")
     with pytest.raises(ValueError, match=r"vecnormalize\.pkl' cannot be read"):
         runs.load_run(run)
+
+
+def test_run_json_records_the_command_steps_time_and_hyperparameters(tiny_run):
+    meta = json.loads((tiny_run[0] / "run.json").read_text())
+    assert meta["command"].startswith("python train.py --env SoftGraspEasyRigid-v1 --algo ppo")
+    assert "cylinder_mass=0.2" in meta["command"]
+    # PPO collects whole rollouts: the steps really trained are reported, not the ones asked for
+    assert meta["timesteps_trained"] == meta["num_timesteps"] >= 64
+    assert meta["train_seconds"] > 0
+    hp = meta["hyperparameters"]
+    assert hp["n_steps"] == 64 and hp["batch_size"] == 64 and hp["policy_kwargs"] == {"net_arch": [64, 64]}
+
+
+def test_evaluation_refuses_a_damaged_run_json_or_a_model_of_another_algo(tiny_run, tmp_path):
+    run = tmp_path / "run"
+    shutil.copytree(tiny_run[0], run)
+    meta = json.loads((run / "run.json").read_text())
+    (run / "run.json").write_text(json.dumps({**meta, "algo": "sac"}))
+    with pytest.raises(ValueError, match=r"model\.zip' holds a PPO model but .*run\.json' says algo 'sac'"):
+        runs.load_run(run)
+    (run / "run.json").write_text(json.dumps({**meta, "algo": "dqn"}))
+    with pytest.raises(ValueError, match=r"run\.json' names algo 'dqn'"):
+        runs.load_run(run)
+    (run / "run.json").write_text(json.dumps({**meta, "env": 3}))
+    with pytest.raises(ValueError, match=r"run\.json': 'env' must be a str"):
+        runs.load_run(run)
+    (run / "run.json").write_text('{"env": "SoftGrasp-v1",')
+    with pytest.raises(ValueError, match=r"run\.json' cannot be read: JSONDecodeError"):
+        runs.load_run(run)
+    (run / "run.json").write_text(json.dumps(meta))
+    (run / "model.zip").write_bytes(b"not a zip")
+    with pytest.raises(ValueError, match=r"model\.zip' is not a model saved by stable-baselines3"):
+        runs.load_run(run)
+
+
+def test_evaluation_refuses_another_env_unless_asked_and_never_other_spaces(tiny_run, capsys):
+    run = str(tiny_run[0])
+    with pytest.raises(SystemExit):
+        evaluate_main(["--policy", run, "--env", "SoftGraspRigid-v1", "--episodes", "1"])
+    assert "trained on 'SoftGraspEasyRigid-v1'" in capsys.readouterr().err
+    # on purpose: the same spaces, another id
+    assert evaluate_main(["--policy", run, "--env", "SoftGraspRigid-v1", "--other-env", "--episodes", "1"]) == 0
+    assert "SoftGraspRigid-v1" in capsys.readouterr().out
+    with pytest.raises(SystemExit):
+        evaluate_main(["--policy", run, "--env", "SoftGraspGoal-v1", "--other-env", "--episodes", "1"])
+    assert "observation_space Dict(" in capsys.readouterr().err
+
+
+def test_train_checks_its_output_before_training(tmp_path, capsys):
+    (tmp_path / "file").write_text("")
+    with pytest.raises(SystemExit):
+        train.main([*TINY_PPO, "--out", str(tmp_path / "file" / "runs")])
+    assert "is a file" in capsys.readouterr().err
+    (tmp_path / "runs" / f"{ENV}_ppo_0" / "model.zip").mkdir(parents=True)
+    with pytest.raises(SystemExit):
+        train.main([*TINY_PPO, "--out", str(tmp_path / "runs")])
+    assert "model.zip' is a directory" in capsys.readouterr().err
+    assert not (tmp_path / "runs" / f"{ENV}_ppo_0" / "run.json").exists()  # nothing written

@@ -1,0 +1,257 @@
+"""The trained baselines shipped in ``agents/trained/``: publishing a train.py run there with its
+model card, reading the cards back, and the results table.
+
+    python -m agents.cards publish runs/SoftGrasp-v1_ppo_0 runs/SoftGraspRigid-v1_ppo_0 ...
+    python -m agents.cards table                 # the results table (scripted measured live)
+
+``publish`` evaluates each run over 100 seeded episodes (seeds 1000-1099, the seeds
+``agents.evaluate`` uses, so scripted and learned policies meet the same starts), then copies into
+``agents/trained/<env>_<algo>_<seed>/`` what loading and the learning curves need: ``model.zip``,
+``vecnormalize.pkl`` (not for HER), ``run.json``, ``progress.csv`` (train.py's periodic
+evaluations) and ``training.csv`` (the columns of SB3's log the curves use). The replay buffer
+stays behind: it is hundreds of MB and only needed to resume. The card is ``card.json`` (read by
+the tests and the table) and ``README.md`` (the same, for people).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import platform
+import shlex
+import shutil
+import sys
+from pathlib import Path
+from typing import Any
+
+TRAINED = Path(__file__).resolve().parent / "trained"
+EPISODES, SEED = 100, 1000
+HYPERPARAMS_FILE = {"ppo": "agents/hyperparams/ppo.yml", "sac": "agents/hyperparams/sac.yml",
+                    "her-sac": "agents/hyperparams/sac.yml"}  # fmt: skip
+TRAINING_COLUMNS = ("time/total_timesteps", "time/time_elapsed", "rollout/success_rate", "rollout/ep_rew_mean",
+                    "rollout/ep_len_mean")  # fmt: skip
+
+
+def shipped() -> list[Path]:
+    """The directories of the shipped models, sorted by name."""
+    return sorted(p.parent for p in TRAINED.glob("*/card.json"))
+
+
+def read_card(model_dir: Path) -> dict[str, Any]:
+    return json.loads((Path(model_dir) / "card.json").read_text())
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, type):
+        return value.__name__
+    return value
+
+
+def hyperparameters(meta: dict[str, Any]) -> dict[str, Any]:
+    """Every keyword the SB3 class got: as train.py recorded them, else the preset of
+    ``agents/baselines.py`` as it stands updated by the run's ``--algo-kwargs`` (and
+    ``--learning-starts``)."""
+    from agents.baselines import PRESETS
+
+    if meta.get("hyperparameters"):  # recorded by train.py since the baselines were shipped
+        return meta["hyperparameters"]
+    out = {**PRESETS[meta["algo"]], **meta.get("algo_kwargs", {})}
+    if meta.get("learning_starts") is not None and meta["algo"] != "ppo":
+        out["learning_starts"] = meta["learning_starts"]
+    return _jsonable(out)
+
+
+def command(meta: dict[str, Any]) -> str:
+    """The train.py command that made the run: recorded by train.py, else rebuilt from run.json."""
+    if meta.get("command"):
+        return meta["command"]
+    args = ["python", "train.py", "--env", meta["env"], "--algo", meta["algo"], "--seed", str(meta["seed"]),
+            "--timesteps", str(meta["timesteps"]), "--eval-every", str(meta["eval_every"]),
+            "--eval-episodes", str(meta["eval_episodes"])]  # fmt: skip
+    if meta.get("env_kwargs"):
+        args += ["--env-kwargs", *(f"{k}={v!r}" for k, v in meta["env_kwargs"].items())]
+    if meta.get("algo_kwargs"):
+        args += ["--algo-kwargs", *(f"{k}={v!r}" for k, v in meta["algo_kwargs"].items())]
+    return " ".join(shlex.quote(a) for a in args)
+
+
+def _training_log(run_dir: Path) -> list[dict[str, str]]:
+    path = run_dir / "logs" / "progress.csv"
+    if not path.exists():
+        return []
+    with open(path, newline="") as f:
+        return [{k: row.get(k, "") for k in TRAINING_COLUMNS} for row in csv.DictReader(f)]
+
+
+def train_seconds(meta: dict[str, Any], log: list[dict[str, str]]) -> float | None:
+    """Wall time of the training: recorded by train.py, else the last ``time/time_elapsed`` of SB3's log."""
+    if meta.get("train_seconds") is not None:
+        return float(meta["train_seconds"])
+    times = [float(r["time/time_elapsed"]) for r in log if r.get("time/time_elapsed")]
+    return max(times) if times else None
+
+
+def publish(run_dir: Path, *, episodes: int = EPISODES, seed: int = SEED, dest: Path = TRAINED) -> Path:
+    """Evaluate the run at ``run_dir`` and copy it, with its card, to ``dest/<run name>/``."""
+    import numpy as np
+    import stable_baselines3
+    import torch
+
+    import softgrasp_env
+    from agents.evaluate import evaluate
+    from agents.runs import load_run
+
+    loaded = load_run(run_dir)
+    meta = loaded.meta
+    env = loaded.make_env()
+    try:
+        env.action_space.seed(seed)
+        ev = evaluate(env, loaded.policy, episodes=episodes, seed=seed)
+    finally:
+        env.close()
+    log = _training_log(loaded.files.run_dir)
+    out = dest / loaded.files.run_dir.name
+    if out.exists():
+        shutil.rmtree(out)
+    out.mkdir(parents=True)
+    shutil.copy2(loaded.files.model, out / "model.zip")
+    if loaded.files.vecnormalize.exists():
+        shutil.copy2(loaded.files.vecnormalize, out / "vecnormalize.pkl")
+    for name in ("run.json", "progress.csv"):
+        if (loaded.files.run_dir / name).exists():
+            shutil.copy2(loaded.files.run_dir / name, out / name)
+    with open(out / "training.csv", "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=TRAINING_COLUMNS)
+        writer.writeheader()
+        writer.writerows(log)
+    card = {
+        "name": out.name,
+        "env": meta["env"],
+        "env_version": int(meta["env"].rsplit("-v", 1)[1]),
+        "env_kwargs": meta.get("env_kwargs", {}),
+        "algo": meta["algo"],
+        "hyperparameters_file": HYPERPARAMS_FILE[meta["algo"]],
+        "hyperparameters": hyperparameters(meta),
+        "timesteps": int(loaded.model.num_timesteps),
+        "seed": int(meta["seed"]),
+        "train_seconds": train_seconds(meta, log),
+        "command": command(meta),
+        "evaluation": {
+            "episodes": ev.episodes,
+            "seeds": f"{seed}-{seed + episodes - 1}",
+            "deterministic": True,
+            "success_rate": ev.success_rate,
+            "mean_return": round(ev.mean_return, 4),
+            "mean_final_lift_m": round(ev.mean_final_lift, 5),
+            "diverged": ev.diverged,
+        },
+        "versions": {"softgrasp_env": softgrasp_env.__version__, "stable_baselines3": stable_baselines3.__version__,
+                     "torch": torch.__version__, "numpy": np.__version__, "python": platform.python_version()},
+        "machine": "2-core x86-64 CPU, no GPU; two runs trained at a time, one torch thread each",
+    }
+    (out / "card.json").write_text(json.dumps(card, indent=2) + "\n")
+    (out / "README.md").write_text(render_card(card))
+    return out
+
+
+def render_card(card: dict[str, Any]) -> str:
+    ev = card["evaluation"]
+    minutes = "unknown" if card["train_seconds"] is None else f"{card['train_seconds'] / 60:.1f} min"
+    lines = [
+        f"# {card['name']}",
+        "",
+        f"{card['algo'].upper()} on `{card['env']}` (version {card['env_version']}), stable-baselines3.",
+        "",
+        "| | |",
+        "|---|---|",
+        f"| env id | `{card['env']}`, kwargs `{card['env_kwargs']}` |",
+        f"| algo | {card['algo']} |",
+        f"| hyperparameters | `{card['hyperparameters_file']}` (the preset); as trained: `{card['hyperparameters']}` |",
+        f"| steps | {card['timesteps']:,} |",
+        f"| seed | {card['seed']} |",
+        (
+            f"| success | **{ev['success_rate']:.0%}** over {ev['episodes']} episodes (seeds {ev['seeds']}, "
+            f"deterministic policy); mean return {ev['mean_return']:.2f}, mean final lift "
+            f"{ev['mean_final_lift_m'] * 100:.2f} cm, diverged {ev['diverged']} |"
+        ),
+        f"| wall time | {minutes} of training on {card['machine']} |",
+        f"| command | `{card['command']}` |",
+        "",
+        "Evaluate: `python -m agents.evaluate --policy agents/trained/" + card["name"] + " --episodes 100`",
+        "",
+    ]
+    return "\n".join(lines)
+
+
+def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True) -> str:
+    """The results table (markdown): the scripted policy, measured now on the same seeds, and every
+    shipped model from its card; per algo and env, mean and range over seeds."""
+    import gymnasium as gym
+    import numpy as np
+
+    import softgrasp_env  # noqa: F401
+    from agents.evaluate import evaluate
+    from agents.scripted import ScriptedGraspPolicy
+
+    rows = []
+    if scripted:
+        for env_id in ("SoftGrasp-v1", "SoftGraspRigid-v1", "SoftGraspGoal-v1"):
+            env = gym.make(env_id)
+            try:
+                ev = evaluate(env, ScriptedGraspPolicy(), episodes=episodes, seed=seed)
+            finally:
+                env.close()
+            rows.append(("scripted", env_id, "-", "-", [ev.success_rate]))
+    groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for model_dir in shipped():
+        card = read_card(model_dir)
+        groups.setdefault((card["algo"], card["env"]), []).append(card)
+    for (algo, env_id), cards in sorted(groups.items()):
+        rates = [c["evaluation"]["success_rate"] for c in cards]
+        steps = sorted({c["timesteps"] for c in cards})
+        minutes = [c["train_seconds"] / 60 for c in cards if c["train_seconds"] is not None]
+        rows.append((algo, env_id, "/".join(f"{s:,}" for s in steps),
+                     f"{np.mean(minutes):.0f}" if minutes else "-", rates))  # fmt: skip
+    out = ["| policy | env | env steps | train min (mean) | seeds | success, 100 episodes each (mean; per seed) |",
+           "|---|---|---|---|---|---|"]  # fmt: skip
+    for algo, env_id, steps, minutes, rates in rows:
+        per_seed = " / ".join(f"{r:.0%}" for r in rates)
+        out.append(f"| {algo} | {env_id} | {steps} | {minutes} | {len(rates) if algo != 'scripted' else '-'} | "
+                   f"**{np.mean(rates):.0%}**" + (f" ({per_seed})" if len(rates) > 1 else "") + " |")  # fmt: skip
+    return "\n".join(out)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m agents.cards", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+    sub = parser.add_subparsers(dest="command", required=True)
+    pub = sub.add_parser("publish", help="evaluate runs and copy them, with their cards, to agents/trained/")
+    pub.add_argument("runs", nargs="+", type=Path)
+    pub.add_argument("--episodes", type=int, default=EPISODES)
+    pub.add_argument("--dest", type=Path, default=TRAINED)
+    tab = sub.add_parser("table", help="print the results table")
+    tab.add_argument("--no-scripted", action="store_true")
+    ns = parser.parse_args(argv)
+    if ns.command == "publish":
+        if ns.episodes < 1:
+            parser.error(f"--episodes must be >= 1, got {ns.episodes}")
+        for run in ns.runs:
+            try:
+                out = publish(run, episodes=ns.episodes, dest=ns.dest)
+            except ValueError as exc:
+                parser.error(f"{run}: {exc}")
+            card = read_card(out)
+            print(f"{out}: success {card['evaluation']['success_rate']:.0%} over {card['evaluation']['episodes']} "
+                  f"episodes, {card['timesteps']:,} steps", flush=True)  # fmt: skip
+    else:
+        print(table(scripted=not ns.no_scripted))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
