@@ -455,6 +455,35 @@ def test_deepcopy_mid_episode_is_exact(env_id):
     twin.close()
 
 
+def test_a_copy_replays_only_the_steps_since_the_last_reset():
+    """Issue 12: a copy's cost is bounded by the episode (at most the 100-step time limit), never
+    by the env's history: earlier episodes are not replayed."""
+    env = gym.make("SoftGraspRigid-v1")
+    rng = np.random.default_rng(2)
+    for episode in range(3):
+        env.reset(seed=episode)
+        for _ in range(40):
+            env.step(rng.uniform(-1, 1, 4).astype(np.float32))
+    env.reset(seed=9)
+    for _ in range(7):
+        env.step(rng.uniform(-1, 1, 4).astype(np.float32))
+    replayed = []
+    simulate = SoftGraspEnv._apply_and_simulate
+
+    def spy(self, action):
+        replayed.append(action)
+        return simulate(self, action)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(SoftGraspEnv, "_apply_and_simulate", spy)
+        twin = copy.deepcopy(env)
+    assert len(replayed) == 7
+    act = np.zeros(4, dtype=np.float32)
+    _assert_same(env.step(act)[0], twin.step(act)[0])
+    env.close()
+    twin.close()
+
+
 def _connected_clients() -> set[int]:
     return {cid for cid in range(256) if p.getConnectionInfo(physicsClientId=cid)["isConnected"]}
 
