@@ -70,13 +70,20 @@ class TissueConfig:
     group_size: int = 8
     """Particles per implicit shape-matching group, centre included (thesis 5.2.1 *groupSize*)."""
     tissue_density: float = 1_000.0
-    """Mass density of the tissue [kg/m^3]; particle mass = density * (its share of the layer volume)."""
+    """Mass density of the tissue [kg/m^3], at most 1e4; particle mass = density * (its share of
+    the layer volume). Heavier tissue outweighs its shape matching under the arm's shoves: 3e4
+    tore in 2 of 3 random-action episodes, 1e5 in every episode, scripted ones too; 1e4 ran all."""
     stiffness: float = 0.5
-    """Shape-matching stiffness k in (0, 1] per *step*; made iteration-independent (Mueller 2007)."""
+    """Shape-matching stiffness k in [0.03, 1] per *step*; made iteration-independent (Mueller
+    2007). Below 0.03 the tissue is too slack to follow its core under the arm's shoves: at 0.01
+    one of three random-action episodes tore it past the divergence limit, at 0.001 every episode
+    did by the second step (issue 12's extremes probe); 0.03 ran them all."""
     radius_scale: float = 0.6
     """Tangential ellipsoid radius as a fraction of the particle spacing (>0.5 closes gaps)."""
     normal_radius: float = 0.003
-    """Ellipsoid radius along the surface normal [m] (flat, pebble-like particles)."""
+    """Ellipsoid radius along the surface normal [m] (flat, pebble-like particles). With ``extrude``
+    it is the pad thickness that SceneConfig checks the cylinder against (0.1 m used to pass the
+    check and diverge at the first step)."""
     friction_static: float = 0.9
     """Coulomb static friction coefficient mu_s of the tissue surface [-]."""
     friction_dynamic: float = 0.7
@@ -87,8 +94,8 @@ class TissueConfig:
         _check_range(o, "density", self.density, 100.0, 1e7)
         _check_range(o, "extrude", self.extrude, 0.0, 0.1, lo_open=True)
         _check_int(o, "group_size", self.group_size, 4, 64)
-        _check_range(o, "tissue_density", self.tissue_density, 0.0, 1e5, lo_open=True)
-        _check_range(o, "stiffness", self.stiffness, 0.0, 1.0, lo_open=True)
+        _check_range(o, "tissue_density", self.tissue_density, 0.0, 1e4, lo_open=True)
+        _check_range(o, "stiffness", self.stiffness, 0.03, 1.0)
         _check_range(o, "radius_scale", self.radius_scale, 0.0, 2.0, lo_open=True)
         _check_range(o, "normal_radius", self.normal_radius, 0.0, 0.1, lo_open=True)
         _check_range(o, "friction_static", self.friction_static, 0.0, 10.0)
@@ -105,12 +112,24 @@ class TissueConfig:
         return 1.0 / math.sqrt(self.density)
 
 
+def pad_thickness(fingers: str, tissue: TissueConfig) -> float:
+    """How far a finger's pad reaches out from its core [m], on the inner face and the tip: the
+    tissue to its outer particles' ellipsoids (extrude plus their normal radius), the FEM pad's
+    thickness (extrude), the segments' depth; 0 for rigid fingers."""
+    if fingers == "tissue":
+        return tissue.extrude + tissue.normal_radius
+    return {"fem": tissue.extrude, "segmented": SEGMENT_DEPTH}.get(fingers, 0.0)
+
+
 @dataclass(frozen=True)
 class SimConfig:
     """Time stepping and solver settings shared by tissue and pybullet."""
 
     dt: float = 1.0 / 240.0
-    """Physics step [s]; one tissue step and one pybullet step per world step."""
+    """Physics step [s], at most 1/60 s; one tissue step and one pybullet step per world step.
+    Longer steps tear the tissue in the grasp (the contact and coupling corrections grow with dt
+    squared): 1/40 s in 1 of 2 scripted episodes, 1/20 s in every episode at its second step;
+    1/60 s ran every episode of the extremes probe (issue 12)."""
     iterations: int = 3
     """Gauss-Seidel iterations over the shape-matching groups and contacts per step. Measured on the
     scripted grasp at the default tissue (deepest penetration over every step, thesis coupling):
@@ -143,7 +162,7 @@ class SimConfig:
 
     def __post_init__(self) -> None:
         o = "SimConfig"
-        _check_range(o, "dt", self.dt, 1e-5, 0.05)
+        _check_range(o, "dt", self.dt, 1e-5, 1.0 / 60.0)
         _check_int(o, "iterations", self.iterations, 1, 200)
         _check_int(o, "rotation_iterations", self.rotation_iterations, 1, 100)
         _check_range(o, "gravity", self.gravity, 0.0, 100.0)
@@ -307,7 +326,19 @@ class SceneConfig:
         the start puts no finger and no palm inside it. Each clash is a ValueError naming the
         settings and the limit."""
         fh = self.finger_half_extents
-        pad = {"tissue": self.tissue.extrude, "fem": self.tissue.extrude, "segmented": SEGMENT_DEPTH}.get(self.fingers, 0.0)
+        pad = pad_thickness(self.fingers, self.tissue)
+        if self.fingers == "tissue":
+            # A particle's ellipsoid wider than the finger's face overhangs the core and reaches
+            # round to the other faces: measured, tangential radii of 3.5-6.7 cm (low density with a
+            # large radius_scale) tore the tissue within 10-50 random-action steps.
+            reach = self.tissue.radius_scale * self.tissue.spacing
+            if reach > fh[1]:
+                raise ValueError(
+                    f"SceneConfig: the tissue particles are wider than the fingers' faces: radius_scale="
+                    f"{self.tissue.radius_scale:g} times the spacing {self.tissue.spacing:.4f} m (density="
+                    f"{self.tissue.density:g} per m^2) gives {reach:.4f} m, more than the face's half width "
+                    f"finger_half_extents[1]={fh[1]:g} m; raise the density to at least "
+                    f"{(self.tissue.radius_scale / fh[1]) ** 2:.0f} per m^2 or lower radius_scale")  # fmt: skip
         # narrowest half gap of the open fingers: a wedge turns one edge of each face inwards
         gap = self.finger_max_opening - pad - fh[2] * math.sin(0.5 * abs(self.jaw_wedge))
         r = self.cylinder_radius

@@ -18,7 +18,7 @@ import numpy as np
 from gymnasium import spaces
 
 from . import presets
-from .config import SceneConfig, SimConfig, TissueConfig
+from .config import SceneConfig, SimConfig, TissueConfig, pad_thickness
 from .scene import GraspScene
 from .sim.world import SimulationDiverged
 
@@ -166,8 +166,8 @@ class SoftGraspEnv(gym.Env):
     - Terminated: the cylinder tilts more than ``max_tilt`` (knocked over), leaves the workspace
       (more than 15 cm from the origin horizontally, below the ground or above 50 cm), or the
       simulation diverges (non-finite numbers, a body faster than 20 m/s, tissue torn more than
-      3 cm from its core, a finger segment turning faster than 90 rad/s): then ``info["diverged"] = True``, the reward is 0 and the observation is
-      the last finite one, never a NaN.
+      3 cm from its core, a finger segment turning faster than 90 rad/s): then ``info["diverged"] = True``, ``info["divergence"]``
+      says which (else it is ``None``), the reward is 0 and the observation is the last finite one, never a NaN.
     - Truncated: by the registered time limit (100 steps = 5 s at 20 Hz).
 
     ## Arguments
@@ -359,10 +359,13 @@ class SoftGraspEnv(gym.Env):
         # The start height of the task: reach starts the fingertips above the cylinder's top.
         _check("cylinder_height", cylinder_height, 0.01, 0.5)
         fh_z = SceneConfig.__dataclass_fields__["finger_half_extents"].default[2]
-        start_height = 0.5 * cylinder_height + fh_z + REACH_CLEARANCE if task == "reach" else 0.05
+        # The cores' tips start 2 cm above the top; a pad thicker than 1.5 cm would reach the top
+        # (the cylinder may stand right under the start), so it keeps 5 mm of clearance instead.
+        clearance = max(REACH_CLEARANCE, pad_thickness(fingers, tissue) + 0.005)
+        start_height = 0.5 * cylinder_height + fh_z + clearance if task == "reach" else 0.05
         grip_z = 0.5 * cylinder_height + start_height
         if grip_z > GRIP_TOP - 0.01:
-            tallest = GRIP_TOP - 0.01 - fh_z - REACH_CLEARANCE if task == "reach" else 2.0 * (GRIP_TOP - 0.01 - 0.05)
+            tallest = GRIP_TOP - 0.01 - fh_z - clearance if task == "reach" else 2.0 * (GRIP_TOP - 0.01 - 0.05)
             raise ValueError(f"cylinder_height={cylinder_height:g} m is too tall for task={task!r}: the grip would start "
                              f"{grip_z:.3f} m up, too near the top of the arm's workspace ({GRIP_TOP:g} m); at most "
                              f"{tallest:.3f} m")  # fmt: skip
@@ -417,7 +420,7 @@ class SoftGraspEnv(gym.Env):
         self._forces = np.zeros(2)
         self._reset_record: tuple[dict, dict] | None = None
         self._actions: list[np.ndarray] = []
-        self._episode_over = False
+        self._episode_over, self._divergence = False, None
 
     # --- gym API -----------------------------------------------------------------------------------
 
@@ -436,7 +439,7 @@ class SoftGraspEnv(gym.Env):
         self._build(options)
         obs = self._observe()
         self._last_obs = obs
-        self._episode_over = False
+        self._episode_over, self._divergence = False, None
         if self.render_mode == "human":
             self.render()
         return self._format_obs(obs), self._info(obs, diverged=False, clipped=False)
@@ -533,6 +536,18 @@ class SoftGraspEnv(gym.Env):
                     f"the randomisation ranges reach a scene that cannot start (cylinder_position_range={p:g}, "
                     f"lateral_offset_range={lo:g}, yaw_range={yw:g}, jaw_wedge_range={w:g}, cylinder_radius_range="
                     f"{rg['cylinder_radius']:g}, task={self.task!r}): {e}") from None  # fmt: skip
+        # The scaled quantities at their extremes stay inside SceneConfig's and TissueConfig's own
+        # ranges (a 9 kg cylinder with cylinder_mass_range=0.9 used to fail at some reset, 17 kg).
+        for sign in (-1.0, 1.0):
+            fs, ms = 1.0 + sign * rg["friction"], 1.0 + sign * rg["cylinder_mass"]
+            try:
+                tissue = replace(b.tissue, friction_static=b.tissue.friction_static * fs,
+                                 friction_dynamic=b.tissue.friction_dynamic * fs)  # fmt: skip
+                replace(b, tissue=tissue, ground_friction=b.ground_friction * fs, cylinder_mass=b.cylinder_mass * ms)
+            except ValueError as e:
+                raise ValueError(
+                    f"the randomisation ranges reach a scene that cannot be built (friction_range={rg['friction']:g}, "
+                    f"cylinder_mass_range={rg['cylinder_mass']:g}, cylinder_mass={b.cylinder_mass:g}): {e}") from None  # fmt: skip
 
     def _draw(self, options: dict[str, Any]) -> SceneConfig:
         """The episode's scene: fixed options, else draws from np_random (always the same number
@@ -596,16 +611,14 @@ class SoftGraspEnv(gym.Env):
                 sc.step()
                 forces += sc.finger_forces()
         except SimulationDiverged:
-            self._episode_over = True
+            self._episode_over, self._divergence = True, "non-finite tissue solve"
             return True
         self._forces = forces / self._substeps
-        if self._diverged():
+        self._divergence = self.scene.divergence()
+        if self._divergence is not None:
             self._episode_over = True
             return True
         return False
-
-    def _diverged(self) -> bool:
-        return self.scene.diverged()
 
     def _observe(self) -> np.ndarray:
         sc = self.scene
@@ -649,6 +662,7 @@ class SoftGraspEnv(gym.Env):
             "is_success": (not diverged) and self._success(obs),
             "lift_height": float(obs[21]),
             "diverged": diverged,
+            "divergence": self._divergence if diverged else None,
             "action_clipped": clipped,
         }
 

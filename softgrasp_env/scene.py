@@ -196,23 +196,33 @@ class GraspScene:
         self.world.step()
 
     def diverged(self) -> bool:
-        """True once the simulation has blown up: a non-finite value, a body faster than 20 m/s or
-        500 rad/s, a particle faster than 20 m/s or 3 cm from its core, a finger segment turning
-        faster than its limit (segmented.py). The env and the accuracy measurements share it."""
+        """True once the simulation has blown up (:meth:`divergence` says how). The env and the
+        accuracy measurements share it."""
+        return self.divergence() is not None
+
+    def divergence(self) -> str | None:
+        """Why the simulation counts as blown up, or ``None``: a non-finite value, a body faster
+        than 20 m/s or 500 rad/s, a particle faster than 20 m/s or 3 cm from its core, a finger
+        segment turning faster than its limit (segmented.py)."""
         w = self.world
         if not w.is_finite():
-            return True
-        if self.segments is not None and self.segments.diverged():
-            return True
+            return "non-finite state"
+        if self.segments is not None:
+            why = self.segments.divergence()
+            if why is not None:
+                return why
         col = w.colliders
-        if np.abs(col.rigid_v).max() > 20.0 or np.abs(col.rigid_w).max() > 500.0:
-            return True
+        v, om = float(np.abs(col.rigid_v).max()), float(np.abs(col.rigid_w).max())
+        if v > 20.0 or om > 500.0:
+            return f"a rigid body at {v:.1f} m/s, {om:.0f} rad/s (limits 20 m/s, 500 rad/s)"
         if w.state is not None:
-            if np.abs(w.state.particle_v).max() > 20.0:
-                return True
-            if w.tissue_deviation() > 0.03:
-                return True
-        return False
+            pv = float(np.abs(w.state.particle_v).max())
+            if pv > 20.0:
+                return f"a tissue particle at {pv:.1f} m/s (limit 20 m/s)"
+            dev = float(w.tissue_deviation())
+            if dev > 0.03:
+                return f"tissue torn: a particle {dev * 100:.1f} cm from where its core holds it (limit 3 cm)"
+        return None
 
     def finger_forces(self) -> np.ndarray:
         """Normal force each finger (left, right) pressed on the cylinder with in the last physics

@@ -288,10 +288,17 @@ class SegmentedFingers:
         """Non-finite joint states, or a passive joint faster than DIVERGED_JOINT_RATE: a segment
         blown up between its joint limits stays finite and never shows in the cores' or the
         cylinder's velocities, which is all the env checked before."""
+        return self.divergence() is not None
+
+    def divergence(self) -> str | None:
+        """Why the segments count as blown up (see :meth:`diverged`), or ``None``."""
         q, v = self.joint_states()
         if not (np.isfinite(q).all() and np.isfinite(v).all()):
-            return True
-        return bool(np.abs(v).max() > DIVERGED_JOINT_RATE)
+            return "non-finite segment joint state"
+        rate = float(np.abs(v).max())
+        if rate > DIVERGED_JOINT_RATE:
+            return f"a finger segment turning at {rate:.0f} rad/s (limit {DIVERGED_JOINT_RATE:g} rad/s)"
+        return None
 
 
 __all__ = ["SegmentedFingers"]

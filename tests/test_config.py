@@ -35,6 +35,8 @@ def test_spacing_follows_density():
         (dict(stiffness=1.5), "stiffness"),
         (dict(stiffness=-0.1), "stiffness"),
         (dict(stiffness=NAN), "stiffness"),
+        (dict(stiffness=0.01), "stiffness"),  # too slack: tore under random actions (issue 12)
+        (dict(tissue_density=3e4), "tissue_density"),  # too heavy: tore under random actions
         (dict(group_size=2), "group_size"),
         (dict(group_size=65), "group_size"),
         (dict(group_size=8.0), "group_size"),
@@ -66,6 +68,8 @@ def test_tissue_config_rejects(kwargs, field):
     "kwargs",
     [
         dict(stiffness=1.0),  # closed upper end
+        dict(stiffness=0.03),  # closed lower end
+        dict(tissue_density=1e4),
         dict(stiffness=1),  # int for a float field is fine
         dict(group_size=4),
         dict(group_size=64),
@@ -87,6 +91,8 @@ def test_tissue_config_accepts_boundaries(kwargs):
     [
         (dict(dt=0.0), "dt"),
         (dict(dt=0.1), "dt"),
+        (dict(dt=0.05), "dt"),  # tore the tissue at the second step (issue 12)
+        (dict(dt=1.0 / 40.0), "dt"),
         (dict(dt=NAN), "dt"),
         (dict(iterations=0), "iterations"),
         (dict(iterations=201), "iterations"),
@@ -119,7 +125,7 @@ def test_sim_config_rejects(kwargs, field):
         dict(iterations=200),
         dict(gravity=0.0),
         dict(damping=0.0),
-        dict(dt=0.05),
+        dict(dt=1.0 / 60.0),
         dict(dt=1e-5),
     ],
 )
@@ -178,7 +184,7 @@ def test_error_message_names_the_range_and_the_value():
     with pytest.raises(ValueError) as info:
         TissueConfig(stiffness=1.5)
     msg = str(info.value)
-    assert "(0.0, 1.0]" in msg and "1.5" in msg
+    assert "[0.03, 1.0]" in msg and "1.5" in msg
     with pytest.raises(ValueError) as info:
         SimConfig(iterations=0)
     assert "[1, 200]" in str(info.value) and "0" in str(info.value)

@@ -142,11 +142,11 @@ def test_task_is_validated():
 @pytest.mark.parametrize(
     "kwargs, match",
     [
-        (dict(cylinder_radius=0.2), r"does not fit between the open fingers.*at most 0\.0510 m"),
+        (dict(cylinder_radius=0.2), r"does not fit between the open fingers.*at most 0\.0480 m"),
         (dict(cylinder_radius=0.08), r"does not fit between the open fingers"),
         (dict(cylinder_height=0.5), r"too tall for task='reach'.*at most 0\.140 m"),
         (dict(cylinder_height=0.5, task="easy"), r"too tall for task='easy'"),
-        (dict(cylinder_radius=0.05), r"randomisation ranges reach a scene that cannot start.*jaw_wedge_range=0\.15"),
+        (dict(cylinder_radius=0.047), r"randomisation ranges reach a scene that cannot start.*jaw_wedge_range=0\.15"),
         (dict(task="easy", cylinder_position_range=0.05), r"cylinder_position_range=0\.05.*fingers start inside the cylinder"),
     ],
 )
