@@ -11,7 +11,8 @@ Maps (rows x columns):
 4. cylinder mass x cylinder radius.
 A cell is one 5 s episode of SoftGraspEnv with agents.scripted.ScriptedGraspPolicy:
 2 = held (lifted and held at the end), 1 = slipped (lifted, then lost), 0 = dropped (never lifted),
--1 = diverged. Methods: the finger kinds of config.FINGER_KINDS, ours with both couplings. Writes
+-1 = diverged, -2 = refused (gym.make raises a ValueError: the setting is outside what the
+method accepts, e.g. the consistent coupling's squeeze impulse limit, config.py). Methods: the finger kinds of config.FINGER_KINDS, ours with both couplings. Writes
 benchmarks/out/stability_map.csv and .png (one heatmap per method and map) and prints the grids.
 """
 
@@ -30,7 +31,7 @@ from agents.scripted import ScriptedGraspPolicy
 from softgrasp_env.config import FINGER_KINDS, SimConfig
 
 OUT = Path(__file__).resolve().parent / "out"
-LABELS = {2: "held", 1: "slipped", 0: "dropped", -1: "diverged"}
+LABELS = {2: "held", 1: "slipped", 0: "dropped", -1: "diverged", -2: "refused"}
 
 
 TINY_SKIP = ("fem",)
@@ -89,9 +90,14 @@ def grid(make: dict, rows: tuple[str, list[float]], cols: tuple[str, list[float]
             if env is None or repr(kwargs) != key:
                 if env is not None:
                     env.close()
-                env, key = gym.make("SoftGraspEasy-v1", **kwargs), repr(kwargs)  # the physics map: fingers start around the cylinder
-            out[i, j] = episode(env, cell, ScriptedGraspPolicy())
-    env.close()
+                key = repr(kwargs)
+                try:  # the physics map: fingers start around the cylinder
+                    env = gym.make("SoftGraspEasy-v1", **kwargs)
+                except ValueError:  # outside what this method accepts
+                    env = None
+            out[i, j] = -2 if env is None else episode(env, cell, ScriptedGraspPolicy())
+    if env is not None:
+        env.close()
     return out
 
 
@@ -131,7 +137,7 @@ def main() -> None:
         for name, make in chosen.items():
             g = grid(make, (rname, rvals), (cname, cvals), fixed)
             results.append((name, rname, rvals, cname, cvals, g))
-            print(f"\n{name}: rows {rname}, columns {cname} (2 held, 1 slipped, 0 dropped, -1 diverged)")
+            print(f"\n{name}: rows {rname}, columns {cname} (2 held, 1 slipped, 0 dropped, -1 diverged, -2 refused)")
             print(" " * 10 + "".join(f"{c:>8g}" for c in cvals))
             for rv, line in zip(rvals, g):
                 print(f"{rv:>10.4g}" + "".join(f"{v:>8d}" for v in line), flush=True)
@@ -149,13 +155,15 @@ def main() -> None:
     fig, axes = plt.subplots(n_maps, len(chosen), figsize=(3.6 * len(chosen), 3.0 * n_maps), squeeze=False)
     for k, (name, rname, rvals, cname, cvals, g) in enumerate(results):
         ax = axes[k // len(chosen), k % len(chosen)]
-        ax.imshow(g, cmap="RdYlGn", vmin=-1, vmax=2, origin="lower", aspect="auto")
+        cmap = plt.get_cmap("RdYlGn").copy()
+        cmap.set_bad("lightgray")  # refused
+        ax.imshow(np.ma.masked_less(g, -1), cmap=cmap, vmin=-1, vmax=2, origin="lower", aspect="auto")
         ax.set_xticks(range(len(cvals)), [f"{c:g}" for c in cvals], fontsize=7)
         ax.set_yticks(range(len(rvals)), [f"{r:.3g}" for r in rvals], fontsize=7)
         ax.set_xlabel(cname, fontsize=8)
         ax.set_ylabel(rname, fontsize=8)
         ax.set_title(name, fontsize=9)
-    fig.suptitle("Scripted grasp: green held, yellow slipped, orange dropped, red diverged")
+    fig.suptitle("Scripted grasp: green held, yellow slipped, orange dropped, red diverged, grey refused")
     fig.tight_layout()
     fig.savefig(args.out / "stability_map.png", dpi=90)
     print(f"\nwrote {args.out / 'stability_map.csv'} and {args.out / 'stability_map.png'}")

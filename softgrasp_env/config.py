@@ -24,6 +24,15 @@ FINGER_DROP = 0.04
 """Gap between the palm's underside and the top of a finger core [m] (the finger's upper part is
 not modelled: only the fingertip segment touches anything)."""
 SEGMENT_DEPTH = 0.008
+MAX_CONSISTENT_SQUEEZE_IMPULSE = 0.125
+"""Largest finger_force * dt the consistent coupling accepts [N s]: a core sliding on its joint
+under the motor's force is projected against the tissue every step, and a large impulse per step
+drives it through the pad. Probe of issue 12 (scripted grasps): 30 N at 1/60 s (0.5 N s) and
+100 N at 1/120 s (0.83) diverged in every episode, 30 N at 1/120 s (0.25) ran; the stability map
+saw 10-20 N fail at 1/60 s (0.17-0.33) on the easy task. 0.125 keeps below all of them."""
+MAX_TISSUE_SAG = 0.006
+"""Largest equilibrium sag g dt^2 / k of the tissue under gravity that SceneConfig accepts [m]
+(the probe of issue 12: 0.54-0.57 cm ran every episode, 1.7 cm tore one in three, more tore all)."""
 """How far a segmented finger's segments stand in front of its core (2 mm boss + 6 mm segment,
 segmented.py) [m]: the pad depth of that kind, as ``TissueConfig.extrude`` is the tissue's."""
 GEOMETRY_MARGIN = 0.001
@@ -68,11 +77,16 @@ class TissueConfig:
     extrude: float = 0.008
     """Distance from an attached particle to its outer partner [m] (thesis 5.2.1 *extrude*)."""
     group_size: int = 8
-    """Particles per implicit shape-matching group, centre included (thesis 5.2.1 *groupSize*)."""
+    """Particles per implicit shape-matching group, centre included (thesis 5.2.1 *groupSize*), 4 to
+    16. Larger groups span most of a pad (30 particles a face at the default density) and let it
+    sag and tear: 32 diverged in every episode at 1 iteration, 64 in 2 of 5 at 2 iterations,
+    while 16 ran every episode at 1 iteration (issue 12's extremes probe)."""
     tissue_density: float = 1_000.0
-    """Mass density of the tissue [kg/m^3], at most 1e4; particle mass = density * (its share of
+    """Mass density of the tissue [kg/m^3], 100 to 1e4; particle mass = density * (its share of
     the layer volume). Heavier tissue outweighs its shape matching under the arm's shoves: 3e4
-    tore in 2 of 3 random-action episodes, 1e5 in every episode, scripted ones too; 1e4 ran all."""
+    tore in 2 of 3 random-action episodes, 1e5 in every episode, scripted ones too; 1e4 ran all.
+    Tissue lighter than foam (2 and 13 kg/m^3) tore in two of the fuzzed settings, and setting
+    that alone back to 1,000 made both run."""
     stiffness: float = 0.5
     """Shape-matching stiffness k in [0.03, 1] per *step*; made iteration-independent (Mueller
     2007). Below 0.03 the tissue is too slack to follow its core under the arm's shoves: at 0.01
@@ -93,8 +107,8 @@ class TissueConfig:
         o = "TissueConfig"
         _check_range(o, "density", self.density, 100.0, 1e7)
         _check_range(o, "extrude", self.extrude, 0.0, 0.1, lo_open=True)
-        _check_int(o, "group_size", self.group_size, 4, 64)
-        _check_range(o, "tissue_density", self.tissue_density, 0.0, 1e4, lo_open=True)
+        _check_int(o, "group_size", self.group_size, 4, 16)
+        _check_range(o, "tissue_density", self.tissue_density, 100.0, 1e4)
         _check_range(o, "stiffness", self.stiffness, 0.03, 1.0)
         _check_range(o, "radius_scale", self.radius_scale, 0.0, 2.0, lo_open=True)
         _check_range(o, "normal_radius", self.normal_radius, 0.0, 0.1, lo_open=True)
@@ -328,6 +342,23 @@ class SceneConfig:
         fh = self.finger_half_extents
         pad = pad_thickness(self.fingers, self.tissue)
         if self.fingers == "tissue":
+            # Shape matching pulls a particle a fraction k of the way to its goal per step
+            # (Mueller 2005, alpha = k), so gravity's g dt^2 per step settles at a sag of
+            # g dt^2 / k: past ~1.7 cm the probe's tissue tore, at 0.57 cm it never did.
+            impulse = self.finger_force * self.sim.dt
+            if self.sim.coupling == "consistent" and impulse > MAX_CONSISTENT_SQUEEZE_IMPULSE:
+                raise ValueError(
+                    f"SceneConfig: coupling='consistent' with finger_force={self.finger_force:g} N at dt="
+                    f"{self.sim.dt:g} s pushes {impulse:.3g} N s per step into the tissue, more than "
+                    f"{MAX_CONSISTENT_SQUEEZE_IMPULSE:g} N s; at this dt finger_force must be at most "
+                    f"{MAX_CONSISTENT_SQUEEZE_IMPULSE / self.sim.dt:.3g} N (or use coupling='thesis')")  # fmt: skip
+            sag = self.sim.gravity * self.sim.dt**2 / self.tissue.stiffness
+            if sag > MAX_TISSUE_SAG:
+                raise ValueError(
+                    f"SceneConfig: the tissue is too slack for the time step: gravity={self.sim.gravity:g} m/s^2 "
+                    f"times dt={self.sim.dt:g} s squared over stiffness={self.tissue.stiffness:g} sags it "
+                    f"{sag * 100:.2f} cm, more than {MAX_TISSUE_SAG * 100:g} cm; raise the stiffness to at least "
+                    f"{self.sim.gravity * self.sim.dt**2 / MAX_TISSUE_SAG:.3g} or shorten dt")  # fmt: skip
             # A particle's ellipsoid wider than the finger's face overhangs the core and reaches
             # round to the other faces: measured, tangential radii of 3.5-6.7 cm (low density with a
             # large radius_scale) tore the tissue within 10-50 random-action steps.

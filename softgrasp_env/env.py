@@ -47,6 +47,8 @@ RESET_OPTIONS = ("cylinder_xy", "lateral_offset", "yaw", "jaw_wedge", "friction_
 GRIP_TOP = 0.20
 """Highest the arm takes the grip point [m]."""
 REACH_CLEARANCE = 0.02
+MAX_ARM_STEP = 1.0 / 60.0
+"""Farthest the arm's target may move in one physics step, gripper_speed * dt [m] (issue 12's probe)."""
 """Task 'reach': the open fingertips start this far above the cylinder's top [m]."""
 
 TASKS: dict[str, dict[str, float]] = {
@@ -183,7 +185,8 @@ class SoftGraspEnv(gym.Env):
       arguments below override them.
     - ``reward_type`` ("dense" | "sparse").
     - ``control_frequency`` (20 Hz): must divide the physics rate ``1 / sim.dt`` (240 Hz).
-    - ``gripper_speed`` (0.15 m/s): arm displacement per step at full action, times the step time.
+    - ``gripper_speed`` (0.15 m/s, at most 2 and at most 1/60 m per physics step, ``gripper_speed * sim.dt``):
+      arm displacement per step at full action, times the step time.
     - ``tissue_density`` (particles per m² of core surface), ``friction_static``,
       ``friction_dynamic``: tissue settings (also the rigid fingers' pybullet friction);
       ``tissue`` / ``sim``: whole ``TissueConfig`` / ``SimConfig`` objects to start from.
@@ -355,6 +358,12 @@ class SoftGraspEnv(gym.Env):
         if abs(ratio - self._substeps) > 1e-9 * ratio or self._substeps < 1:
             raise ValueError(f"control_frequency must divide the physics rate 1/sim.dt = {1.0 / sim.dt:g} Hz, "
                              f"got {control_frequency!r}")  # fmt: skip
+        # The arm's target moves gripper_speed * dt per physics step; at 3.3 cm a step (2 m/s at
+        # 1/60 s) the tissue tore in 2 of 5 probe episodes, at 1.7 cm (2 m/s at 1/120 s) in none.
+        if gripper_speed * sim.dt > MAX_ARM_STEP + 1e-12:
+            raise ValueError(f"gripper_speed={gripper_speed:g} m/s with sim.dt={sim.dt:g} s moves the arm "
+                             f"{gripper_speed * sim.dt * 100:.2f} cm per physics step, more than {MAX_ARM_STEP * 100:.2f} "
+                             f"cm; at this dt gripper_speed must be at most {MAX_ARM_STEP / sim.dt:.3g} m/s")  # fmt: skip
         # The base scene, validated now so that bad sizes fail at construction, not at reset.
         # The start height of the task: reach starts the fingertips above the cylinder's top.
         _check("cylinder_height", cylinder_height, 0.01, 0.5)
