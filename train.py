@@ -23,7 +23,6 @@ import ast
 import csv
 import json
 import os
-import shlex
 import sys
 import time
 from pathlib import Path
@@ -40,7 +39,7 @@ from tqdm import tqdm
 
 import softgrasp_env
 from agents.baselines import ALGOS, default_algo, make_model, model_class
-from agents.cards import hyperparameters
+from agents.cards import hyperparameters, quote_arg
 from agents.evaluate import evaluate
 from agents.runs import CHECKPOINT_PREFIX, deterministic_policy, make_env, run_files
 
@@ -350,7 +349,7 @@ def main(argv: list[str] | None = None) -> int:
     eval_env.close()
     venv.close()
     meta["num_timesteps"] = model.num_timesteps
-    session = {"command": " ".join(["python", "train.py", *map(shlex.quote, sys.argv[1:] if argv is None else argv)]),
+    session = {"command": " ".join(["python", "train.py", *map(quote_arg, sys.argv[1:] if argv is None else argv)]),
                "timesteps_trained": model.num_timesteps - start, "train_seconds": round(seconds, 1)}  # fmt: skip
     if files is None:
         meta.update(session)

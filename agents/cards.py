@@ -66,6 +66,14 @@ def hyperparameters(meta: dict[str, Any]) -> dict[str, Any]:
     return _jsonable(out)
 
 
+def quote_arg(arg: str) -> str:
+    """``arg`` as a POSIX shell word: bare when safe, in double quotes when it holds single quotes
+    (a dict literal such as ``policy_kwargs={'net_arch': [64, 64]}``), else as shlex quotes it."""
+    if "'" in arg and not any(c in arg for c in '"$`\\!'):
+        return f'"{arg}"'
+    return shlex.quote(arg)
+
+
 def command(meta: dict[str, Any]) -> str:
     """The train.py command that made the run: recorded by train.py, else rebuilt from run.json."""
     if meta.get("command"):
@@ -77,7 +85,7 @@ def command(meta: dict[str, Any]) -> str:
         args += ["--env-kwargs", *(f"{k}={v!r}" for k, v in meta["env_kwargs"].items())]
     if meta.get("algo_kwargs"):
         args += ["--algo-kwargs", *(f"{k}={v!r}" for k, v in meta["algo_kwargs"].items())]
-    return " ".join(shlex.quote(a) for a in args)
+    return " ".join(quote_arg(a) for a in args)
 
 
 def _training_log(run_dir: Path) -> list[dict[str, str]]:
@@ -85,7 +93,9 @@ def _training_log(run_dir: Path) -> list[dict[str, str]]:
     if not path.exists():
         return []
     with open(path, newline="") as f:
-        return [{k: row.get(k, "") for k in TRAINING_COLUMNS} for row in csv.DictReader(f)]
+        # SB3 writes evaluation rows of its own (eval/* only): the curves need the training ones
+        return [{k: row.get(k, "") for k in TRAINING_COLUMNS} for row in csv.DictReader(f)
+                if row.get("time/total_timesteps")]  # fmt: skip
 
 
 def train_seconds(meta: dict[str, Any], log: list[dict[str, str]]) -> float | None:
