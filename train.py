@@ -205,6 +205,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--timesteps", type=int, default=100_000, help="steps to train (more steps with --resume)")
     parser.add_argument("--seed", type=int, default=None, help="default 0 (with --resume: the run's seed + its steps)")
     parser.add_argument("--n-envs", type=int, default=None, help="parallel envs (subprocesses when > 1); default 1")
+    parser.add_argument("--vec", choices=("subproc", "dummy"), default=None,
+                        help="how --n-envs > 1 run: 'subproc' (default; one process each, SB3's SubprocVecEnv) or "
+                             "'dummy' (in this process, one after the other)")  # fmt: skip
     parser.add_argument("--eval-every", type=int, default=10_000, help="timesteps between evaluations")
     parser.add_argument("--eval-episodes", type=int, default=10)
     parser.add_argument("--learning-starts", type=int, default=None, help="override the preset (off-policy algos)")
@@ -279,8 +282,16 @@ def main(argv: list[str] | None = None) -> int:
     if files is None:
         (run / "run.json").write_text(json.dumps(meta, indent=2))
 
-    vec_cls = SubprocVecEnv if n_envs > 1 else DummyVecEnv
-    venv = make_vec_env(env_id, n_envs=n_envs, seed=meta["seed"], vec_env_cls=vec_cls, env_kwargs=env_kwargs,
+    vec = ns.vec or ("subproc" if n_envs > 1 else "dummy")
+    vec_cls = SubprocVecEnv if vec == "subproc" else DummyVecEnv
+    if vec_cls is SubprocVecEnv:
+        # One core per env process: numba and torch threads would only compete with the other
+        # envs (the children inherit the environment; the kernels are serial anyway).
+        for name in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+            os.environ.setdefault(name, "1")
+    # "module:id": a worker process imports softgrasp_env (and with it the ids) before gym.make,
+    # whatever the main module is (train.main called from a script or a test, not only train.py).
+    venv = make_vec_env(f"softgrasp_env:{env_id}", n_envs=n_envs, seed=meta["seed"], vec_env_cls=vec_cls, env_kwargs=env_kwargs,
                         monitor_dir=str(run), monitor_kwargs={"info_keywords": ("is_success",)})  # fmt: skip
     # Positions (cm), velocities and forces (N) differ by orders of magnitude: normalise the
     # observations. HER relabels goals inside its buffer, so the goal env runs unnormalised.

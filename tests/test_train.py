@@ -276,3 +276,12 @@ def test_train_checks_its_output_before_training(tmp_path, capsys):
         train.main([*TINY_PPO, "--out", str(tmp_path / "runs")])
     assert "model.zip' is a directory" in capsys.readouterr().err
     assert not (tmp_path / "runs" / f"{ENV}_ppo_0" / "run.json").exists()  # nothing written
+
+
+def test_two_subprocess_envs_train_and_report_the_steps_really_taken(tmp_path, capsys):
+    """--n-envs 2 (SubprocVecEnv) from train.main, not train.py's own __main__: the workers find
+    the ids. PPO collects n_steps per env per rollout: 64 asked, 2 x 64 = 128 taken and reported."""
+    assert train.main([*TINY_PPO, "--n-envs", "2", "--no-progress", "--out", str(tmp_path)]) == 0
+    meta = json.loads((tmp_path / f"{ENV}_ppo_0" / "run.json").read_text())
+    assert meta["n_envs"] == 2 and meta["num_timesteps"] == meta["timesteps_trained"] == 128
+    assert "trained 128 steps" in capsys.readouterr().out
