@@ -463,7 +463,10 @@ class SoftGraspEnv(gym.Env):
     def step(self, action):
         if self.scene is None:
             raise RuntimeError("call reset() before step()")
-        act = np.asarray(action, dtype=np.float64)
+        raw = np.asarray(action)
+        if raw.dtype.kind not in "biuf":  # complex (numpy would drop the imaginary part), text, None
+            raise TypeError(f"action must be real numbers, got dtype {raw.dtype} ({action!r})")
+        act = raw.astype(np.float64)
         if act.shape != (4,):
             raise ValueError(f"action must have shape (4,), got {act.shape}")
         if not np.isfinite(act).all():

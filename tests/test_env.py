@@ -551,3 +551,17 @@ def test_human_mode_runs_the_gui_with_the_particles_shown():
         np.testing.assert_allclose(pos, state.particle_x[k], atol=1e-9)
     env.close()
     ref.close()
+
+
+@pytest.mark.parametrize("action", [np.array([0.1 + 1j, 0, 0, 0]), np.array([0.1 + 0j, 0, 0, 0]), ["a", "b", "c", "d"],
+                                    [0.1, 0.2, 0.3, None]])  # fmt: skip
+def test_an_action_that_is_not_real_numbers_is_a_type_error(action):
+    """Issue 12: a complex action used to lose its imaginary part with only numpy's warning."""
+    env = gym.make("SoftGraspRigid-v1")
+    env.reset(seed=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no ComplexWarning on the way
+        with pytest.raises(TypeError, match="action must be real numbers"):
+            env.step(action)
+    env.step(np.zeros(4, dtype=np.float32))  # still usable
+    env.close()

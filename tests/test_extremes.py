@@ -149,6 +149,7 @@ def test_slow_ends_run(kwargs):
      r"too slack for the time step.*sags it 2\.27 cm.*at least 0\.114"),
     (dict(tissue=TissueConfig(radius_scale=2.0)), r"wider than the fingers' faces.*0\.0316 m.*at least 10000 per m\^2"),
     (dict(tissue=TissueConfig(normal_radius=0.03)), r"tissue pad \(0\.038 m\)"),
+    (dict(tissue=TissueConfig(extrude=0.1)), r"does not fit between the open fingers.*tissue pad \(0\.103 m\)"),
     (dict(sim=SimConfig(dt=1 / 60, coupling="consistent"), finger_force=30.0),
      r"coupling='consistent' with finger_force=30 N .* at most 7\.5 N"),
     (dict(cylinder_mass=9.0, cylinder_mass_range=0.9), r"cylinder_mass_range=0\.9, cylinder_mass=9\b.*got 17\."),
