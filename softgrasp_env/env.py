@@ -379,15 +379,19 @@ class SoftGraspEnv(gym.Env):
         # (the cylinder may stand right under the start), so it keeps 5 mm of clearance instead.
         clearance = max(REACH_CLEARANCE, pad_thickness(fingers, tissue) + 0.005)
         start_height = 0.5 * cylinder_height + fh_z + clearance if task == "reach" else 0.05
+        base_kwargs = dict(fingers=fingers, tissue_faces=tissue_faces, fem_resolution=fem_resolution,
+                           cylinder_radius=cylinder_radius, cylinder_height=cylinder_height, cylinder_mass=cylinder_mass,
+                           finger_force=finger_force, tissue=tissue, sim=sim)  # fmt: skip
+        # The scene's own checks first, from a start well above the cylinder: a pad too thick to
+        # fit is named as such, not as a cylinder too tall for the start it raises.
+        SceneConfig(**base_kwargs, start_height=min(0.3, 0.5 * cylinder_height + fh_z + clearance))
         grip_z = 0.5 * cylinder_height + start_height
         if grip_z > GRIP_TOP - 0.01:
             tallest = GRIP_TOP - 0.01 - fh_z - clearance if task == "reach" else 2.0 * (GRIP_TOP - 0.01 - 0.05)
             raise ValueError(f"cylinder_height={cylinder_height:g} m is too tall for task={task!r}: the grip would start "
                              f"{grip_z:.3f} m up, too near the top of the arm's workspace ({GRIP_TOP:g} m); at most "
                              f"{tallest:.3f} m")  # fmt: skip
-        self._base = SceneConfig(fingers=fingers, tissue_faces=tissue_faces, fem_resolution=fem_resolution, cylinder_radius=cylinder_radius, cylinder_height=cylinder_height,
-                                 cylinder_mass=cylinder_mass, finger_force=finger_force, tissue=tissue, sim=sim,
-                                 start_height=start_height)  # fmt: skip
+        self._base = SceneConfig(**base_kwargs, start_height=start_height)
         if cylinder_radius - cylinder_radius_range < 0.005:
             raise ValueError(f"cylinder_radius - cylinder_radius_range must be >= 0.005 m, got "
                              f"{cylinder_radius} - {cylinder_radius_range}")  # fmt: skip
