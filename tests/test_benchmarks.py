@@ -55,3 +55,24 @@ def test_stability_map_sees_rigid_fingers_fail_where_the_tissue_holds(tmp_path):
     assert outcome["rigid", 0.0] == "held" and outcome["rigid", 0.1] != "held"
     assert outcome["tissue, thesis", 0.1] == "held" and outcome["tissue, consistent", 0.1] == "held"
     assert (tmp_path / "stability_map.png").stat().st_size > 5_000
+
+
+def _run_plain(script: str, *args: str) -> str:
+    proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / script), *args], cwd=ROOT, capture_output=True,
+                          text=True, timeout=900, env={"PYTHONPATH": str(ROOT), "PATH": ""})  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    return proc.stdout
+
+
+def test_vec_throughput_measures_in_process_and_subprocess_envs():
+    import re
+
+    out = _run_plain("vec_throughput.py", "--env", "SoftGraspRigid-v1", "--seconds", "0.5", "--max-envs", "2")
+    rates = [float(x) for x in re.findall(r":\s+(\d+) env steps/s", out)]
+    assert len(rates) == 3 and min(rates) > 0, out  # in-process, 1 and 2 subprocesses
+    assert "x1.00 over 1 subprocess" in out
+
+
+def test_wedge_sign_splits_success_by_the_wedge():
+    out = _run_plain("wedge_sign.py", "--policy", "scripted", "--episodes", "4")
+    assert "scripted: success" in out and "|wedge|" in out
