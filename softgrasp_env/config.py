@@ -30,6 +30,12 @@ under the motor's force is projected against the tissue every step, and a large 
 drives it through the pad. Probe of issue 12 (scripted grasps): 30 N at 1/60 s (0.5 N s) and
 100 N at 1/120 s (0.83) diverged in every episode, 30 N at 1/120 s (0.25) ran; the stability map
 saw 10-20 N fail at 1/60 s (0.17-0.33) on the easy task. 0.125 keeps below all of them."""
+MAX_PARTICLE_RADIUS = 0.0125
+"""Widest tangential particle radius (radius_scale * spacing) SceneConfig accepts on the fingers
+[m]. Wider particles overhang the cores' edges (a face is 4 cm wide) and catch on the cylinder's
+rim: 3.5-6.7 cm tore the tissue within 10-50 random-action steps, 2.0 cm (900 per m^2) in one of
+five random-action episodes (issue 12's probe and tests/test_extremes.py); the `fast` preset's
+1.2 cm (2,500 per m^2) and the default's 0.95 cm run."""
 MAX_TISSUE_SAG = 0.006
 """Largest equilibrium sag g dt^2 / k of the tissue under gravity that SceneConfig accepts [m]
 (the probe of issue 12: 0.54-0.57 cm ran every episode, 1.7 cm tore one in three, more tore all)."""
@@ -359,17 +365,14 @@ class SceneConfig:
                     f"times dt={self.sim.dt:g} s squared over stiffness={self.tissue.stiffness:g} sags it "
                     f"{sag * 100:.2f} cm, more than {MAX_TISSUE_SAG * 100:g} cm; raise the stiffness to at least "
                     f"{self.sim.gravity * self.sim.dt**2 / MAX_TISSUE_SAG:.3g} or shorten dt")  # fmt: skip
-            # A particle's ellipsoid wider than the finger's face overhangs the core and reaches
-            # round to the other faces: measured, tangential radii of 3.5-6.7 cm (low density with a
-            # large radius_scale) tore the tissue within 10-50 random-action steps.
+            # Coarse pads of wide particles overhang the core's edges and catch on the cylinder.
             reach = self.tissue.radius_scale * self.tissue.spacing
-            if reach > fh[1]:
+            if reach > MAX_PARTICLE_RADIUS:
                 raise ValueError(
-                    f"SceneConfig: the tissue particles are wider than the fingers' faces: radius_scale="
-                    f"{self.tissue.radius_scale:g} times the spacing {self.tissue.spacing:.4f} m (density="
-                    f"{self.tissue.density:g} per m^2) gives {reach:.4f} m, more than the face's half width "
-                    f"finger_half_extents[1]={fh[1]:g} m; raise the density to at least "
-                    f"{(self.tissue.radius_scale / fh[1]) ** 2:.0f} per m^2 or lower radius_scale")  # fmt: skip
+                    f"SceneConfig: the tissue particles are too wide: radius_scale={self.tissue.radius_scale:g} "
+                    f"times the spacing {self.tissue.spacing:.4f} m (density={self.tissue.density:g} per m^2) "
+                    f"gives {reach:.4f} m, more than {MAX_PARTICLE_RADIUS:g} m; raise the density to at least "
+                    f"{(self.tissue.radius_scale / MAX_PARTICLE_RADIUS) ** 2:.0f} per m^2 or lower radius_scale")  # fmt: skip
         # narrowest half gap of the open fingers: a wedge turns one edge of each face inwards
         gap = self.finger_max_opening - pad - fh[2] * math.sin(0.5 * abs(self.jaw_wedge))
         r = self.cylinder_radius

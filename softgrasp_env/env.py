@@ -202,8 +202,8 @@ class SoftGraspEnv(gym.Env):
     Out-of-range arguments raise ``ValueError`` naming the argument. So do combinations that
     would not run, each naming the rule and the limit (measured where they stopped running,
     tests/test_extremes.py): a cylinder that does not fit the open fingers with their pads, or a
-    range whose extremes start a finger or the palm inside it; tissue particles wider than the
-    finger face; a tissue that sags more than 0.6 cm under gravity per ``g dt^2 / stiffness``; the
+    range whose extremes start a finger or the palm inside it; tissue particles wider than 1.25 cm
+    (``radius_scale`` times the spacing); a tissue that sags more than 0.6 cm under gravity per ``g dt^2 / stiffness``; the
     consistent coupling's squeeze ``finger_force * dt`` above 0.125 N s; the arm's target moving
     more than 1/60 m per physics step. Every setting that is accepted runs: both ends of every
     range, 13 combinations of them and a seeded fuzz over all of them run without divergence.
