@@ -76,3 +76,11 @@ def test_vec_throughput_measures_in_process_and_subprocess_envs():
 def test_wedge_sign_splits_success_by_the_wedge():
     out = _run_plain("wedge_sign.py", "--policy", "scripted", "--episodes", "4")
     assert "scripted: success" in out and "|wedge|" in out
+
+
+def test_build_scaling_prints_linear_memory():
+    out = _run_plain("build_scaling.py", "--factors", "1", "4")
+    rows = [line.split() for line in out.splitlines()[1:] if line.strip()]
+    assert len(rows) == 2
+    per_particle = [float(r[5].replace(",", "")) for r in rows]
+    assert max(per_particle) < 1.5 * min(per_particle)  # linear in the particle count, not quadratic
