@@ -47,8 +47,10 @@ RESET_OPTIONS = ("cylinder_xy", "lateral_offset", "yaw", "jaw_wedge", "friction_
 GRIP_TOP = 0.20
 """Highest the arm takes the grip point [m]."""
 REACH_CLEARANCE = 0.02
-MAX_ARM_STEP = 1.0 / 60.0
-"""Farthest the arm's target may move in one physics step, gripper_speed * dt [m] (issue 12's probe)."""
+MAX_ARM_STEP = 1.0 / 120.0
+"""Farthest the arm's target may move in one physics step, gripper_speed * dt [m]: 3.3 cm tore
+the tissue in 2 of 5 probe episodes, 1.7 cm in 2 of 8 (1/60 s with the strongest fingers,
+tests/test_extremes.py); the default moves 0.6 mm."""
 """Task 'reach': the open fingertips start this far above the cylinder's top [m]."""
 
 TASKS: dict[str, dict[str, float]] = {
@@ -185,7 +187,7 @@ class SoftGraspEnv(gym.Env):
       arguments below override them.
     - ``reward_type`` ("dense" | "sparse").
     - ``control_frequency`` (20 Hz): must divide the physics rate ``1 / sim.dt`` (240 Hz).
-    - ``gripper_speed`` (0.15 m/s, at most 2 and at most 1/60 m per physics step, ``gripper_speed * sim.dt``):
+    - ``gripper_speed`` (0.15 m/s, at most 2 and at most 1/120 m per physics step, ``gripper_speed * sim.dt``):
       arm displacement per step at full action, times the step time.
     - ``tissue_density`` (particles per m² of core surface), ``friction_static``,
       ``friction_dynamic``: tissue settings (also the rigid fingers' pybullet friction);
@@ -205,7 +207,7 @@ class SoftGraspEnv(gym.Env):
     range whose extremes start a finger or the palm inside it; tissue particles wider than 1.25 cm
     (``radius_scale`` times the spacing); a tissue that sags more than 0.6 cm under gravity per ``g dt^2 / stiffness``; the
     consistent coupling's squeeze ``finger_force * dt`` above 0.125 N s; the arm's target moving
-    more than 1/60 m per physics step. Every setting that is accepted runs: both ends of every
+    more than 1/120 m per physics step. Every setting that is accepted runs: both ends of every
     range, 13 combinations of them and a seeded fuzz over all of them run without divergence.
 
     ## Rendering
@@ -365,8 +367,7 @@ class SoftGraspEnv(gym.Env):
         if abs(ratio - self._substeps) > 1e-9 * ratio or self._substeps < 1:
             raise ValueError(f"control_frequency must divide the physics rate 1/sim.dt = {1.0 / sim.dt:g} Hz, "
                              f"got {control_frequency!r}")  # fmt: skip
-        # The arm's target moves gripper_speed * dt per physics step; at 3.3 cm a step (2 m/s at
-        # 1/60 s) the tissue tore in 2 of 5 probe episodes, at 1.7 cm (2 m/s at 1/120 s) in none.
+        # The arm's target moves gripper_speed * dt per physics step (MAX_ARM_STEP).
         if gripper_speed * sim.dt > MAX_ARM_STEP + 1e-12:
             raise ValueError(f"gripper_speed={gripper_speed:g} m/s with sim.dt={sim.dt:g} s moves the arm "
                              f"{gripper_speed * sim.dt * 100:.2f} cm per physics step, more than {MAX_ARM_STEP * 100:.2f} "
