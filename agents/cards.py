@@ -76,8 +76,8 @@ def quote_arg(arg: str) -> str:
 
 def command(meta: dict[str, Any]) -> str:
     """The train.py command that made the run: recorded by train.py, else rebuilt from run.json."""
-    if meta.get("command"):
-        return meta["command"]
+    if meta.get("command"):  # re-quoted: runs before quote_arg recorded shlex's '"'"' quoting
+        return " ".join(quote_arg(a) for a in shlex.split(meta["command"]))
     args = ["python", "train.py", "--env", meta["env"], "--algo", meta["algo"], "--seed", str(meta["seed"]),
             "--timesteps", str(meta["timesteps"]), "--eval-every", str(meta["eval_every"]),
             "--eval-episodes", str(meta["eval_episodes"])]  # fmt: skip
