@@ -141,8 +141,8 @@ def test_combinations_of_ends_run(name):
 def test_ends_and_combinations_run_over_more_seeds(name):
     """Eight more episodes each (5 random-action, 3 scripted): at most one ends in the one known
     failure, a tissue particle snagged over the cylinder's rim and torn just past the 3 cm limit
-    (at the defaults about once in 10,000 random-action steps, README). Measured over the 58
-    settings: 56 none; 'lightest tissue, stiffness 0.1' one (random seed 3, 3.4 cm; the same
+    (at the defaults about once in 10,000 random-action steps, README). Measured over the 56
+    settings: 54 none; 'lightest tissue, stiffness 0.1' one (random seed 3, 3.4 cm; the same
     seed tears at 3.0 cm with 300 kg/m^3 or with stiffness 0.2), 'every randomisation range wide'
     one (scripted seed 2, 3.3 cm; none with jaw_wedge_range 0.15 or without the radius range).
     Fixing the snag is physics left to do; any other divergence, or a second, fails."""
