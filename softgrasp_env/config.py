@@ -37,8 +37,9 @@ rim: 3.5-6.7 cm tore the tissue within 10-50 random-action steps, 2.0 cm (900 pe
 five random-action episodes (issue 12's probe and tests/test_extremes.py); the `fast` preset's
 1.2 cm (2,500 per m^2) and the default's 0.95 cm run."""
 MAX_TISSUE_SAG = 0.006
-"""Largest equilibrium sag g dt^2 / k of the tissue under gravity that SceneConfig accepts [m]
-(the probe of issue 12: 0.54-0.57 cm ran every episode, 1.7 cm tore one in three, more tore all)."""
+"""Largest equilibrium sag g dt^2 / k of the tissue under gravity that SceneConfig accepts [m].
+Issue 12's probe: 0.54-0.57 cm ran its five episodes (0.57 cm, stiffness 0.03 at 1/240 s, snagged
+once in eight more: stiffness now starts at 0.1), 1.7 cm tore one in three, more tore all."""
 """How far a segmented finger's segments stand in front of its core (2 mm boss + 6 mm segment,
 segmented.py) [m]: the pad depth of that kind, as ``TissueConfig.extrude`` is the tissue's."""
 GEOMETRY_MARGIN = 0.001
@@ -85,8 +86,9 @@ class TissueConfig:
     group_size: int = 8
     """Particles per implicit shape-matching group, centre included (thesis 5.2.1 *groupSize*), 4 to
     16. Larger groups span most of a pad (30 particles a face at the default density) and let it
-    sag and tear: 32 diverged in every episode at 1 iteration, 64 in 2 of 5 at 2 iterations,
-    while 16 ran every episode at 1 iteration (issue 12's extremes probe)."""
+    sag and tear: 32 diverged in every episode at 1 iteration, 64 in 1 of 5 at 2 iterations (and
+    1 of 5 at 2 iterations and 1/60 s), while 16 ran every episode at 1 iteration (issue 12's
+    extremes probe)."""
     tissue_density: float = 1_000.0
     """Mass density of the tissue [kg/m^3], 100 to 1e4; particle mass = density * (its share of
     the layer volume). Heavier tissue outweighs its shape matching under the arm's shoves: 3e4
@@ -350,7 +352,7 @@ class SceneConfig:
         if self.fingers == "tissue":
             # Shape matching pulls a particle a fraction k of the way to its goal per step
             # (Mueller 2005, alpha = k), so gravity's g dt^2 per step settles at a sag of
-            # g dt^2 / k: past ~1.7 cm the probe's tissue tore, at 0.57 cm it never did.
+            # g dt^2 / k (MAX_TISSUE_SAG: at 1.7 cm the probe's tissue tore one episode in three).
             impulse = self.finger_force * self.sim.dt
             if self.sim.coupling == "consistent" and impulse > MAX_CONSISTENT_SQUEEZE_IMPULSE:
                 raise ValueError(
