@@ -11,6 +11,7 @@ step every 2 env steps (``train_freq=2``), and PPO SB3's default 64x64 (its upda
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 import gymnasium as gym
@@ -52,7 +53,8 @@ PRESETS: dict[str, dict[str, Any]] = {
         "learning_starts": 1000,
         "replay_buffer_class": HerReplayBuffer,
         "replay_buffer_kwargs": {"n_sampled_goal": 4, "goal_selection_strategy": "future"},
-        "policy_kwargs": {"net_arch": [256, 256]},
+        "train_freq": 2,
+        "policy_kwargs": {"net_arch": [128, 128]},
     },
 }
 
@@ -68,7 +70,9 @@ def make_model(algo: str, env: gym.Env | VecEnv, *, seed: int | None = None, **o
     ``overrides`` (any keyword of the SB3 class)."""
     if algo not in PRESETS:
         raise ValueError(f"algo must be one of {ALGOS}, got {algo!r}")
-    kwargs = {**PRESETS[algo], **overrides}
+    # A deep copy: SB3 writes into the policy_kwargs it is given (use_sde), which would change the
+    # preset for every later model and the hyperparameters a run records.
+    kwargs = copy.deepcopy({**PRESETS[algo], **overrides})
     policy = kwargs.pop("policy")
     cls = PPO if algo == "ppo" else SAC
     return cls(policy, env, seed=seed, device="cpu", verbose=0, **kwargs)

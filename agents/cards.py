@@ -114,16 +114,16 @@ def publish(run_dir: Path, *, episodes: int = EPISODES, seed: int = SEED, dest: 
 
     import softgrasp_env
     from agents.evaluate import evaluate
-    from agents.runs import load_run
+    from agents.runs import load_run, make_env, run_files
 
-    loaded = load_run(run_dir)
-    meta = loaded.meta
-    env = loaded.make_env()
+    env = make_env(run_files(run_dir).meta)  # one env for loading (HER's buffer needs it) and evaluating
     try:
+        loaded = load_run(run_dir, env=env)
         env.action_space.seed(seed)
         ev = evaluate(env, loaded.policy, episodes=episodes, seed=seed)
     finally:
         env.close()
+    meta = loaded.meta
     log = _training_log(loaded.files.run_dir)
     out = dest / loaded.files.run_dir.name
     if out.exists():

@@ -24,6 +24,8 @@ FINGER_DROP = 0.04
 """Gap between the palm's underside and the top of a finger core [m] (the finger's upper part is
 not modelled: only the fingertip segment touches anything)."""
 SEGMENT_DEPTH = 0.008
+"""How far a segmented finger's segments stand in front of its core (2 mm boss + 6 mm segment,
+segmented.py) [m]: the pad depth of that kind, as ``TissueConfig.extrude`` is the tissue's."""
 MAX_CONSISTENT_SQUEEZE_IMPULSE = 0.125
 """Largest finger_force * dt the consistent coupling accepts [N s]: a core sliding on its joint
 under the motor's force is projected against the tissue every step, and a large impulse per step
@@ -40,8 +42,6 @@ MAX_TISSUE_SAG = 0.006
 """Largest equilibrium sag g dt^2 / k of the tissue under gravity that SceneConfig accepts [m].
 Issue 12's probe: 0.54-0.57 cm ran its five episodes (0.57 cm, stiffness 0.03 at 1/240 s, snagged
 once in eight more: stiffness now starts at 0.1), 1.7 cm tore one in three, more tore all."""
-"""How far a segmented finger's segments stand in front of its core (2 mm boss + 6 mm segment,
-segmented.py) [m]: the pad depth of that kind, as ``TissueConfig.extrude`` is the tissue's."""
 GEOMETRY_MARGIN = 0.001
 """Clearance the start geometry must leave between the cylinder and the open fingers or palm [m]."""
 
@@ -350,9 +350,7 @@ class SceneConfig:
         fh = self.finger_half_extents
         pad = pad_thickness(self.fingers, self.tissue)
         if self.fingers == "tissue":
-            # Shape matching pulls a particle a fraction k of the way to its goal per step
-            # (Mueller 2005, alpha = k), so gravity's g dt^2 per step settles at a sag of
-            # g dt^2 / k (MAX_TISSUE_SAG: at 1.7 cm the probe's tissue tore one episode in three).
+            # The consistent coupling's squeeze per step (MAX_CONSISTENT_SQUEEZE_IMPULSE).
             impulse = self.finger_force * self.sim.dt
             if self.sim.coupling == "consistent" and impulse > MAX_CONSISTENT_SQUEEZE_IMPULSE:
                 raise ValueError(
@@ -360,6 +358,9 @@ class SceneConfig:
                     f"{self.sim.dt:g} s pushes {impulse:.3g} N s per step into the tissue, more than "
                     f"{MAX_CONSISTENT_SQUEEZE_IMPULSE:g} N s; at this dt finger_force must be at most "
                     f"{MAX_CONSISTENT_SQUEEZE_IMPULSE / self.sim.dt:.3g} N (or use coupling='thesis')")  # fmt: skip
+            # Shape matching pulls a particle a fraction k of the way to its goal per step
+            # (Mueller 2005, alpha = k), so gravity's g dt^2 per step settles at a sag of
+            # g dt^2 / k (MAX_TISSUE_SAG: at 1.7 cm the probe's tissue tore one episode in three).
             sag = self.sim.gravity * self.sim.dt**2 / self.tissue.stiffness
             if sag > MAX_TISSUE_SAG:
                 raise ValueError(

@@ -47,11 +47,11 @@ RESET_OPTIONS = ("cylinder_xy", "lateral_offset", "yaw", "jaw_wedge", "friction_
 GRIP_TOP = 0.20
 """Highest the arm takes the grip point [m]."""
 REACH_CLEARANCE = 0.02
+"""Task 'reach': the open fingertips start this far above the cylinder's top [m]."""
 MAX_ARM_STEP = 1.0 / 120.0
 """Farthest the arm's target may move in one physics step, gripper_speed * dt [m]: 3.3 cm tore
 the tissue in 2 of 5 probe episodes, 1.7 cm in 2 of 8 (1/60 s with the strongest fingers,
 tests/test_extremes.py); the default moves 0.6 mm."""
-"""Task 'reach': the open fingertips start this far above the cylinder's top [m]."""
 
 TASKS: dict[str, dict[str, float]] = {
     # The grip starts above the cylinder's top, 4-14 cm from the origin in a random direction
@@ -147,6 +147,11 @@ class SoftGraspEnv(gym.Env):
     0.025 rad wedge on, at every yaw tried, while the tissue holds it up to 0.45 rad; offset and yaw
     alone break neither (the cylinder is round: the yaw only turns the grasp). 83 % of the
     episodes have |wedge| > 0.025 rad; the scripted policy measured 30 / 30 soft, 14 / 30 rigid.
+    What the rigid twin cannot hold is a grasp at mid-height with the gap open at the top (the
+    map's sign): the scripted policy's rigid success is 1 of 46 such episodes, 30 of 30 with the
+    gap open at the bottom (seeds 1000-1099, benchmarks/wedge_sign.py). A learned policy that
+    closes near the top rim holds either way (SAC on the rigid twin: 88-93 % on two of three
+    seeds, docs/RESULTS.md), so this task shows what tissue buys a fixed grasp, not a learned one.
     The spread of start and cylinder (as wide as the workspace allows) keeps every constant action
     sequence tried at or below 10 % (the best of 18: 4 of 40 episodes).
     A positive wedge opens the gap at the top (each inner face 6 mm further out at the top than
@@ -567,11 +572,9 @@ class SoftGraspEnv(gym.Env):
         # The scaled quantities at their extremes stay inside SceneConfig's and TissueConfig's own
         # ranges (a 9 kg cylinder with cylinder_mass_range=0.9 used to fail at some reset, 17 kg).
         for sign in (-1.0, 1.0):
-            fs, ms = 1.0 + sign * rg["friction"], 1.0 + sign * rg["cylinder_mass"]
             try:
-                tissue = replace(b.tissue, friction_static=b.tissue.friction_static * fs,
-                                 friction_dynamic=b.tissue.friction_dynamic * fs)  # fmt: skip
-                replace(b, tissue=tissue, ground_friction=b.ground_friction * fs, cylinder_mass=b.cylinder_mass * ms)
+                _with_friction_scale(replace(b, cylinder_mass=b.cylinder_mass * (1.0 + sign * rg["cylinder_mass"])),
+                                     1.0 + sign * rg["friction"])  # fmt: skip
             except ValueError as e:
                 raise ValueError(
                     f"the randomisation ranges reach a scene that cannot be built (friction_range={rg['friction']:g}, "
@@ -606,9 +609,7 @@ class SoftGraspEnv(gym.Env):
         fs = vals.pop("friction_scale")
         if not 0.0 < fs <= 10.0:
             raise ValueError(f"friction_scale must be in (0, 10], got {fs!r}")
-        tissue = replace(b.tissue, friction_static=b.tissue.friction_static * fs,
-                         friction_dynamic=b.tissue.friction_dynamic * fs)  # fmt: skip
-        return replace(b, tissue=tissue, ground_friction=b.ground_friction * fs, **vals)  # the task's start height is b's
+        return _with_friction_scale(replace(b, **vals), fs)  # the task's start height is b's
 
     def _build(self, options: dict[str, Any]) -> None:
         cfg = self._draw(options)
@@ -770,6 +771,14 @@ class SoftGraspGoalEnv(SoftGraspEnv):
             return -1.0
         fo = self._format_obs(obs)
         return float(self.compute_reward(fo["achieved_goal"], fo["desired_goal"], info))
+
+
+def _with_friction_scale(cfg: SceneConfig, scale: float) -> SceneConfig:
+    """``cfg`` with every friction coefficient (the tissue's static and kinetic, the ground's)
+    scaled by ``scale``: the one place the env's ``friction_range`` / ``friction_scale`` acts."""
+    tissue = replace(cfg.tissue, friction_static=cfg.tissue.friction_static * scale,
+                     friction_dynamic=cfg.tissue.friction_dynamic * scale)  # fmt: skip
+    return replace(cfg, tissue=tissue, ground_friction=cfg.ground_friction * scale)
 
 
 def _real(value) -> bool:

@@ -84,3 +84,40 @@ def test_train_rejects_bad_arguments(tmp_path):
         train.main(["--env", "SoftGrasp-v1", "--timesteps", "0", "--out", str(tmp_path)])
     with pytest.raises(SystemExit):
         evaluate_main(["--policy", str(tmp_path / "missing.zip")])
+
+
+def test_making_a_model_leaves_the_presets_as_they_are():
+    """SB3 writes into the policy_kwargs it is given; make_model hands it a copy, so the presets
+    (and the hyperparameters train.py records from them) stay what agents/baselines.py says."""
+    import copy
+
+    from agents.baselines import PRESETS, make_model
+
+    before = copy.deepcopy(PRESETS)
+    env = gym.make("SoftGraspRigid-v1")
+    for algo in ("ppo", "sac"):
+        make_model(algo, env, seed=0)
+    env.close()
+    assert PRESETS == before
+
+
+def test_the_zoo_hyperparameter_files_say_what_the_presets_say():
+    """agents/hyperparams/*.yml repeat the presets for rl-baselines3-zoo: their network sizes,
+    train_freq, gamma and learning rate must be the presets' (the HER preset once drifted)."""
+    import re
+    from pathlib import Path
+
+    from agents.baselines import PRESETS
+
+    root = Path(__file__).resolve().parents[1] / "agents" / "hyperparams"
+    for name, sections in (("ppo.yml", {"SoftGrasp-v1": "ppo"}), ("sac.yml", {"SoftGrasp-v1": "sac", "SoftGraspGoal-v1": "her-sac"})):
+        text = (root / name).read_text()
+        for env_id, algo in sections.items():
+            block = re.search(rf"^{re.escape(env_id)}:.*?(?=^\S|\Z)", text, re.S | re.M).group(0)
+            preset = PRESETS[algo]
+            arch = [int(x) for x in re.search(r"net_arch=\[([\d, ]+)\]", block).group(1).split(",")]
+            assert arch == preset["policy_kwargs"]["net_arch"], (name, env_id)
+            assert float(re.search(r"gamma: ([\d.]+)", block).group(1)) == preset["gamma"]
+            assert float(re.search(r"learning_rate: !!float ([\de.-]+)", block).group(1)) == preset["learning_rate"]
+            freq = re.search(r"train_freq: (\d+)", block)
+            assert (int(freq.group(1)) if freq else None) == preset.get("train_freq"), (name, env_id)
