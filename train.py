@@ -1,10 +1,10 @@
 """Train a stable-baselines3 agent on a SoftGrasp environment.
 
-    python train.py --env SoftGrasp-v1 --algo sac --timesteps 100000
+    python train.py --env SoftGrasp-v2 --algo sac --timesteps 100000
     python train.py --env SoftGraspGoal-v1               # HER + SAC by default for the goal env
-    python train.py --env SoftGraspRigid-v1 --algo ppo --n-envs 2
-    python train.py --env SoftGrasp-v1 --env-kwargs cylinder_mass=0.2 fingers="'segmented'"
-    python train.py --resume runs/SoftGrasp-v1_sac_0 --timesteps 50000   # 50k more steps
+    python train.py --env SoftGraspRigid-v2 --algo ppo --n-envs 2
+    python train.py --env SoftGrasp-v2 --env-kwargs cylinder_mass=0.2 fingers="'segmented'"
+    python train.py --resume runs/SoftGrasp-v2_sac_0 --timesteps 50000   # 50k more steps
 
 Writes ``<out>/<env>_<algo>_<seed>/``: ``model.zip``, ``vecnormalize.pkl`` (observation statistics,
 except for HER), ``replay_buffer.pkl`` (off-policy algos, for --resume), ``run.json`` (the
@@ -195,7 +195,7 @@ def _kwargs_dict(parser: argparse.ArgumentParser, flag: str, pairs: list[tuple[s
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python train.py", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
-    parser.add_argument("--env", default=None, choices=softgrasp_env.ENV_IDS, help="default: SoftGrasp-v1")
+    parser.add_argument("--env", default=None, choices=softgrasp_env.ENV_IDS, help="default: SoftGrasp-v2")
     parser.add_argument("--env-kwargs", nargs="+", type=parse_kwarg, default=None, metavar="KEY=VALUE",
                         help="keyword arguments of gym.make (values as Python literals, else strings), "
                              "recorded in run.json; e.g. cylinder_mass=0.2 soft=False")  # fmt: skip
@@ -249,7 +249,7 @@ def main(argv: list[str] | None = None) -> int:
         env_kwargs, algo_kwargs = meta.get("env_kwargs", {}), meta.get("algo_kwargs", {})
         run = files.run_dir
     else:
-        env_id = ns.env or "SoftGrasp-v1"
+        env_id = ns.env or "SoftGrasp-v2"
         algo = ns.algo or default_algo(env_id)
         n_envs = ns.n_envs or 1
         seed = 0 if ns.seed is None else ns.seed

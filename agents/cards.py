@@ -1,7 +1,7 @@
 """The trained baselines shipped in ``agents/trained/``: publishing a train.py run there with its
 model card, reading the cards back, and the results table.
 
-    python -m agents.cards publish runs/SoftGrasp-v1_ppo_0 runs/SoftGraspRigid-v1_ppo_0 ...
+    python -m agents.cards publish runs/SoftGrasp-v2_ppo_0 runs/SoftGraspRigid-v2_ppo_0 ...
     python -m agents.cards table                 # the results table (scripted measured live)
 
 ``publish`` evaluates each run over 100 seeded episodes (seeds 1000-1099, the seeds
@@ -210,7 +210,7 @@ def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True) 
 
     rows = []
     if scripted:
-        for env_id in ("SoftGrasp-v1", "SoftGraspRigid-v1", "SoftGraspGoal-v1"):
+        for env_id in ("SoftGrasp-v2", "SoftGraspRigid-v2", "SoftGrasp-v1", "SoftGraspRigid-v1", "SoftGraspGoal-v1"):
             env = gym.make(env_id)
             try:
                 ev = evaluate(env, ScriptedGraspPolicy(), episodes=episodes, seed=seed)

@@ -1,7 +1,7 @@
 """Evaluate a policy on a SoftGrasp environment: success rate, return, lift.
 
-    python -m agents.evaluate --env SoftGrasp-v1 --policy scripted --episodes 20
-    python -m agents.evaluate --policy runs/SoftGrasp-v1_sac_0       # the run's env, kwargs and stats
+    python -m agents.evaluate --env SoftGrasp-v2 --policy scripted --episodes 20
+    python -m agents.evaluate --policy runs/SoftGrasp-v2_sac_0       # the run's env, kwargs and stats
 
 Episodes use seeds ``seed, seed + 1, ...`` so two policies meet the same starts.
 """
@@ -68,19 +68,19 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m agents.evaluate", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     parser.add_argument("--env", default=None, choices=softgrasp_env.ENV_IDS,
-                        help="default: the run's env (with its env kwargs) for a saved model, else SoftGrasp-v1")
+                        help="default: the run's env (with its env kwargs) for a saved model, else SoftGrasp-v2")
     parser.add_argument("--policy", default="scripted",
                         help="'scripted', 'random' or a run from train.py (its directory, model.zip or a checkpoint)")
     parser.add_argument("--episodes", type=int, default=10)
     parser.add_argument("--seed", type=int, default=1000)
     parser.add_argument("--other-env", action="store_true",
                         help="allow --env to differ from the run's env (same spaces), e.g. a soft-trained policy "
-                             "on SoftGraspRigid-v1")  # fmt: skip
+                             "on SoftGraspRigid-v2")  # fmt: skip
     ns = parser.parse_args(argv)
     env = None
     try:
         if ns.policy in ("scripted", "random"):
-            env = gym.make(ns.env or "SoftGrasp-v1")
+            env = gym.make(ns.env or "SoftGrasp-v2")
             policy = load_policy(ns.policy, env)
         else:
             from agents.runs import load_run, make_env, run_files

@@ -3,7 +3,7 @@
 Move the grip point over the cylinder (horizontally first: from above, the open fingers would
 otherwise come down on its top), down onto its centre, close the fingers, and once both fingers
 press on the cylinder, lift to a little above the success height and hold there. Works for the vector
-observation of SoftGrasp-v1 / SoftGraspRigid-v1 / SoftGraspSparse-v1 and for the ``observation``
+observation of SoftGrasp-v2 / SoftGraspRigid-v2 / SoftGraspSparse-v2 (and their v1) and for the ``observation``
 entry of SoftGraspGoal-v1's dict.
 """
 
@@ -11,9 +11,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from softgrasp_env.env import OBS_NAMES
+from softgrasp_env.env import CARRY_OBS_NAMES, OBS_NAMES
 
 _I = {name: k for k, name in enumerate(OBS_NAMES)}
+_SIZES = (len(OBS_NAMES), len(CARRY_OBS_NAMES))
+"""Without and with the carry test's clock (the v1 and v2 ids); the policy does not read the clock:
+it holds on from the grasp to the episode's end either way."""
 
 
 class ScriptedGraspPolicy:
@@ -44,16 +47,16 @@ class ScriptedGraspPolicy:
         obs = np.asarray(obs, dtype=np.float64)
         if obs.ndim == 1:
             return self(obs), state
-        if obs.ndim != 2 or obs.shape[1] != len(OBS_NAMES):
-            raise ValueError(f"observation must have shape ({len(OBS_NAMES)},) or (n_envs, {len(OBS_NAMES)}), got {obs.shape}")
+        if obs.ndim != 2 or obs.shape[1] not in _SIZES:
+            raise ValueError(f"observation must have shape (n,) or (n_envs, n) with n in {_SIZES}, got {obs.shape}")
         return np.stack([self(o) for o in obs]), state
 
     def __call__(self, obs) -> np.ndarray:
         if isinstance(obs, dict):
             obs = obs["observation"]
         obs = np.asarray(obs, dtype=np.float64)
-        if obs.shape != (len(OBS_NAMES),):
-            raise ValueError(f"observation must have shape ({len(OBS_NAMES)},), got {obs.shape} (batches: use predict)")
+        if obs.ndim != 1 or obs.shape[0] not in _SIZES:
+            raise ValueError(f"observation must have shape (n,) with n in {_SIZES}, got {obs.shape} (batches: use predict)")
         rel = obs[_I["cyl_rel_x"] : _I["cyl_rel_z"] + 1]
         forces = obs[[_I["force_left"], _I["force_right"]]]
         lift = obs[_I["lift"]]

@@ -2,7 +2,7 @@
 1, 2, ... up to the core count in subprocesses (SubprocVecEnv, what ``train.py --n-envs N``
 uses), in one run, with the speed-up over one subprocess env.
 
-    PYTHONPATH=. python benchmarks/vec_throughput.py [--env SoftGrasp-v1] [--seconds 20] [--max-envs N]
+    PYTHONPATH=. python benchmarks/vec_throughput.py [--env SoftGrasp-v2] [--seconds 20] [--max-envs N]
 
 Random actions, seeded; each configuration is warmed up (process start, numba's cached kernels
 loaded, first reset) before the timed window. Only stepping is timed; the policy is not (a
@@ -44,7 +44,7 @@ def measure(env_id: str, n_envs: int, vec: str, seconds: float) -> float:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="SoftGrasp-v1")
+    parser.add_argument("--env", default="SoftGrasp-v2")
     parser.add_argument("--seconds", type=float, default=20.0, help="timed window per configuration")
     parser.add_argument("--max-envs", type=int, default=os.cpu_count() or 1)
     ns = parser.parse_args()

@@ -6,7 +6,7 @@ Importing the package registers the Gymnasium environments listed in ``ENV_IDS``
     import gymnasium as gym
     import softgrasp_env
 
-    env = gym.make("SoftGrasp-v1")
+    env = gym.make("SoftGrasp-v2")
 """
 
 from ._jit_cache import invalidate_stale_kernels
@@ -17,5 +17,5 @@ from .registration import ENV_IDS, register_envs  # noqa: E402
 
 register_envs()
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 __all__ = ["ENV_IDS", "register_envs", "__version__"]

@@ -39,6 +39,11 @@ OBS_NAMES: tuple[str, ...] = (
 )  # fmt: skip
 """Names of the observation entries, in order (the env card documents each)."""
 
+CARRY_OBS_NAMES: tuple[str, ...] = OBS_NAMES + ("time",)
+"""With the carry test (``carry=True``, the v2 ids) the observation ends with the time since
+reset [s]: the carry comes at a fixed time, and a policy that cannot see the clock would face a
+task that is not Markov."""
+
 RESET_OPTIONS = ("cylinder_xy", "lateral_offset", "yaw", "jaw_wedge", "friction_scale", "cylinder_radius",
                  "cylinder_mass", "gripper_xy")  # fmt: skip
 """Keys ``reset(options=...)`` accepts: each fixes a quantity that is otherwise randomised."""
@@ -62,12 +67,28 @@ TASKS: dict[str, dict[str, float]] = {
     # cylinder from a 0.025 rad wedge on at every yaw tried (0-0.3 rad; 83 % of these episodes
     # have |wedge| > 0.025), the tissue holds it up to the 0.45 rad tried; offset and yaw alone
     # break neither, and the cylinder is round, so the yaw only turns the grasp.
-    "reach": dict(cylinder_position_range=0.07, yaw_range=math.pi / 4, jaw_wedge_range=0.15),
+    "reach": dict(cylinder_position_range=0.07, yaw_range=math.pi / 4, jaw_wedge_range=0.15, carry=True),
     # The gentle start of v0, for debugging: the open fingers around the top of the cylinder,
     # aligned (no wedge), the cylinder within +-1 cm of the origin.
-    "easy": dict(cylinder_position_range=0.01, yaw_range=math.radians(5.0), jaw_wedge_range=0.0),
+    "easy": dict(cylinder_position_range=0.01, yaw_range=math.radians(5.0), jaw_wedge_range=0.0, carry=False),
 }
-"""Tasks (``task=``) and the randomisation ranges each defaults to."""
+"""Tasks (``task=``), the randomisation ranges and whether the carry test is on, as each defaults to."""
+
+CARRY_START = 3.5
+"""The carry test begins this long after reset [s] (step 70 of the 100 at 20 Hz): the scripted
+policy has the cylinder up by 2.3 s at the latest, SAC by 1.7 s (tiltprobe, seeds 1000-1029)."""
+CARRY_DURATION = 1.5
+"""How long the arm carries [s]: three periods at CARRY_FREQUENCY, ending where it began."""
+CARRY_AMPLITUDE = 0.01
+"""Sideways displacement amplitude of the carry [m]."""
+CARRY_FREQUENCY = 2.0
+"""Frequency of the carry's sideways sway [Hz]: peak speed 2 pi f A = 0.13 m/s (below the arm's
+0.15 m/s), peak acceleration (2 pi f)^2 A = 1.6 m/s^2 (0.16 g). A cylinder hanging from two rigid
+contact points swings about the line through them as a pendulum of length l (the grasp's height
+above the centre of mass), sqrt(g / l) / (2 pi) = 2.4 Hz for l = 4.5 cm, so this sway rocks it;
+tissue pads hold it by their area and shear stiffness. Measured with the v1 baselines (seeds
+1000-1029): scripted soft 30 / 30 held, SAC soft 26 / 26, scripted rigid 0 / 12, SAC rigid 5 / 28;
+at 1.25 and 1.5 Hz the scripted rigid grasp held 12 / 12 (tilting 21-28 degrees)."""
 
 
 def _display_available() -> bool:
@@ -77,15 +98,19 @@ def _display_available() -> bool:
 
 
 class SoftGraspEnv(gym.Env):
-    """Two fingers pick up a cylinder; with ``soft=True`` each finger is a rigid core wrapped in
-    oriented-particle tissue (``SoftGrasp-v1``), with ``soft=False`` the same cores touch the
-    cylinder through pybullet's rigid contacts (``SoftGraspRigid-v1``).
+    """Two fingers pick up a cylinder and hold it while the arm carries it; with ``soft=True`` each
+    finger is a rigid core wrapped in oriented-particle tissue (``SoftGrasp-v2``), with
+    ``soft=False`` the same cores touch the cylinder through pybullet's rigid contacts
+    (``SoftGraspRigid-v2``). ``SoftGrasp-v1`` / ``SoftGraspRigid-v1`` are the same task without the
+    carry test (``carry=False``).
 
     ## Description
     A gripper hangs above a cylinder (radius 3 cm, height 10 cm, 0.1 kg) standing on the ground.
     The gripper is a palm pulled by a force-limited arm (200 N) and two finger cores that close
     along the palm's x axis, each driven by a force-limited motor (3 N): squeezing is a force, not a
-    teleport. The task is to reach the cylinder, close on it and lift it at least 5 cm. The gripper
+    teleport. The task is to reach the cylinder, close on it, lift it at least 5 cm and keep it
+    through the carry test: for the episode's last 1.5 s the arm sways it sideways (Carry test,
+    below), as a transport would. The gripper
     starts above the cylinder's top and 4-14 cm away from the origin, the cylinder anywhere within
     7 cm of it, and the fingers are only approximately aligned (thesis: "only approximate
     orientation of the fingers relative to the object"): a jaw wedge, a yaw and a lateral offset
@@ -107,7 +132,7 @@ class SoftGraspEnv(gym.Env):
     ``ValueError``.
 
     ## Observation space
-    ``Box(-inf, inf, (23,), float32)``, SI units, world frame (z up):
+    ``Box(-inf, inf, (24,), float32)`` (23 without the carry test: the v1 ids), SI units, world frame (z up):
 
     | index | name | meaning |
     |---|---|---|
@@ -121,6 +146,7 @@ class SoftGraspEnv(gym.Env):
     | 19, 20 | force_left/right | normal force each finger presses on the cylinder with, tissue plus core contacts, mean over the env step [N] |
     | 21 | lift | cylinder centre above its resting height [m] |
     | 22 | gripper_yaw | palm yaw (the misalignment the agent cannot command) [rad] |
+    | 23 | time | time since reset [s] (only with the carry test, which starts at a fixed time) |
 
     ``force_left/right`` can be far above the fingers' 3 N: the squeeze is limited by the finger
     motors, but the arm (200 N) can press a finger onto the cylinder, from the side or from above
@@ -136,7 +162,26 @@ class SoftGraspEnv(gym.Env):
     ``lift = clip(lift_height / success_height, 0, 1)`` (the task: 1 once the cylinder is 5 cm up)
     and ``reach = -reach_weight * min(d, 0.1 m) / 0.1 m`` with ``d`` the grip point's distance to the
     cylinder centre (small shaping, default weight 0.1). Both terms are in ``info["reward_terms"]``.
-    ``reward_type="sparse"`` (``SoftGraspSparse-v1``): 1 on steps where ``is_success``, else 0.
+    ``reward_type="sparse"`` (``SoftGraspSparse-v2``): 1 on steps where ``info["held"]`` (lifted
+    ≥ ``success_height``, both fingers pressing, upright: before, during and after the carry), else 0.
+
+    ## Carry test
+    With ``carry=True`` (the v2 ids; the default for ``task="reach"``), from ``carry_start``
+    (3.5 s, step 70) for ``carry_duration`` (1.5 s, the last 30 steps of the 100) the arm, not the
+    policy, moves the palm: ``carry_amplitude * sin(2 pi carry_frequency t)`` (1 cm at 2 Hz: peak
+    speed 0.13 m/s, peak acceleration 1.6 m/s^2, 0.16 g) sideways across the jaw, horizontal and
+    perpendicular to the fingers' closing axis, about where the palm's target was when it began;
+    the arm's actions are ignored meanwhile (``info["carrying"]``), the finger action still acts.
+    Success needs the cylinder held once the carry is over. Why: without it (v1) a learned policy
+    found a rigid grasp that holds statically, closing near the cylinder's top rim, and the task no
+    longer told soft fingers from rigid ones (SAC: 94 % soft, 93 % rigid, docs/RESULTS.md). A grasp
+    held at two contact points, as rigid fingers hold a round cylinder, lets it swing about the
+    line through them like a pendulum of the grasp's height above the centre of mass
+    (sqrt(g / l) / 2 pi = 2.4 Hz at 4.5 cm), which the 2 Hz sway rocks; the tissue's contact
+    patches resist the turn. Measured with the v1 policies under this carry (seeds 1000-1029):
+    scripted soft 30 / 30 held, SAC soft 26 / 26; scripted rigid 0 / 12, SAC rigid 5 / 28 of the
+    grasps that held before the carry. A scripted soft grasp held through a 30 s carry (6 of 6
+    seeds, tilt below 0.4 degrees, no slip: tests/test_task.py soaks it).
 
     ## Starting state
     ``task="reach"`` (every id but the Easy ones): fingers fully open, the fingertips 2 cm above the
@@ -146,12 +191,12 @@ class SoftGraspEnv(gym.Env):
     (benchmarks/stability_map.py, docs/RESULTS.md) has rigid fingers lose the cylinder from a
     0.025 rad wedge on, at every yaw tried, while the tissue holds it up to 0.45 rad; offset and yaw
     alone break neither (the cylinder is round: the yaw only turns the grasp). 83 % of the
-    episodes have |wedge| > 0.025 rad; the scripted policy measured 30 / 30 soft, 14 / 30 rigid.
-    What the rigid twin cannot hold is a grasp at mid-height with the gap open at the top (the
-    map's sign): the scripted policy's rigid success is 1 of 46 such episodes, 30 of 30 with the
-    gap open at the bottom (seeds 1000-1099, benchmarks/wedge_sign.py). A learned policy that
-    closes near the top rim holds either way (SAC on the rigid twin: 88-93 % on two of three
-    seeds, docs/RESULTS.md), so this task shows what tissue buys a fixed grasp, not a learned one.
+    episodes have |wedge| > 0.025 rad. Without the carry test (v1) what the rigid twin cannot hold
+    is a grasp at mid-height with the gap open at the top (the map's sign): the scripted policy's
+    rigid success is 1 of 46 such episodes, 30 of 30 with the gap open at the bottom (seeds
+    1000-1099, benchmarks/wedge_sign.py), and a learned policy that closes near the top rim holds
+    either way (SAC on SoftGraspRigid-v1: 88-93 % on two of three seeds). The carry test (v2)
+    takes that way out: the rigid grasps that hold statically swing out under the sway.
     The spread of start and cylinder (as wide as the workspace allows) keeps every constant action
     sequence tried at or below 10 % (the best of 18: 4 of 40 episodes).
     A positive wedge opens the gap at the top (each inner face 6 mm further out at the top than
@@ -170,8 +215,9 @@ class SoftGraspEnv(gym.Env):
     may fix any of them (keys in ``RESET_OPTIONS``).
 
     ## Episode end
-    - ``info["is_success"]`` (every step): lifted ≥ ``success_height``, both fingers press on it
-      (≥ 0.05 N each) and it is not tilted more than ``max_tilt``.
+    - ``info["is_success"]`` (every step): ``info["held"]`` - lifted ≥ ``success_height``, both
+      fingers press on it (≥ 0.05 N each), not tilted more than ``max_tilt`` - and, with the carry
+      test, the carry is over (so only on the last step of a 100-step episode).
     - Terminated: the cylinder tilts more than ``max_tilt`` (knocked over), leaves the workspace
       (more than 15 cm from the origin horizontally, below the ground or above 50 cm), or the
       simulation diverges (non-finite numbers, a body faster than 20 m/s, tissue torn more than
@@ -180,7 +226,7 @@ class SoftGraspEnv(gym.Env):
     - Truncated: by the registered time limit (100 steps = 5 s at 20 Hz).
 
     ## Arguments
-    ``gym.make("SoftGrasp-v1", **kwargs)``; all keyword-only except ``render_mode``:
+    ``gym.make("SoftGrasp-v2", **kwargs)``; all keyword-only except ``render_mode``:
 
     - ``soft`` (True): tissue on the fingers, or rigid-only fingers; ``fingers`` ('tissue' |
       'rigid' | 'segmented' | 'fem', overrides ``soft``) names the finger kind; ``tissue_faces``
@@ -199,6 +245,9 @@ class SoftGraspEnv(gym.Env):
       ``tissue`` / ``sim``: whole ``TissueConfig`` / ``SimConfig`` objects to start from.
     - ``cylinder_radius``, ``cylinder_height``, ``cylinder_mass``, ``finger_force``.
     - ``success_height`` (0.05 m), ``reach_weight`` (0.1), ``max_tilt`` (π/4 rad).
+    - ``carry`` (None: on for task "reach", off for "easy"), ``carry_start`` (3.5 s),
+      ``carry_duration`` (1.5 s), ``carry_amplitude`` (0.01 m), ``carry_frequency`` (2 Hz): the
+      carry test, above. Its sway may move the arm's target at most 1/120 m per physics step.
     - ``task`` ("reach" | "easy", see Starting state) and the randomisation ranges, their defaults
       per task (reach / easy): ``cylinder_position_range`` (0.07 / 0.01 m), ``yaw_range``
       (pi/4 / 5° in rad), ``jaw_wedge_range`` (0.15 / 0 rad), ``approach_range`` ((0.04, 0.14) m,
@@ -265,6 +314,9 @@ class SoftGraspEnv(gym.Env):
     ``fingers="fem"`` (pybullet's FEM, 8 substeps) at a few steps/s: docs/RESULTS.md.
 
     ## Version history
+    - v2: the carry test (for the soft, rigid and sparse ids; the observation gains the time);
+      the v1 ids stay, unchanged (``carry=False``), because their published baselines reproduce on
+      them. SoftGraspGoal-v1 and the Easy ids have no carry test and keep v1.
     - v1: the reach task (approach from above and away, misaligned fingers) for every id; the
       gentle start as SoftGraspEasy-v1 / SoftGraspEasyRigid-v1; the final physics and default
       preset (contact-face tissue, 4,000 particles per m^2). ``reset(options=...)`` takes
@@ -304,6 +356,11 @@ class SoftGraspEnv(gym.Env):
         success_height: float = 0.05,
         reach_weight: float = 0.1,
         max_tilt: float = math.pi / 4,
+        carry: bool | None = None,
+        carry_start: float = CARRY_START,
+        carry_duration: float = CARRY_DURATION,
+        carry_amplitude: float = CARRY_AMPLITUDE,
+        carry_frequency: float = CARRY_FREQUENCY,
         cylinder_position_range: float | None = None,
         lateral_offset_range: float = 0.005,
         yaw_range: float | None = None,
@@ -329,6 +386,9 @@ class SoftGraspEnv(gym.Env):
         cylinder_position_range = defaults["cylinder_position_range"] if cylinder_position_range is None else cylinder_position_range
         yaw_range = defaults["yaw_range"] if yaw_range is None else yaw_range
         jaw_wedge_range = defaults["jaw_wedge_range"] if jaw_wedge_range is None else jaw_wedge_range
+        carry = defaults["carry"] if carry is None else carry
+        if not isinstance(carry, (bool, np.bool_)):
+            raise ValueError(f"carry must be a bool (or None: the task's default), got {carry!r}")
         try:
             a_lo, a_hi = (float(v) for v in approach_range)
         except (TypeError, ValueError):
@@ -346,6 +406,10 @@ class SoftGraspEnv(gym.Env):
         _check("success_height", success_height, 0.0, 0.15, lo_open=True)
         _check("reach_weight", reach_weight, 0.0, 10.0)
         _check("max_tilt", max_tilt, 0.0, math.pi, lo_open=True)
+        _check("carry_start", carry_start, 0.0, 600.0)
+        _check("carry_duration", carry_duration, 0.0, 600.0, lo_open=True)
+        _check("carry_amplitude", carry_amplitude, 0.0, 0.05)
+        _check("carry_frequency", carry_frequency, 0.0, 10.0, lo_open=True)
         _check("cylinder_position_range", cylinder_position_range, 0.0, 0.08)
         _check("lateral_offset_range", lateral_offset_range, 0.0, 0.05)
         _check("yaw_range", yaw_range, 0.0, math.pi / 4)
@@ -381,6 +445,12 @@ class SoftGraspEnv(gym.Env):
             raise ValueError(f"gripper_speed={gripper_speed:g} m/s with sim.dt={sim.dt:g} s moves the arm "
                              f"{gripper_speed * sim.dt * 100:.2f} cm per physics step, more than {MAX_ARM_STEP * 100:.2f} "
                              f"cm; at this dt gripper_speed must be at most {MAX_ARM_STEP / sim.dt:.3g} m/s")  # fmt: skip
+        # The carry moves the arm's target by at most 2 pi f A dt per physics step (MAX_ARM_STEP, as above).
+        carry_step = 2.0 * math.pi * carry_frequency * carry_amplitude * sim.dt
+        if carry and carry_step > MAX_ARM_STEP + 1e-12:
+            raise ValueError(f"the carry (carry_amplitude={carry_amplitude:g} m at carry_frequency={carry_frequency:g} Hz) "
+                             f"moves the arm up to {carry_step * 100:.2f} cm per physics step at sim.dt={sim.dt:g} s, "
+                             f"more than {MAX_ARM_STEP * 100:.2f} cm")  # fmt: skip
         # The base scene, validated now so that bad sizes fail at construction, not at reset.
         # The start height of the task: reach starts the fingertips above the cylinder's top.
         _check("cylinder_height", cylinder_height, 0.01, 0.5)
@@ -416,6 +486,13 @@ class SoftGraspEnv(gym.Env):
         self.reach_weight = float(reach_weight)
         self.max_tilt = float(max_tilt)
         self.task = task
+        self.carry = bool(carry)
+        self.carry_start = float(carry_start)
+        self.carry_duration = float(carry_duration)
+        self.carry_amplitude = float(carry_amplitude)
+        self.carry_frequency = float(carry_frequency)
+        self.obs_names = CARRY_OBS_NAMES if self.carry else OBS_NAMES
+        """The observation's entries, in order (``OBS_NAMES``, and ``time`` with the carry test)."""
         self.approach_range = (a_lo, a_hi)
         self.ranges = {
             "cylinder_position": float(cylinder_position_range),
@@ -434,7 +511,7 @@ class SoftGraspEnv(gym.Env):
         self.metadata = {**type(self).metadata, "render_modes": modes, "render_fps": self.control_frequency}
 
         self.action_space = spaces.Box(-1.0, 1.0, shape=(4,), dtype=np.float32)
-        self.observation_space = spaces.Box(-np.inf, np.inf, shape=(len(OBS_NAMES),), dtype=np.float32)
+        self.observation_space = spaces.Box(-np.inf, np.inf, shape=(len(self.obs_names),), dtype=np.float32)
 
         self._check_range_extremes()
 
@@ -451,6 +528,8 @@ class SoftGraspEnv(gym.Env):
         self._reset_record: tuple[dict, dict] | None = None
         self._actions: list[np.ndarray] = []
         self._episode_over, self._divergence = False, None
+        self._physics_steps = 0
+        self._carry_anchor: np.ndarray | None = None
 
     # --- gym API -----------------------------------------------------------------------------------
 
@@ -618,6 +697,8 @@ class SoftGraspEnv(gym.Env):
         if self._renderer is not None:
             self._renderer.invalidate()
         self._forces = np.zeros(2)
+        self._physics_steps = 0
+        self._carry_anchor = None
 
     def _apply_and_simulate(self, act: np.ndarray) -> bool:
         """Set the arm and finger targets from ``act`` and run one control interval; True if the
@@ -637,7 +718,10 @@ class SoftGraspEnv(gym.Env):
         forces = np.zeros(2)
         try:
             for _ in range(self._substeps):
+                if self.carry:
+                    self._carry_target()
                 sc.step()
+                self._physics_steps += 1
                 forces += sc.finger_forces()
         except SimulationDiverged:
             self._episode_over, self._divergence = True, "non-finite tissue solve"
@@ -648,6 +732,34 @@ class SoftGraspEnv(gym.Env):
             self._episode_over = True
             return True
         return False
+
+    def _carry_phase(self, physics_steps: int) -> float | None:
+        """Seconds into the carry at the end of physics step ``physics_steps`` (counted from
+        reset), or None outside it."""
+        t = physics_steps * self.scene.config.sim.dt - self.carry_start
+        return t if -1e-9 < t <= self.carry_duration + 1e-9 else None
+
+    def _carry_over(self) -> bool:
+        return (not self.carry) or self._physics_steps * self.scene.config.sim.dt >= self.carry_start + self.carry_duration - 1e-9
+
+    def _carry_target(self) -> None:
+        """During the carry test the arm, not the policy, moves the palm: a sideways sway
+        ``A sin(2 pi f t)`` about where the palm's target was when the carry began, horizontal and
+        across the jaw (perpendicular to the fingers' closing axis, the direction a grasp held at
+        two contact points is weakest in: it swings about the line through them). The policy's
+        finger command still acts. Set before each physics step, so the sway is smooth at 240 Hz."""
+        sc = self.scene
+        t = self._carry_phase(self._physics_steps + 1)
+        if t is None:
+            return
+        if self._carry_anchor is None:
+            self._carry_anchor = sc.palm_target.copy()
+        yaw = sc.config.yaw
+        across = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
+        target = self._carry_anchor + across * (self.carry_amplitude * math.sin(2.0 * math.pi * self.carry_frequency * t))
+        col = sc.world.colliders
+        grip_to_palm = col.rigid_x[_PALM] - 0.5 * (col.rigid_x[_LEFT] + col.rigid_x[_RIGHT])
+        sc.set_palm_target(np.clip(target - grip_to_palm, self._grip_low, self._grip_high) + grip_to_palm)
 
     def _observe(self) -> np.ndarray:
         sc = self.scene
@@ -663,6 +775,8 @@ class SoftGraspEnv(gym.Env):
             grip, col.rigid_v[_PALM], [gap], col.rigid_x[_CYL] - grip, axis, col.rigid_v[_CYL], col.rigid_w[_CYL],
             self._forces, [col.rigid_x[_CYL, 2] - sc.cylinder_rest_z], [yaw],
         ])  # fmt: skip
+        if self.carry:
+            obs = np.append(obs, self._physics_steps * sc.config.sim.dt)
         return obs
 
     def _reward(self, obs: np.ndarray) -> tuple[float, dict[str, float]]:
@@ -671,12 +785,16 @@ class SoftGraspEnv(gym.Env):
         reach = -self.reach_weight * min(d / 0.1, 1.0)  # exactly -reach_weight from 10 cm on
         terms = {"lift": lift, "reach": reach}
         if self.reward_type == "sparse":
-            return float(self._success(obs)), terms
+            return float(self._held(obs)), terms
         return lift + reach, terms
 
-    def _success(self, obs: np.ndarray) -> bool:
+    def _held(self, obs: np.ndarray) -> bool:
+        """Lifted to the success height, both fingers pressing, not tilted beyond max_tilt."""
         upright = math.acos(float(np.clip(obs[12], -1.0, 1.0))) <= self.max_tilt
         return bool(obs[21] >= self.success_height and obs[19] >= 0.05 and obs[20] >= 0.05 and upright)
+
+    def _success(self, obs: np.ndarray) -> bool:
+        return self._held(obs) and self._carry_over()
 
     def _knocked_over_or_gone(self, obs: np.ndarray) -> bool:
         sc = self.scene
@@ -689,6 +807,8 @@ class SoftGraspEnv(gym.Env):
     def _info(self, obs: np.ndarray, *, diverged: bool, clipped: bool) -> dict[str, Any]:
         return {
             "is_success": (not diverged) and self._success(obs),
+            "held": (not diverged) and self._held(obs),
+            "carrying": self.carry and self._carry_phase(self._physics_steps) is not None and not self._carry_over(),
             "lift_height": float(obs[21]),
             "diverged": diverged,
             "divergence": self._divergence if diverged else None,
@@ -723,6 +843,10 @@ class SoftGraspGoalEnv(SoftGraspEnv):
                  goal_height_range: tuple[float, float] = (0.05, 0.08), **kwargs: Any) -> None:  # fmt: skip
         if "reward_type" in kwargs:
             raise ValueError("SoftGraspGoalEnv's reward is the goal reward (compute_reward); do not pass reward_type")
+        if kwargs.get("carry"):
+            raise ValueError("SoftGraspGoalEnv has no carry test (carry=True): its reward and success are the goal's "
+                             "alone (compute_reward), which a time-bound test would break for HER's relabelling")  # fmt: skip
+        kwargs["carry"] = False
         super().__init__(render_mode, reward_type="sparse", **kwargs)
         del self._init_kwargs["reward_type"]
         _check("distance_threshold", distance_threshold, 0.0, 0.1, lo_open=True)

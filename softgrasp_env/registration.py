@@ -8,17 +8,23 @@ MAX_EPISODE_STEPS = 100
 """5 s at the default 20 Hz control frequency."""
 
 _SPECS: dict[str, tuple[str, dict]] = {
-    "SoftGrasp-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "dense"}),
-    "SoftGraspRigid-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": False, "reward_type": "dense"}),
-    "SoftGraspSparse-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "sparse"}),
+    "SoftGrasp-v2": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "dense", "carry": True}),
+    "SoftGraspRigid-v2": ("softgrasp_env.env:SoftGraspEnv", {"soft": False, "reward_type": "dense", "carry": True}),
+    "SoftGraspSparse-v2": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "sparse", "carry": True}),
+    "SoftGrasp-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "dense", "carry": False}),
+    "SoftGraspRigid-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": False, "reward_type": "dense", "carry": False}),
+    "SoftGraspSparse-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "sparse", "carry": False}),
     "SoftGraspGoal-v1": ("softgrasp_env.env:SoftGraspGoalEnv", {"soft": True}),
     "SoftGraspEasy-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "dense", "task": "easy"}),
     "SoftGraspEasyRigid-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": False, "reward_type": "dense", "task": "easy"}),
 }
 
 ENV_IDS: tuple[str, ...] = tuple(_SPECS)
-"""The reach task (``task="reach"``: approach from above and away, misaligned fingers) with soft
-fingers and the dense lift reward; its rigid-only twin; the sparse-reward variant; the
+"""The reach task with the carry test (v2: approach from above and away, misaligned fingers, lift,
+then the arm sways the cylinder sideways for the last 1.5 s) with soft fingers and the dense lift
+reward; its rigid-only twin; the sparse-reward variant; the same three without the carry test
+(v1, kept because their published baselines reproduce on them: a v1 success is a static hold,
+which a rigid grasp near the cylinder's top rim achieves as well as a soft one); the
 goal-conditioned variant (dict observations, ``compute_reward`` for HER); and the gentle start of
 v0 (``task="easy"``: the open fingers around the cylinder's top, aligned), soft and rigid, for
 debugging a policy or the physics. v0 (the gentle start as the only task, on the physics before
