@@ -19,14 +19,12 @@ Evaluate a saved model with ``python -m agents.evaluate --policy <dir>`` (same e
 from __future__ import annotations
 
 import argparse
-import ast
 import csv
 import json
 import os
 import sys
 import time
 from pathlib import Path
-from typing import Any
 
 import gymnasium as gym
 from stable_baselines3.common import logger as sb3_logger
@@ -40,6 +38,8 @@ from tqdm import tqdm
 import softgrasp_env
 from agents.baselines import ALGOS, default_algo, make_model, model_class
 from agents.cards import hyperparameters, quote_arg
+from agents.cli import kwargs_dict as _kwargs_dict
+from agents.cli import parse_kwarg
 from agents.evaluate import evaluate
 from agents.runs import CHECKPOINT_PREFIX, deterministic_policy, make_env, run_files
 
@@ -160,36 +160,6 @@ def _unwritable(run: Path) -> str | None:
     if not os.access(parent, os.W_OK | os.X_OK):
         return f"--out: {str(parent)!r} is not writable, so {str(run)!r} cannot be made"
     return None
-
-
-def parse_kwarg(item: str) -> tuple[str, Any]:
-    """``key=value`` -> (key, value): the value as a Python literal (``0.2``, ``False``,
-    ``(0.05, 0.08)``, ``'segmented'``), else the text itself (``fingers=segmented``)."""
-    key, sep, text = item.partition("=")
-    key = key.strip()
-    if not sep or not key.isidentifier():
-        raise argparse.ArgumentTypeError(f"expected key=value with key a Python name, got {item!r}")
-    try:
-        value = ast.literal_eval(text)
-    except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
-        value = text
-    return key, value
-
-
-def _kwargs_dict(parser: argparse.ArgumentParser, flag: str, pairs: list[tuple[str, Any]] | None) -> dict[str, Any]:
-    out: dict[str, Any] = {}
-    for key, value in pairs or []:
-        if key in out:
-            parser.error(f"{flag}: {key!r} given twice")
-        out[key] = value
-    try:
-        json.dumps(out)
-    except TypeError as exc:  # e.g. a set literal: run.json must be able to record it
-        parser.error(
-            f"{flag}: values must be numbers, strings, booleans, None, lists/tuples or dicts, "
-            f"to be recorded in run.json ({exc})"
-        )
-    return out
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -2,6 +2,7 @@
 
     python -m agents.evaluate --env SoftGrasp-v2 --policy scripted --episodes 20
     python -m agents.evaluate --policy runs/SoftGrasp-v2_sac_0       # the run's env, kwargs and stats
+    .venv-rllib/bin/python -m agents.evaluate --policy runs-rllib/SoftGrasp-v2_rllib-ppo/seed_0   # an RLlib trial
 
 Episodes use seeds ``seed, seed + 1, ...`` so two policies meet the same starts.
 """
@@ -50,18 +51,24 @@ def evaluate(env: gym.Env, policy: Callable[[object], np.ndarray], *, episodes: 
     return Evaluation(episodes, float(np.mean(successes)), float(np.mean(returns)), float(np.mean(lifts)), diverged)
 
 
-def load_policy(spec: str, env: gym.Env) -> Callable[[object], np.ndarray]:
-    """``"scripted"``, ``"random"`` or a run saved by train.py (its directory, model.zip or a
-    checkpoint zip), loaded by :func:`agents.runs.load_run` (observation statistics applied there)."""
+def load_policy(spec: str, env: gym.Env, *, other_env: bool = False) -> Callable[[object], np.ndarray]:
+    """``"scripted"``, ``"random"``, a run saved by train.py (its directory, model.zip or a
+    checkpoint zip), loaded by :func:`agents.runs.load_run` (observation statistics applied there),
+    or an RLlib trial of agents.rllib_train (its directory or a checkpoint in it,
+    :func:`agents.rllib_policy.load_rllib_policy`: its observation filter applied there)."""
     if spec == "scripted":
         from agents.scripted import ScriptedGraspPolicy
 
         return ScriptedGraspPolicy()
     if spec == "random":
         return lambda obs: env.action_space.sample()
+    from agents.rllib_policy import is_rllib_run, load_rllib_policy
+
+    if is_rllib_run(spec):
+        return load_rllib_policy(spec, env, other_env=other_env)
     from agents.runs import load_run
 
-    return load_run(spec, env=env).policy
+    return load_run(spec, env=env, other_env=other_env).policy
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -70,7 +77,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--env", default=None, choices=softgrasp_env.ENV_IDS,
                         help="default: the run's env (with its env kwargs) for a saved model, else SoftGrasp-v2")
     parser.add_argument("--policy", default="scripted",
-                        help="'scripted', 'random' or a run from train.py (its directory, model.zip or a checkpoint)")
+                        help="'scripted', 'random', a run from train.py (its directory, model.zip or a checkpoint) "
+                             "or an RLlib trial from agents.rllib_train (its directory or a checkpoint_<N>)")  # fmt: skip
     parser.add_argument("--episodes", type=int, default=10)
     parser.add_argument("--seed", type=int, default=1000)
     parser.add_argument("--other-env", action="store_true",
@@ -83,13 +91,14 @@ def main(argv: list[str] | None = None) -> int:
             env = gym.make(ns.env or "SoftGrasp-v2")
             policy = load_policy(ns.policy, env)
         else:
-            from agents.runs import load_run, make_env, run_files
+            from agents.rllib_policy import is_rllib_run, locate
+            from agents.runs import make_env, run_files
 
             # The env is re-created as the run made it: same id (unless --env says otherwise), same kwargs.
-            meta = run_files(ns.policy).meta
+            meta = locate(ns.policy)[0] if is_rllib_run(ns.policy) else run_files(ns.policy).meta
             env = make_env(meta, env_id=ns.env)
             ns.env = env.spec.id if env.spec is not None else meta["env"]
-            policy = load_run(ns.policy, env=env, other_env=ns.other_env).policy
+            policy = load_policy(ns.policy, env, other_env=ns.other_env)
         env.action_space.seed(ns.seed)
         ev = evaluate(env, policy, episodes=ns.episodes, seed=ns.seed)
     except ValueError as exc:

@@ -1,8 +1,11 @@
 """Env steps/s of SB3's vectorised envs on this machine: one env in-process (DummyVecEnv), then
 1, 2, ... up to the core count in subprocesses (SubprocVecEnv, what ``train.py --n-envs N``
-uses), in one run, with the speed-up over one subprocess env.
+uses), in one run, with the speed-up over one subprocess env; with ``--rllib`` (in the RLlib venv)
+also RLlib sampling with 1, 2, ... env runners (what ``agents.rllib_train --num-env-runners N``
+uses), and what 64 cores over several machines would give at the measured per-runner rate.
 
     PYTHONPATH=. python benchmarks/vec_throughput.py [--env SoftGrasp-v2] [--seconds 20] [--max-envs N]
+    PYTHONPATH=. .venv-rllib/bin/python benchmarks/vec_throughput.py --rllib     # SB3 and RLlib in one run
 
 Random actions, seeded; each configuration is warmed up (process start, numba's cached kernels
 loaded, first reset) before the timed window. Only stepping is timed; the policy is not (a
@@ -42,11 +45,31 @@ def measure(env_id: str, n_envs: int, vec: str, seconds: float) -> float:
         venv.close()
 
 
+def measure_rllib(env_id: str, n_runners: int, seconds: float) -> float:
+    """Env steps/s RLlib's env runners sample with PPO's (untrained) policy: every runner samples
+    at once, 200 steps per call, for ``seconds``; the learner does not train (sampling only, as
+    the SB3 figures are stepping only)."""
+    from agents.rllib_train import build_algorithm
+
+    algo = build_algorithm(env_id, num_env_runners=n_runners, num_cpus_per_env_runner=0.5)
+    try:
+        group = algo.env_runner_group
+        group.foreach_env_runner(lambda r: r.sample(num_timesteps=100), local_env_runner=False)  # warm-up
+        steps, tic = 0, time.perf_counter()
+        while time.perf_counter() - tic < seconds:
+            episodes = group.foreach_env_runner(lambda r: r.sample(num_timesteps=200), local_env_runner=False)
+            steps += sum(len(e) for batch in episodes for e in batch)
+        return steps / (time.perf_counter() - tic)
+    finally:
+        algo.stop()
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--env", default="SoftGrasp-v2")
     parser.add_argument("--seconds", type=float, default=20.0, help="timed window per configuration")
     parser.add_argument("--max-envs", type=int, default=os.cpu_count() or 1)
+    parser.add_argument("--rllib", action="store_true", help="also RLlib env runners (needs Ray: .venv-rllib)")
     ns = parser.parse_args()
     if ns.seconds <= 0 or ns.max_envs < 1:
         parser.error("--seconds must be > 0 and --max-envs >= 1")
@@ -61,6 +84,22 @@ def main() -> int:
         one = one or rate
         print(f"  SubprocVecEnv {n:2d} envs: {rate:7.0f} env steps/s   x{rate / one:.2f} over 1 subprocess, "
               f"x{rate / base:.2f} over in-process", flush=True)  # fmt: skip
+    if ns.rllib:
+        import ray
+
+        ray.init(num_cpus=os.cpu_count(), include_dashboard=False, log_to_driver=False)
+        try:
+            first = None
+            for n in range(1, ns.max_envs + 1):
+                rate = measure_rllib(ns.env, n, ns.seconds)
+                first = first or rate
+                print(f"  RLlib         {n:2d} env runners: {rate:7.0f} env steps/s   x{rate / first:.2f} over 1 runner",
+                      flush=True)  # fmt: skip
+            per_core = rate / ns.max_envs
+            print(f"  on paper, 64 cores (one env runner each, learner aside) at {per_core:.0f} env steps/s per runner: "
+                  f"{64 * per_core:,.0f} env steps/s; 10 M steps in {1e7 / (64 * per_core) / 60:.0f} min of sampling")
+        finally:
+            ray.shutdown()
     return 0
 
 
