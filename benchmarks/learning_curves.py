@@ -1,5 +1,6 @@
 """Learning curves of the shipped baselines: success rate against env steps, soft vs rigid fingers,
-mean and spread (min-max) over seeds, one panel per algorithm.
+mean and spread (min-max) over seeds, one panel per algorithm and task version (a row each: v2
+with the carry test, v1 without).
 
     python benchmarks/learning_curves.py                       # agents/trained/ -> docs/results/
     python benchmarks/learning_curves.py --models runs --out /tmp/curves
@@ -23,8 +24,15 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-FINGERS = {"SoftGrasp-v1": "soft (tissue)", "SoftGraspRigid-v1": "rigid", "SoftGraspGoal-v1": "soft, goal (HER)"}
-COLORS = {"SoftGrasp-v1": "tab:blue", "SoftGraspRigid-v1": "tab:red", "SoftGraspGoal-v1": "tab:green"}
+FINGERS = {"SoftGrasp": "soft (tissue)", "SoftGraspRigid": "rigid", "SoftGraspGoal": "soft, goal (HER)"}
+COLORS = {"SoftGrasp": "tab:blue", "SoftGraspRigid": "tab:red", "SoftGraspGoal": "tab:green"}
+VERSIONS = {"v2": "v2 (carry test)", "v1": "v1 (no carry test)"}
+
+
+def _split(env_id: str) -> tuple[str, str]:
+    """``"SoftGraspRigid-v2"`` -> ``("SoftGraspRigid", "v2")``."""
+    name, _, version = env_id.rpartition("-")
+    return name, version
 
 
 def _rows(path: Path) -> list[dict[str, str]]:
@@ -86,34 +94,40 @@ def main(argv: list[str] | None = None) -> int:
     import matplotlib.pyplot as plt
 
     algos = sorted({algo for algo, _ in groups}, key=["ppo", "sac", "her-sac"].index)
-    fig, axes = plt.subplots(1, len(algos), figsize=(5.2 * len(algos), 3.8), squeeze=False)
+    versions = sorted({_split(env)[1] for _, env in groups}, reverse=True)
+    fig, axes = plt.subplots(len(versions), len(algos), figsize=(5.2 * len(algos), 3.6 * len(versions)), squeeze=False)
     table = []
-    for ax, algo in zip(axes[0], algos):
+    for ax, (version, algo) in zip(axes.flat, [(v, a) for v in versions for a in algos]):
+        if not any(a == algo and _split(env)[1] == version for a, env in groups):
+            ax.set_visible(False)
+            continue
         for (a, env), runs in sorted(groups.items()):
-            if a != algo:
+            name, v = _split(env)
+            if a != algo or v != version:
                 continue
-            label = f"{FINGERS.get(env, env)} ({len(runs)} seed{'s' if len(runs) > 1 else ''})"
+            label = f"{FINGERS.get(name, name)} ({len(runs)} seed{'s' if len(runs) > 1 else ''})"
             b = band([r["train"] for r in runs])
             if b is not None:
                 grid, mean, lo, hi = b
-                ax.plot(grid, mean, color=COLORS.get(env), label=label)
-                ax.fill_between(grid, lo, hi, color=COLORS.get(env), alpha=0.2, lw=0)
+                ax.plot(grid, mean, color=COLORS.get(name), label=label)
+                ax.fill_between(grid, lo, hi, color=COLORS.get(name), alpha=0.2, lw=0)
                 table += [{"algo": algo, "env": env, "measure": "training episodes", "steps": f"{s:.0f}",
                            "mean": f"{m:.3f}", "min": f"{lo_:.3f}", "max": f"{hi_:.3f}"}
                           for s, m, lo_, hi_ in zip(grid[::20], mean[::20], lo[::20], hi[::20])]  # fmt: skip
             for r in runs:
                 x, y = r["eval"]
                 if len(x):
-                    ax.plot(x, y, "o", ms=3.5, color=COLORS.get(env), alpha=0.6)
+                    ax.plot(x, y, "o", ms=3.5, color=COLORS.get(name), alpha=0.6)
                     table += [{"algo": algo, "env": env, "measure": f"evaluation, seed {r['seed']}",
                                "steps": f"{s:.0f}", "mean": f"{v:.3f}", "min": "", "max": ""}
                               for s, v in zip(x, y)]  # fmt: skip
-        ax.set_title(algo.upper())
+        ax.set_title(f"{algo.upper()}, {VERSIONS.get(version, version)}")
         ax.set_xlabel("env steps")
         ax.set_ylim(-0.03, 1.03)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="upper left")
-    axes[0][0].set_ylabel("success rate")
+    for row in axes:
+        row[0].set_ylabel("success rate")
     fig.suptitle("success vs env steps; lines: last 100 training episodes (mean, band: min-max over seeds)\n"
                  "dots: evaluations of the deterministic policy (20 episodes each)", fontsize=9)  # fmt: skip
     fig.tight_layout()

@@ -3,11 +3,13 @@ size and sign, and how high above the cylinder's centre the fingers close, over 
 episodes of the model cards (seeds 1000-1099).
 
     PYTHONPATH=. python benchmarks/wedge_sign.py                                 # scripted and every shipped rigid model
-    PYTHONPATH=. python benchmarks/wedge_sign.py --env SoftGrasp-v1 --policy scripted agents/trained/SoftGrasp-v1_sac_0
+    PYTHONPATH=. python benchmarks/wedge_sign.py --env SoftGrasp-v2 --policy scripted agents/trained/SoftGrasp-v2_sac_0
 
 A positive wedge opens the gap at the top (the faces meet the cylinder with their lower edges),
 a negative one at the bottom. The grip height is the grip point above the cylinder's centre at
-the first step both fingers press with more than 0.5 N.
+the first step both fingers press with more than 0.5 N. On the v2 ids it also counts the
+episodes whose cylinder was held when the carry test began (``info["held"]`` at its first step)
+and how many of those still held it at the end.
 """
 
 from __future__ import annotations
@@ -26,7 +28,8 @@ BINS = ((0.0, 0.025), (0.025, 0.075), (0.075, 0.151))
 
 
 def episodes(env_id: str, spec: str, seeds: range) -> np.ndarray:
-    """Per episode: wedge, success, grip height above the cylinder centre at contact [m] (NaN if never)."""
+    """Per episode: wedge, success, grip height above the cylinder centre at contact [m] (NaN if
+    never), held when the carry began (NaN without a carry test)."""
     env = gym.make(env_id)
     try:
         policy = load_policy(spec, env)
@@ -34,13 +37,16 @@ def episodes(env_id: str, spec: str, seeds: range) -> np.ndarray:
         for seed in seeds:
             obs, _ = env.reset(seed=seed)
             wedge, grip, info = env.unwrapped.scene.config.jaw_wedge, np.nan, {}
+            at_carry = 0.0 if env.unwrapped.carry else np.nan
             for _ in range(100):
                 obs, _, term, trunc, info = env.step(policy(obs))
                 if np.isnan(grip) and obs[19] > 0.5 and obs[20] > 0.5:
                     grip = -float(obs[9])
+                if info["carrying"] and at_carry == 0.0:
+                    at_carry = 1.0 if info["held"] else -1.0  # -1: the carry began, not held
                 if term or trunc:
                     break
-            rows.append((wedge, float(info["is_success"]), grip))
+            rows.append((wedge, float(info["is_success"]), grip, float(at_carry > 0) if not np.isnan(at_carry) else np.nan))
         return np.array(rows)
     finally:
         env.close()
@@ -48,7 +54,7 @@ def episodes(env_id: str, spec: str, seeds: range) -> np.ndarray:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="SoftGraspRigid-v1")
+    parser.add_argument("--env", default="SoftGraspRigid-v2")
     parser.add_argument("--policy", nargs="+", default=None,
                         help="'scripted' and/or runs; default: scripted and every shipped model of --env")  # fmt: skip
     parser.add_argument("--episodes", type=int, default=cards.EPISODES)
@@ -58,8 +64,11 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{ns.env}, {ns.episodes} episodes (seeds {seeds[0]}-{seeds[-1]})")
     for spec in specs:
         a = episodes(ns.env, spec, seeds)
-        w, ok, grip = a[:, 0], a[:, 1], a[:, 2]
+        w, ok, grip, held = a[:, 0], a[:, 1], a[:, 2], a[:, 3]
         print(f"\n{spec}: success {ok.mean():.0%}")
+        if not np.isnan(held).all():
+            print(f"  held when the carry began: {int(held.sum())} of {len(held)}; still held at the end: "
+                  f"{int((ok * held).sum())} of those")  # fmt: skip
         for lo, hi in BINS:
             m = (np.abs(w) >= lo) & (np.abs(w) < hi)
             if m.any():

@@ -29,8 +29,8 @@ def test_scripted_policy_succeeds_where_random_actions_do_not():
 
 def test_default_algos_and_presets():
     assert default_algo("SoftGraspGoal-v1") == "her-sac"
-    assert default_algo("SoftGrasp-v1") == "sac"
-    env = gym.make("SoftGraspRigid-v1")
+    assert default_algo("SoftGrasp-v2") == "sac"
+    env = gym.make("SoftGraspRigid-v2")
     for algo in ("ppo", "sac"):
         model = make_model(algo, env, seed=0, **({"n_steps": 64, "batch_size": 64} if algo == "ppo" else {}))
         assert model.gamma == 0.98
@@ -40,8 +40,8 @@ def test_default_algos_and_presets():
     assert set(ALGOS) == {"ppo", "sac", "her-sac"}
 
 
-@pytest.mark.parametrize(("env_id", "algo", "steps"), [("SoftGraspRigid-v1", "sac", 300),
-                                                       ("SoftGraspRigid-v1", "ppo", 1024),
+@pytest.mark.parametrize(("env_id", "algo", "steps"), [("SoftGraspRigid-v2", "sac", 300),
+                                                       ("SoftGraspRigid-v2", "ppo", 1024),
                                                        ("SoftGraspGoal-v1", "her-sac", 230)])  # fmt: skip
 def test_train_writes_a_run_that_evaluate_can_load(tmp_path, env_id, algo, steps, capsys):
     import train
@@ -79,9 +79,9 @@ def test_train_rejects_bad_arguments(tmp_path):
     import train
 
     with pytest.raises(SystemExit):
-        train.main(["--env", "SoftGrasp-v1", "--algo", "her-sac", "--out", str(tmp_path)])
+        train.main(["--env", "SoftGrasp-v2", "--algo", "her-sac", "--out", str(tmp_path)])
     with pytest.raises(SystemExit):
-        train.main(["--env", "SoftGrasp-v1", "--timesteps", "0", "--out", str(tmp_path)])
+        train.main(["--env", "SoftGrasp-v2", "--timesteps", "0", "--out", str(tmp_path)])
     with pytest.raises(SystemExit):
         evaluate_main(["--policy", str(tmp_path / "missing.zip")])
 
@@ -94,7 +94,7 @@ def test_making_a_model_leaves_the_presets_as_they_are():
     from agents.baselines import PRESETS, make_model
 
     before = copy.deepcopy(PRESETS)
-    env = gym.make("SoftGraspRigid-v1")
+    env = gym.make("SoftGraspRigid-v2")
     for algo in ("ppo", "sac"):
         make_model(algo, env, seed=0)
     env.close()

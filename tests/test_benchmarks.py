@@ -67,7 +67,7 @@ def _run_plain(script: str, *args: str) -> str:
 def test_vec_throughput_measures_in_process_and_subprocess_envs():
     import re
 
-    out = _run_plain("vec_throughput.py", "--env", "SoftGraspRigid-v1", "--seconds", "0.5", "--max-envs", "2")
+    out = _run_plain("vec_throughput.py", "--env", "SoftGraspRigid-v2", "--seconds", "0.5", "--max-envs", "2")
     rates = [float(x) for x in re.findall(r":\s+(\d+) env steps/s", out)]
     assert len(rates) == 3 and min(rates) > 0, out  # in-process, 1 and 2 subprocesses
     assert "x1.00 over 1 subprocess" in out
@@ -75,7 +75,7 @@ def test_vec_throughput_measures_in_process_and_subprocess_envs():
 
 def test_wedge_sign_splits_success_by_the_wedge():
     out = _run_plain("wedge_sign.py", "--policy", "scripted", "--episodes", "4")
-    assert "scripted: success" in out and "|wedge|" in out
+    assert "scripted: success" in out and "|wedge|" in out and "held when the carry began:" in out
 
 
 def test_build_scaling_prints_linear_memory():

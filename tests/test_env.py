@@ -61,13 +61,16 @@ def _rollout(env, seed: int, steps: int, action_seed: int) -> list:
 
 
 def test_ids_are_registered_with_time_limits():
-    assert len(ENV_IDS) == 6
+    assert len(ENV_IDS) == 9
     gym.register_envs(softgrasp_env)  # the documented idiom is accepted
     for env_id in ENV_IDS:
         spec = gym.spec(env_id)
         assert spec.max_episode_steps == 100
-    assert gym.spec("SoftGrasp-v1").kwargs["soft"] is True
-    assert gym.spec("SoftGraspRigid-v1").kwargs["soft"] is False
+    for version, carry in (("v2", True), ("v1", False)):
+        assert gym.spec(f"SoftGrasp-{version}").kwargs["soft"] is True
+        assert gym.spec(f"SoftGraspRigid-{version}").kwargs["soft"] is False
+        for name in ("SoftGrasp", "SoftGraspRigid", "SoftGraspSparse"):
+            assert gym.spec(f"{name}-{version}").kwargs["carry"] is carry
 
 
 def test_register_envs_is_idempotent():
@@ -121,7 +124,7 @@ def test_same_seed_bit_identical_and_reset_restores_everything(env_id):
 
 
 def test_different_seeds_give_different_starts():
-    env = gym.make("SoftGraspRigid-v1")
+    env = gym.make("SoftGraspRigid-v2")
     o1, _ = env.reset(seed=1)
     o2, _ = env.reset(seed=2)
     assert not np.array_equal(o1, o2)
@@ -159,7 +162,7 @@ def test_thousand_random_steps_stay_finite(env_id):
 
 
 def test_action_validation():
-    env = gym.make("SoftGraspRigid-v1").unwrapped
+    env = gym.make("SoftGraspRigid-v2").unwrapped
     with pytest.raises(RuntimeError, match="reset"):
         env.step(np.zeros(4, dtype=np.float32))
     env.reset(seed=0)
@@ -176,8 +179,8 @@ def test_action_validation():
 
 def test_out_of_range_actions_are_clipped_and_reported():
     big = np.array([5.0, -3.0, 2.0, 9.0])
-    a = gym.make("SoftGrasp-v1")
-    b = gym.make("SoftGrasp-v1")
+    a = gym.make("SoftGrasp-v2")
+    b = gym.make("SoftGrasp-v2")
     a.reset(seed=4)
     b.reset(seed=4)
     for _ in range(5):
@@ -212,7 +215,7 @@ def test_bad_arguments_raise_naming_the_argument():
 
 
 def test_reset_options_fix_the_randomised_quantities():
-    env = gym.make("SoftGraspRigid-v1").unwrapped
+    env = gym.make("SoftGraspRigid-v2").unwrapped
     env.reset(seed=0, options={"cylinder_xy": (0.004, -0.003), "yaw": 0.05, "lateral_offset": 0.002,
                                "jaw_wedge": 0.02, "cylinder_mass": 0.2, "cylinder_radius": 0.025})  # fmt: skip
     cfg = env.scene.config
@@ -225,7 +228,7 @@ def test_reset_options_fix_the_randomised_quantities():
 
 
 def test_nan_in_the_tissue_ends_the_episode_with_a_finite_observation():
-    env = gym.make("SoftGrasp-v1")
+    env = gym.make("SoftGrasp-v2")
     obs0, _ = env.reset(seed=0)
     obs1, *_ = env.step(np.zeros(4, dtype=np.float32))
     env.unwrapped.scene.world.state.particle_x[7, 0] = np.nan
@@ -243,7 +246,7 @@ def test_nan_in_the_tissue_ends_the_episode_with_a_finite_observation():
 
 
 def test_runaway_velocity_is_divergence():
-    env = gym.make("SoftGraspRigid-v1")
+    env = gym.make("SoftGraspRigid-v2")
     env.reset(seed=0)
     sc = env.unwrapped.scene
     sc.client.resetBaseVelocity(sc.cylinder, [0.0, 0.0, 300.0], [0.0, 0.0, 0.0])
@@ -253,7 +256,7 @@ def test_runaway_velocity_is_divergence():
 
 
 def test_knocked_over_cylinder_terminates():
-    env = gym.make("SoftGraspRigid-v1")
+    env = gym.make("SoftGraspRigid-v2")
     env.reset(seed=0)
     sc = env.unwrapped.scene
     sc.client.resetBasePositionAndOrientation(sc.cylinder, [0.03, 0.0, 0.03], p.getQuaternionFromEuler([1.5, 0, 0]))
@@ -290,8 +293,8 @@ def test_scripted_policy_lifts_and_fingers_press_with_the_motor_force(env_id):
 
 
 def test_dense_and_sparse_rewards_follow_their_definitions():
-    dense = gym.make("SoftGrasp-v1")
-    sparse = gym.make("SoftGraspSparse-v1")
+    dense = gym.make("SoftGrasp-v2")
+    sparse = gym.make("SoftGraspSparse-v2")
     policy = ScriptedGraspPolicy()
     od, _ = dense.reset(seed=2)
     os_, _ = sparse.reset(seed=2)
@@ -304,9 +307,10 @@ def test_dense_and_sparse_rewards_follow_their_definitions():
         assert rd == pytest.approx(terms["lift"] + terms["reach"])
         assert 0.0 <= terms["lift"] <= 1.0 and -0.1 <= terms["reach"] <= 0.0
         assert terms["lift"] == pytest.approx(min(max(infd["lift_height"] / 0.05, 0.0), 1.0))
-        assert rs == float(infs["is_success"])
+        assert rs == float(infs["held"])  # held: before, during and after the carry
+        assert not infs["is_success"] or infs["held"]
         seen_success |= infs["is_success"]
-    assert seen_success
+    assert seen_success and infs["is_success"]  # success only once the carry is over: the last step
     dense.close()
     sparse.close()
 
@@ -375,8 +379,8 @@ def test_rgb_array_shows_the_tissue():
 
 
 def test_rendering_does_not_change_the_trajectory():
-    a = gym.make("SoftGrasp-v1", render_mode="rgb_array", render_width=64, render_height=48)
-    b = gym.make("SoftGrasp-v1")
+    a = gym.make("SoftGrasp-v2", render_mode="rgb_array", render_width=64, render_height=48)
+    b = gym.make("SoftGrasp-v2")
     ra = [a.reset(seed=1)]
     rb = [b.reset(seed=1)]
     rng = np.random.default_rng(0)
@@ -401,7 +405,7 @@ def test_human_mode_without_display_is_a_clear_error(monkeypatch):
 
 
 def test_render_without_mode_warns_and_returns_none():
-    env = gym.make("SoftGraspRigid-v1")
+    env = gym.make("SoftGraspRigid-v2")
     env.reset(seed=0)
     with pytest.warns(UserWarning, match="render_mode"):
         assert env.unwrapped.render() is None
@@ -410,7 +414,7 @@ def test_render_without_mode_warns_and_returns_none():
 
 def test_record_video_writes_an_episode(tmp_path):
     pytest.importorskip("moviepy")
-    env = gym.make("SoftGrasp-v1", render_mode="rgb_array", render_width=96, render_height=64, max_episode_steps=8)
+    env = gym.make("SoftGrasp-v2", render_mode="rgb_array", render_width=96, render_height=64, max_episode_steps=8)
     env = gym.wrappers.RecordVideo(env, str(tmp_path / "videos"), episode_trigger=lambda e: True, disable_logger=True)
     env.reset(seed=0)
     done = False
@@ -426,7 +430,7 @@ def test_record_video_writes_an_episode(tmp_path):
 
 
 def test_pickled_fresh_env_behaves_like_the_original():
-    env = gym.make("SoftGrasp-v1")
+    env = gym.make("SoftGrasp-v2")
     twin = pickle.loads(pickle.dumps(env))
     _assert_same(env.reset(seed=0), twin.reset(seed=0))
     act = np.array([0.3, -0.2, -0.5, 0.1], dtype=np.float32)
@@ -436,7 +440,7 @@ def test_pickled_fresh_env_behaves_like_the_original():
     twin.close()
 
 
-@pytest.mark.parametrize("env_id", ["SoftGrasp-v1", "SoftGraspGoal-v1"])
+@pytest.mark.parametrize("env_id", ["SoftGrasp-v2", "SoftGraspGoal-v1"])
 def test_deepcopy_mid_episode_is_exact(env_id):
     env = gym.make(env_id)
     env.reset(seed=5)
@@ -458,7 +462,7 @@ def test_deepcopy_mid_episode_is_exact(env_id):
 def test_a_copy_replays_only_the_steps_since_the_last_reset():
     """Issue 12: a copy's cost is bounded by the episode (at most the 100-step time limit), never
     by the env's history: earlier episodes are not replayed."""
-    env = gym.make("SoftGraspRigid-v1")
+    env = gym.make("SoftGraspRigid-v2")
     rng = np.random.default_rng(2)
     for episode in range(3):
         env.reset(seed=episode)
@@ -492,7 +496,7 @@ def test_create_and_close_100_envs_leaves_no_client_connected():
     before = _connected_clients()
     ids = []
     for k in range(100):
-        env = gym.make("SoftGrasp-v1", render_mode="rgb_array", render_width=32, render_height=24)
+        env = gym.make("SoftGrasp-v2", render_mode="rgb_array", render_width=32, render_height=24)
         env.reset(seed=k)
         if k % 10 == 0:
             env.render()
@@ -502,7 +506,7 @@ def test_create_and_close_100_envs_leaves_no_client_connected():
     assert _connected_clients() == before
     assert not set(ids) & before
     # an env closed before any reset, and closed twice
-    env = gym.make("SoftGrasp-v1")
+    env = gym.make("SoftGrasp-v2")
     env.close()
     env.close()
 
@@ -514,7 +518,7 @@ def test_jaw_wedge_defeats_rigid_fingers_but_not_soft_ones():
     options = {"jaw_wedge": 0.1, "yaw": 0.1, "lateral_offset": 0.005, "cylinder_xy": (0.0, 0.0)}
     policy = ScriptedGraspPolicy()
     outcome = {}
-    for env_id in ("SoftGraspRigid-v1", "SoftGrasp-v1"):
+    for env_id in ("SoftGraspRigid-v2", "SoftGrasp-v2"):
         env = gym.make(env_id)
         obs, _ = env.reset(seed=0, options=options)
         for _ in range(100):
@@ -523,16 +527,16 @@ def test_jaw_wedge_defeats_rigid_fingers_but_not_soft_ones():
                 break
         outcome[env_id] = (term, info["is_success"], float(obs[OBS_NAMES.index("cyl_axis_z")]))
         env.close()
-    rigid_term, rigid_success, rigid_axis_z = outcome["SoftGraspRigid-v1"]
+    rigid_term, rigid_success, rigid_axis_z = outcome["SoftGraspRigid-v2"]
     assert rigid_term and not rigid_success and rigid_axis_z < math.cos(math.pi / 4)
-    soft_term, soft_success, soft_axis_z = outcome["SoftGrasp-v1"]
+    soft_term, soft_success, soft_axis_z = outcome["SoftGrasp-v2"]
     assert not soft_term and soft_success and soft_axis_z > math.cos(0.1)
 
 
 @pytest.mark.skipif(not softgrasp_env.env._display_available(), reason="needs a display (CI runs under xvfb-run)")
 def test_human_mode_runs_the_gui_with_the_particles_shown():
-    env = gym.make("SoftGrasp-v1", render_mode="human")
-    ref = gym.make("SoftGrasp-v1")
+    env = gym.make("SoftGrasp-v2", render_mode="human")
+    ref = gym.make("SoftGrasp-v2")
     obs, _ = env.reset(seed=0)
     ref_obs, _ = ref.reset(seed=0)
     policy = ScriptedGraspPolicy()
@@ -557,7 +561,7 @@ def test_human_mode_runs_the_gui_with_the_particles_shown():
                                     [0.1, 0.2, 0.3, None]])  # fmt: skip
 def test_an_action_that_is_not_real_numbers_is_a_type_error(action):
     """Issue 12: a complex action used to lose its imaginary part with only numpy's warning."""
-    env = gym.make("SoftGraspRigid-v1")
+    env = gym.make("SoftGraspRigid-v2")
     env.reset(seed=0)
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no ComplexWarning on the way

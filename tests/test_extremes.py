@@ -19,7 +19,7 @@ from agents.scripted import ScriptedGraspPolicy
 from softgrasp_env.config import SimConfig, TissueConfig
 
 
-def _episodes(kwargs: dict, *, seeds=(0,), scripted=(0,), env_id: str = "SoftGrasp-v1") -> list[str]:
+def _episodes(kwargs: dict, *, seeds=(0,), scripted=(0,), env_id: str = "SoftGrasp-v2") -> list[str]:
     """Random-action episodes on ``seeds`` and scripted ones on ``scripted``; the divergences,
     each with its reason (empty when none)."""
     env = gym.make(env_id, **kwargs)
@@ -171,7 +171,7 @@ def test_slow_ends_run(kwargs):
 ])  # fmt: skip
 def test_settings_that_did_not_run_are_refused_naming_the_rule(kwargs, match):
     with pytest.raises(ValueError, match=match):
-        gym.make("SoftGrasp-v1", **kwargs)
+        gym.make("SoftGrasp-v2", **kwargs)
 
 
 def _draw(rng: np.random.Generator) -> dict:
@@ -209,7 +209,7 @@ def test_fuzz_over_the_documented_ranges():
     for k in range(30):
         kwargs = _draw(rng)
         try:
-            env = gym.make("SoftGrasp-v1", **kwargs)
+            env = gym.make("SoftGrasp-v2", **kwargs)
         except ValueError:
             refused += 1
             continue

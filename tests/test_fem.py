@@ -135,7 +135,7 @@ def test_config_rejects_bad_fem_fields():
 def test_env_resets_repeatedly_without_leaking_pads_and_is_deterministic():
     runs = []
     for _ in range(2):
-        env = gym.make("SoftGrasp-v1", fingers="fem")
+        env = gym.make("SoftGrasp-v2", fingers="fem")
         traj = []
         for _ in range(2):
             obs, _ = env.reset(seed=7)

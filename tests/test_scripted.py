@@ -25,7 +25,7 @@ def _observations(env_id: str, steps: int = 40) -> list:
     return seen
 
 
-@pytest.mark.parametrize("env_id", ["SoftGraspRigid-v1", "SoftGraspGoal-v1"])
+@pytest.mark.parametrize("env_id", ["SoftGraspRigid-v2", "SoftGraspRigid-v1", "SoftGraspGoal-v1"])
 def test_predict_matches_the_callable_single_and_batched(env_id):
     policy = ScriptedGraspPolicy()
     seen = _observations(env_id)

@@ -129,7 +129,7 @@ def test_torque_springs_diverge_and_the_env_says_so() -> None:
         assert s.is_finite() and s.diverged()
     finally:
         sc.close()
-    env = gym.make("SoftGrasp-v1", fingers="segmented")
+    env = gym.make("SoftGrasp-v2", fingers="segmented")
     try:
         from dataclasses import replace
 
@@ -174,7 +174,7 @@ def test_segmented_holds_at_a_wedge_where_rigid_slips() -> None:
     rad x yaw 0 / 0.1 / 0.3: segmented held every cell, rigid only the 0 wedge."""
     outcome = {}
     for fingers in ("rigid", "segmented"):
-        env = gym.make("SoftGrasp-v1", fingers=fingers)
+        env = gym.make("SoftGrasp-v1", fingers=fingers)  # the static hold of the map (v1: no carry test)
         try:
             obs, _ = env.reset(seed=0, options={"jaw_wedge": 0.1, "yaw": 0.1, "lateral_offset": 0.005, "cylinder_xy": (0.0, 0.0)})
             policy, ever = ScriptedGraspPolicy(), False

@@ -256,7 +256,7 @@ def test_evaluation_refuses_a_damaged_run_json_or_a_model_of_another_algo(tiny_r
 def test_evaluation_refuses_another_env_unless_asked_and_never_other_spaces(tiny_run, capsys):
     run = str(tiny_run[0])
     with pytest.raises(SystemExit):
-        evaluate_main(["--policy", run, "--env", "SoftGraspRigid-v1", "--episodes", "1"])
+        evaluate_main(["--policy", run, "--env", "SoftGraspRigid-v2", "--episodes", "1"])
     assert "trained on 'SoftGraspEasyRigid-v1'" in capsys.readouterr().err
     # on purpose: the same spaces, another id
     assert evaluate_main(["--policy", run, "--env", "SoftGraspRigid-v1", "--other-env", "--episodes", "1"]) == 0
@@ -264,6 +264,9 @@ def test_evaluation_refuses_another_env_unless_asked_and_never_other_spaces(tiny
     with pytest.raises(SystemExit):
         evaluate_main(["--policy", run, "--env", "SoftGraspGoal-v1", "--other-env", "--episodes", "1"])
     assert "observation_space Dict(" in capsys.readouterr().err
+    with pytest.raises(SystemExit):  # v2 adds the clock: a v1 policy cannot read it
+        evaluate_main(["--policy", run, "--env", "SoftGraspRigid-v2", "--other-env", "--episodes", "1"])
+    assert "(24,)" in capsys.readouterr().err
 
 
 def test_train_checks_its_output_before_training(tmp_path, capsys):
