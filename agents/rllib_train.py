@@ -69,7 +69,8 @@ def _make_env(config: dict[str, Any]):
 
 
 def register(env_id: str) -> None:
-    """Register ``env_id`` with Ray's registry (RLlib's workers look there, not in gymnasium's)."""
+    """Register ``env_id`` with Ray's registry (RLlib's workers look there, not in gymnasium's).
+    Call it after ``ray.init``: Ray's registry, asked for its job id before, starts Ray itself."""
     if env_id not in softgrasp_env.ENV_IDS:
         raise ValueError(f"env must be one of {softgrasp_env.ENV_IDS}, got {env_id!r}")
     import ray
@@ -106,7 +107,8 @@ def make_config(env_id: str, *, algo: str = "ppo", seed: int = 0, env_kwargs: di
                 training: dict[str, Any] | None = None):  # fmt: skip
     """The RLlib ``AlgorithmConfig`` for ``algo`` on ``env_id``: the preset, ``training`` on top,
     observations normalised by a running mean/std filter (as SB3's VecNormalize), failed env
-    runners restarted."""
+    runners restarted. The id must be :func:`register`-ed (after ``ray.init``) before an
+    algorithm is built from it."""
     if algo not in ALGOS:
         raise ValueError(f"algo must be one of {ALGOS}, got {algo!r}")
     if env_id.startswith("SoftGraspGoal"):
@@ -118,7 +120,6 @@ def make_config(env_id: str, *, algo: str = "ppo", seed: int = 0, env_kwargs: di
             raise ValueError(f"{name} must be an integer >= {0 if name == 'num_env_runners' else 1}, got {value!r}")
     from ray.rllib.core.rl_module.default_model_config import DefaultModelConfig
 
-    register(env_id)
     preset = {**PRESETS[algo], **(training or {})}
     hidden = preset.pop("fcnet_hiddens")
     if algo == "ppo":
@@ -153,7 +154,13 @@ def _mean_std_filter(env=None, spaces=None, device=None):
 
 
 def build_algorithm(env_id: str, **kwargs: Any):
-    """``make_config(env_id, **kwargs).build_algo()`` (Ray must be initialised)."""
+    """``make_config(env_id, **kwargs).build_algo()`` with the id registered (Ray must be
+    initialised: registering before would make Ray connect on its own)."""
+    import ray
+
+    if not ray.is_initialized():
+        raise RuntimeError("build_algorithm needs Ray initialised (ray.init) first")
+    register(env_id)
     return make_config(env_id, **kwargs).build_algo()
 
 

@@ -119,7 +119,7 @@ def test_training_joins_a_two_node_cluster_and_restarts_a_killed_env_runner(tmp_
     runner, and the later iterations keep sampling with both."""
     from ray.cluster_utils import Cluster
 
-    cluster = Cluster(initialize_head=True, head_node_args={"num_cpus": 1})
+    cluster = Cluster(initialize_head=True, head_node_args={"num_cpus": 0})
     try:
         cluster.add_node(num_cpus=2)
         cluster.wait_for_nodes()
@@ -166,7 +166,8 @@ def test_training_joins_a_two_node_cluster_and_restarts_a_killed_env_runner(tmp_
     "argv, match",
     [
         (["--num-env-runners", "-1"], "num_env_runners must be an integer >= 0"),
-        (["--algo-kwargs", "no_such_thing=1"], r"not an RLlib PPO training\(\) argument: \['no_such_thing'\]"),
+        (["--algo-kwargs", "no_such_thing=1"], r"training\(\) got an unexpected keyword argument 'no_such_thing'"),
+        (["--grid", "no_such_grid=1,2"], r"not an RLlib PPO training\(\) argument: \['no_such_grid'\]"),
         (["--env-kwargs", "cylinder_radius=0.2"], "does not fit between the open fingers"),
         (["--grid", "lr"], "--grid takes KEY=V1,V2"),
         (["--timesteps", "0"], "--timesteps must be >= 1"),
