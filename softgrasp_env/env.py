@@ -123,7 +123,7 @@ class SoftGraspEnv(gym.Env):
 
     | index | meaning | scaling |
     |---|---|---|
-    | 0, 1, 2 | gripper displacement x, y, z (world frame) | ``a * gripper_speed / control_frequency`` m added to the arm's target |
+    | 0, 1, 2 | gripper displacement x, y, z (world frame; ignored during the carry test) | ``a * gripper_speed / control_frequency`` m added to the arm's target |
     | 3 | finger closing | target travel ``(a + 1) / 2 * finger_max_opening`` from fully open: -1 fully open, +1 fingers meet (the force limit sets the squeeze) |
 
     The arm's target is kept inside the workspace (x, y within ±15 cm of the origin, fingertip
