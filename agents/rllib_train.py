@@ -58,13 +58,15 @@ def env_name(env_id: str) -> str:
 
 
 def _make_env(config: dict[str, Any]):
+    """RLlib's env creator, run in each env runner: one numba thread (set before numba loads, as
+    train.py does for its subprocesses), the id made through gymnasium with its time limit."""
+    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
     import gymnasium as gym
 
     import softgrasp_env  # noqa: F401  (in the worker: registers the ids)
 
     config = dict(config)
     env_id = config.pop("_env_id")
-    os.environ.setdefault("NUMBA_NUM_THREADS", "1")
     return gym.make(env_id, **config)
 
 
