@@ -114,5 +114,8 @@ def load_rllib_policy(path: str | Path, env, *, other_env: bool = False) -> RLli
     from agents.runs import check_env_matches
 
     meta, checkpoint = locate(path)
-    check_env_matches(meta, env, Path(path) / "run.json", other_id=other_env)
+    run_json = Path(path) / "run.json"
+    if not run_json.exists():  # a checkpoint: its trial directory holds the run.json
+        run_json = checkpoint.parent / "run.json"
+    check_env_matches(meta, env, run_json, other_id=other_env)
     return RLlibPolicy(checkpoint, env.action_space.low, env.action_space.high)
