@@ -1,0 +1,28 @@
+"""Behaviour does not change under restructuring: every registered id (random actions and the
+scripted policy) and the finger kinds reached through kwargs replay bit-identically against the
+trajectories recorded before issue 18 (tests/trajectories.py says what each case runs)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import softgrasp_env  # noqa: F401  (registers the ids)
+from tests.trajectories import CASES, DATA, fingerprint, record
+
+_GOLDEN = np.load(DATA)
+
+
+@pytest.mark.parametrize(("name", "env_id", "kwargs", "policy", "steps"), CASES, ids=[c[0] for c in CASES])
+def test_trajectory_is_bit_identical_to_the_recording(name, env_id, kwargs, policy, steps):
+    here, there = fingerprint(), str(_GOLDEN["fingerprint"])
+    if here != there:
+        pytest.skip(f"recorded on {there!r}, this is {here!r}: bit-identity is promised on the same machine and "
+                    f"libraries only (re-record with python -m tests.trajectories at the recording's commit)")  # fmt: skip
+    got = record(env_id, kwargs, policy, steps)
+    for key, arr in got.items():
+        want = _GOLDEN[f"{name}/{key}"]
+        assert arr.shape == want.shape, f"{name}/{key}: shape {arr.shape} != recorded {want.shape}"
+        if arr.tobytes() != want.tobytes():
+            first = int(np.flatnonzero((arr != want).reshape(len(arr), -1).any(axis=1))[0])
+            pytest.fail(f"{name}/{key} differs from the recording first at row {first}: {arr[first]!r} != {want[first]!r}")
