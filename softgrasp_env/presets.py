@@ -22,10 +22,10 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
-from .config import SceneConfig
+from .scene.config import SceneConfig
 
 PRESETS: dict[str, dict[str, Any]] = {
-    "fast": dict(tissue=dict(density=2_500.0), sim=dict(iterations=2)),
+    "fast": dict(tissue=dict(particle_density=2_500.0), sim=dict(iterations=2)),
     "default": dict(),
     "accurate": dict(sim=dict(dt=1.0 / 480.0, iterations=2)),
 }

@@ -8,15 +8,15 @@ MAX_EPISODE_STEPS = 100
 """5 s at the default 20 Hz control frequency."""
 
 _SPECS: dict[str, tuple[str, dict]] = {
-    "SoftGrasp-v2": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "dense", "carry": True}),
-    "SoftGraspRigid-v2": ("softgrasp_env.env:SoftGraspEnv", {"soft": False, "reward_type": "dense", "carry": True}),
-    "SoftGraspSparse-v2": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "sparse", "carry": True}),
-    "SoftGrasp-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "dense", "carry": False}),
-    "SoftGraspRigid-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": False, "reward_type": "dense", "carry": False}),
-    "SoftGraspSparse-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "sparse", "carry": False}),
-    "SoftGraspGoal-v1": ("softgrasp_env.env:SoftGraspGoalEnv", {"soft": True}),
-    "SoftGraspEasy-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": True, "reward_type": "dense", "task": "easy"}),
-    "SoftGraspEasyRigid-v1": ("softgrasp_env.env:SoftGraspEnv", {"soft": False, "reward_type": "dense", "task": "easy"}),
+    "SoftGrasp-v2": ("softgrasp_env.env:SoftGraspEnv", {"fingers": "tissue", "reward_type": "dense", "carry": True}),
+    "SoftGraspRigid-v2": ("softgrasp_env.env:SoftGraspEnv", {"fingers": "rigid", "reward_type": "dense", "carry": True}),
+    "SoftGraspSparse-v2": ("softgrasp_env.env:SoftGraspEnv", {"fingers": "tissue", "reward_type": "sparse", "carry": True}),
+    "SoftGrasp-v1": ("softgrasp_env.env:SoftGraspEnv", {"fingers": "tissue", "reward_type": "dense", "carry": False}),
+    "SoftGraspRigid-v1": ("softgrasp_env.env:SoftGraspEnv", {"fingers": "rigid", "reward_type": "dense", "carry": False}),
+    "SoftGraspSparse-v1": ("softgrasp_env.env:SoftGraspEnv", {"fingers": "tissue", "reward_type": "sparse", "carry": False}),
+    "SoftGraspGoal-v1": ("softgrasp_env.env:SoftGraspGoalEnv", {"fingers": "tissue"}),
+    "SoftGraspEasy-v1": ("softgrasp_env.env:SoftGraspEnv", {"fingers": "tissue", "reward_type": "dense", "task": "easy"}),
+    "SoftGraspEasyRigid-v1": ("softgrasp_env.env:SoftGraspEnv", {"fingers": "rigid", "reward_type": "dense", "task": "easy"}),
 }
 
 ENV_IDS: tuple[str, ...] = tuple(_SPECS)

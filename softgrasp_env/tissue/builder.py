@@ -376,7 +376,7 @@ def check_fits(particle_count: int, group_size: int, *, what: str) -> None:
     if free is not None and need > free:
         raise ValueError(
             f"{what}: {particle_count:,} particles would need about {need / 2**30:.1f} GiB, but only "
-            f"{free / 2**30:.1f} GiB of memory is free; lower TissueConfig.density"
+            f"{free / 2**30:.1f} GiB of memory is free; lower TissueConfig.particle_density"
         )
 
 
@@ -390,7 +390,7 @@ def build_combined_body(
 ) -> TissueModel:
     """Tissue for one combined body (thesis 5.2.1), in the core's centre-of-mass frame.
 
-    Attached particles are spread over the core surface at ``tissue.density`` per m^2; each gets
+    Attached particles are spread over the core surface at ``tissue.particle_density`` per m^2; each gets
     an outer partner ``tissue.extrude`` further out. The thesis pushes outer particles along the
     direction from the core's centre of mass (``extrude_direction="radial"``). For elongated
     cores that sends the tissue of a long face sideways (on an 8 x 20 x 30 mm finger the outer
@@ -404,7 +404,7 @@ def build_combined_body(
     if extrude_direction not in ("normal", "radial"):
         raise ValueError(f"extrude_direction must be 'normal' or 'radial', got {extrude_direction!r}")
     offset = np.zeros(3) if shape_offset is None else np.asarray(shape_offset, dtype=np.float64)
-    check_fits(2 * int(math.ceil(shape.area * tissue.density)), tissue.group_size, what="combined body")
+    check_fits(2 * int(math.ceil(shape.area * tissue.particle_density)), tissue.group_size, what="combined body")
     pts, nrm, area = sample_surface(shape, tissue.spacing, faces=faces)
     pts = pts + offset
     if extrude_direction == "radial":
@@ -415,7 +415,7 @@ def build_combined_body(
     outer = pts + tissue.extrude * d
     rest_x = np.concatenate([pts, outer])
     # Each attached/outer pair stands for a prism of tissue (area x extrude); half the mass each.
-    m_pair = tissue.tissue_density * area * tissue.extrude
+    m_pair = tissue.mass_density * area * tissue.extrude
     mass = np.concatenate([0.5 * m_pair, 0.5 * m_pair])
     tangential = tissue.radius_scale * np.sqrt(area)
     radii = np.stack([tangential, tangential, np.full(k, tissue.normal_radius)], axis=1)
@@ -446,7 +446,7 @@ def build_free_block(
     g = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     n = g.shape[0]
     cell = float(np.prod(2 * h)) / n
-    mass = np.full(n, tissue.tissue_density * cell)
+    mass = np.full(n, tissue.mass_density * cell)
     radius = 0.5 * cell ** (1.0 / 3.0)
     radii = np.full((n, 3), radius)
     rest_q = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))

@@ -20,7 +20,7 @@ dt = 1/960 s, and 6.6 mm the other way with the mesh mirrored. So the split is m
 face's middle planes (y = 0, z = 0; both grid planes, the cell counts along the face are even),
 which keeps it conforming (a mirror fixes the triangulation of the plane it mirrors in) and makes
 the pad symmetric as the tissue is. Cells inside the core are left out. The grid is given by the
-cells through the pad's thickness (``SceneConfig.fem_resolution``: 'coarse' 1, 'fine' 2); the
+cells through the pad's thickness (``FemConfig.resolution``: 'coarse' 1, 'fine' 2); the
 cells along the face are as near cubic as the core's extents allow.
 
 The nodes on the core's surface are anchored to the core link (``createSoftBodyAnchor``: the node
@@ -31,7 +31,7 @@ core, the free nodes torn 63 mm off their rest places in 0.25 s, half the steps/
 
 Time step: pybullet's deformable world integrates the elastic forces explicitly (only damping,
 contacts and anchors are implicit), so the pads need a shorter step than the scene's 1/240 s; the
-scene takes ``SceneConfig.fem_substeps`` pybullet steps per world step (measurements there).
+scene takes ``FemConfig.substeps`` pybullet steps per world step (measurements there).
 
 What pybullet reports: ``getContactPoints`` lists a soft body's face-rigid contacts with their
 normal force, but not its node-rigid contacts (PhysicsServerCommandProcessor, 3.2.7), so
@@ -54,8 +54,11 @@ import numpy as np
 import pybullet as p
 from pybullet_utils.bullet_client import BulletClient
 
-from .config import SceneConfig
-from .sim.bullet import _quiet_c_stdout
+from ..config import TissueConfig
+from ..sim.bullet import _quiet_c_stdout
+from ..sim.world import World
+from ..validation import check_choice, check_int
+from .base import FingerConfig, FingerKind, FingerSite, Visual
 
 FEM_CELLS_THROUGH = {"coarse": 1, "fine": 2}
 """Tetrahedral-mesh resolution: hex cells through the pad's thickness (8 mm: 8 or 4 mm cells)."""
@@ -65,7 +68,7 @@ FEM_CELLS_THROUGH = {"coarse": 1, "fine": 2}
 # implements it) takes the Lame parameters mu, lambda [Pa] and a damping coefficient [s] (Rayleigh
 # stiffness damping: the stress of the strain rate times it). Poisson ratio 0.4. Tried at 1/240 s:
 # a stiffer pad (mu x10) or less damping (x0.1) blew up already in the approach, before any
-# contact (explicit elastic forces, see SceneConfig.fem_substeps); at 1/960 s, 3x the damping let
+# contact (explicit elastic forces, see FemConfig.substeps); at 1/960 s, 3x the damping let
 # the cylinder slide out and fall over (14.6 mm of slip in a 1 s hold, against 4 mm).
 FEM_MU = 1.2e4
 FEM_LAMBDA = 4.0 * FEM_MU  # nu = 0.4: lambda = 2 mu nu / (1 - 2 nu)
@@ -200,7 +203,8 @@ class FemPads:
     """The two finger pads of a GraspScene with ``fingers='fem'``: loading, anchoring, and what the
     scene reads back (squeeze force, node positions, penetration)."""
 
-    def __init__(self, client: BulletClient, cfg: SceneConfig, gripper: int, cylinder: int, links: tuple[int, int] = (0, 1)) -> None:
+    def __init__(self, client: BulletClient, cfg, gripper: int, cylinder: int, *, resolution: str,
+                 links: tuple[int, int] = (0, 1)) -> None:  # fmt: skip
         self.client = c = client
         self.gripper, self.cylinder, self.links = gripper, cylinder, links
         self.cylinder_radius, self.cylinder_half_height = cfg.cylinder_radius, 0.5 * cfg.cylinder_height
@@ -210,12 +214,12 @@ class FemPads:
         self.meshes: list[PadMesh] = []
         self.bodies: list[int] = []
         for link, side in zip(links, (+1, -1)):  # the left core's inner face is +x, the right's -x
-            mesh = pad_mesh(fh, cfg.tissue.extrude, FEM_CELLS_THROUGH[cfg.fem_resolution], side=side)
+            mesh = pad_mesh(fh, cfg.tissue.extrude, FEM_CELLS_THROUGH[resolution], side=side)
             pos, orn = c.getLinkState(gripper, link)[4:6]  # the link frame (its inertial frame is the same)
             with _quiet_c_stdout():  # bullet prints node/link/face/tet counts on C stdout
                 body = c.loadSoftBody(
                     vtk_file(mesh), basePosition=pos, baseOrientation=orn, scale=1.0,
-                    mass=cfg.tissue.tissue_density * mesh.volume, useNeoHookean=1, NeoHookeanMu=FEM_MU,
+                    mass=cfg.tissue.mass_density * mesh.volume, useNeoHookean=1, NeoHookeanMu=FEM_MU,
                     NeoHookeanLambda=FEM_LAMBDA, NeoHookeanDamping=FEM_DAMPING, useMassSpring=0,
                     useBendingSprings=0, collisionMargin=FEM_COLLISION_MARGIN, useSelfCollision=0,
                     frictionCoeff=cfg.tissue.friction_static,
@@ -274,4 +278,85 @@ class FemPads:
         return all(np.isfinite(x).all() for x in self.node_positions())
 
 
-__all__ = ["FEM_CELLS_THROUGH", "FemPads", "fem_ground_shape", "PadMesh", "pad_mesh", "vtk_file", "write_vtk"]
+FEM_RGBA = (0.55, 0.8, 0.45, 1.0)
+FEM_NODE_RADIUS = 0.0015
+"""Radius of the sphere a renderer draws at each pad node [m]."""
+
+
+@dataclass(frozen=True, eq=False)
+class FemConfig(FingerConfig):
+    """Settings of the FEM pads (their depth, mass density and friction are the finger surface's:
+    ``SceneConfig.tissue.extrude``, ``mass_density``, ``friction_static``)."""
+
+    kind = "fem"
+    resolution: str = "coarse"
+    """Tetrahedral mesh of the pads, one of FEM_CELLS_THROUGH: 'coarse' - one hex cell (6 tets)
+    through the 8 mm pad, about 8-10 mm cells along it; 'fine' - two, about 4 mm cells."""
+    substeps: int = 8
+    """pybullet steps per world step (``sim.dt``), each ``sim.dt / substeps`` long. pybullet's
+    deformable world integrates the elastic forces explicitly (only the damping and the
+    constraints are implicit). Measured with the coarse pads, scripted grasp of the default
+    cylinder: 1 substep (1/240 s) blew up at first contact (nodes 25 mm inside the cylinder, which
+    was thrown off at 6 m/s); 2 still gave 7 mm of penetration at the impact; 4 lifted it but it
+    slid 17 mm down the pads in the 2 s hold (14-41 mm of lift left, depending on a 0.2 mm start
+    offset); 8 holds it (0.11 mm of slip) at half the speed of 4."""
+
+    def __post_init__(self) -> None:
+        check_choice("resolution", self.resolution, tuple(FEM_CELLS_THROUGH), owner="FemConfig")
+        check_int("substeps", self.substeps, 1, 64, owner="FemConfig")
+
+
+class FemFingers(FingerKind):
+    """The fem kind in a scene: the deformable world, a box ground, the substeps, and the pads
+    (:class:`FemPads`), built once the world exists."""
+
+    name = "fem"
+    config_type = FemConfig
+    description = "pybullet's FEM soft pads on each core (fully deformable fingers)"
+    reset_flags = p.RESET_USE_DEFORMABLE_WORLD
+
+    def __init__(self, scene_config) -> None:
+        super().__init__(scene_config)
+        self.pads: FemPads | None = None
+
+    @classmethod
+    def pad_thickness(cls, config: FingerConfig, tissue: TissueConfig) -> float:
+        """The pad's depth: the tissue's extrude (the same 8 mm by default)."""
+        return tissue.extrude
+
+    @property
+    def bullet_substeps(self) -> int:
+        return self.config.substeps
+
+    def ground_shape(self, client: BulletClient) -> int:
+        return fem_ground_shape(client)
+
+    def connect(self, world: World) -> None:
+        super().connect(world)
+        s = self.site
+        self.pads = FemPads(s.client, self.scene_config, s.gripper, s.cylinder, resolution=self.config.resolution,
+                            links=s.core_links)  # fmt: skip
+
+    def contact_force(self) -> np.ndarray:
+        """pybullet's core contacts plus the pads' face contacts (it reports no node contacts, so
+        this reads low: FemPads)."""
+        return super().contact_force() + self.pads.contact_normal_force()
+
+    def penetration(self) -> tuple[float, float]:
+        pen, intrusion = super().penetration()
+        fem_pen, fem_intrusion = self.pads.penetration()
+        return max(pen, fem_pen), max(intrusion, fem_intrusion)
+
+    def divergence(self) -> str | None:
+        return None if self.pads.is_finite() else "non-finite fem pad node"
+
+    def visuals(self) -> list[Visual]:
+        """The cores, and a small sphere at each pad node (the pads' deformation as it is)."""
+        pads = self.pads
+        n = pads.node_count
+        return super().visuals() + [Visual("points", np.tile(FEM_RGBA, (n, 1)), radii=np.full((n, 3), FEM_NODE_RADIUS),
+                                           positions=lambda: np.concatenate(pads.node_positions()))]  # fmt: skip
+
+
+__all__ = ["FEM_CELLS_THROUGH", "FemConfig", "FemFingers", "FemPads", "PadMesh", "fem_ground_shape", "pad_mesh",
+           "vtk_file", "write_vtk"]  # fmt: skip

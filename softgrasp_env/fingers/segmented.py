@@ -1,10 +1,10 @@
-"""Segmented rigid fingers (``SceneConfig(fingers='segmented')``): the thesis' "traditional" fix
+"""Finger kind 'segmented' (``fingers="segmented"``): the thesis' "traditional" fix
 for rigid fingers that meet a cylinder only approximately aligned - several rigid bodies per
 finger, joined by joints - built so that it can be compared side by side with the rigid twin and
 the tissue.
 
 Each finger keeps its prismatic core link (joint 0 / 1, the same box, mass, motor and gear as the
-other kinds) and carries ``finger_segments`` rigid segments on its inner face, which are what
+other kinds) and carries ``SegmentedConfig.segments`` rigid segments on its inner face, which are what
 grips the cylinder:
 
 - **Layout: side by side along the face's long horizontal axis y**, each segment the full height
@@ -26,7 +26,7 @@ grips the cylinder:
   turn in the grasp. The gimbal's middle link is a small massless-looking body (1 g, no collision
   shape), the pybullet way of chaining two revolutes.
 - **Springs: a force-limited POSITION_CONTROL motor per passive joint whose force limit is set
-  every physics step to the spring-damper torque |k q + c q'|** (``SceneConfig.segment_spring =
+  every physics step to the spring-damper torque |k q + c q'|** (``SegmentedConfig.spring =
   'motor'``, the default). pybullet has no spring joints for multibodies. An explicit torque
   -(k q + c q') (``'torque'``: TORQUE_CONTROL each step) is unstable here: a segment's inertia
   about its yaw axis is ~2e-7 kg m^2, so even k = 0.05 N m/rad gives omega dt = 2.1 at 1/240 s,
@@ -53,7 +53,7 @@ grips the cylinder:
   ``step_stiffness``), where a free load still makes them chatter - only a blocking contact
   (the holding case) gives k exactly there.
 
-Segment friction is ``tissue.friction_static`` like the rigid twin's links (pybullet has one
+Segment friction is ``SceneConfig.tissue.friction_static`` like the rigid twin's links (pybullet has one
 coefficient), set in a changeDynamics call of its own and checked. Links of one multibody do not
 collide with each other in pybullet (no self-collision flag), so segments and core overlap freely
 where a segment pitches by more than the 2 mm boss allows (atan(2 / 30) = 0.067 rad): a real
@@ -63,19 +63,24 @@ comparison changes one thing only.
 
 from __future__ import annotations
 
-import math
+from dataclasses import dataclass
 
 import numpy as np
 import pybullet as p
 from pybullet_utils.bullet_client import BulletClient
 
-from .config import SEGMENT_DEPTH, SceneConfig
+from ..config import TissueConfig
+from ..sim.world import TissueSpec
+from ..validation import check_choice, check_int, check_range
+from .base import FingerConfig, FingerKind, FingerSite, Visual
 
+SEGMENT_DEPTH = 0.008
+"""How far the segments stand in front of their core (2 mm boss + 6 mm segment) [m]: the pad
+depth of this kind, as the tissue's is extrude plus its particles' normal radius."""
 SEGMENT_THICKNESS = 0.006
 """Thickness of a segment along the closing axis x [m]."""
 SEGMENT_STANDOFF = SEGMENT_DEPTH - SEGMENT_THICKNESS
-"""Gap between the core's inner face and a segment's back at rest (the pivot boss): 2 mm [m]
-(config.SEGMENT_DEPTH is the whole depth, which the scene's geometry check uses)."""
+"""Gap between the core's inner face and a segment's back at rest (the pivot boss): 2 mm [m]."""
 SEGMENT_GAP = 0.001
 """Gap between neighbouring segments along y [m]."""
 SEGMENT_DENSITY = 2700.0
@@ -108,22 +113,68 @@ DIVERGED_JOINT_RATE = 90.0
 motor springs stayed below 40 rad/s in the grasps measured (tests/test_segmented.py)."""
 
 
-class SegmentedFingers:
-    """Layout, building and per-step springs of the segmented fingers of one :class:`GraspScene`.
+SEGMENT_SPRINGS: tuple[str, ...] = ("motor", "torque")
+"""How the segments' springs are made in pybullet (SegmentedConfig.spring)."""
+SEGMENT_RGBA = (0.2, 0.6, 0.75, 1.0)
 
-    Usage (scene.py): ``extend_links(links, client)`` appends the carriage, gimbal and segment
-    links to the gripper's createMultiBody lists before it is created, ``attach(...)`` then gears
-    the carriages to the cores and sets friction, limits, inertias and the motors, and
-    ``apply_springs()`` runs before every physics step. Joints 0 and 1 stay the prismatic
-    fingers."""
 
-    def __init__(self, config: SceneConfig) -> None:
-        self.config = cfg = config
-        n = cfg.finger_segments
+@dataclass(frozen=True, eq=False)
+class SegmentedConfig(FingerConfig):
+    """Settings of the segmented fingers."""
+
+    kind = "segmented"
+    segments: int = 3
+    """Segments per finger, side by side along the face's 40 mm: 3 gives 13 mm wide segments,
+    narrower than the cylinder's flat-contact zone, so one of them always takes a lateral offset of
+    up to the face's half width on its centre part."""
+    stiffness_pitch: float = 0.3
+    """Spring stiffness of a segment's pitch joint (about the face's long axis y) [N m/rad]."""
+    stiffness_yaw: float = 0.03
+    """Spring stiffness of a segment's yaw joint (about z) [N m/rad]."""
+    damping_pitch: float = 0.002
+    """Damping of a segment's pitch joint [N m s/rad] ('motor' springs apply at most 0.5 I / dt of
+    it, I the joint's inertia: 4.5e-4 at 3 segments and 1/240 s; the module docstring says why)."""
+    damping_yaw: float = 0.0002
+    """Damping of a segment's yaw joint [N m s/rad] (capped likewise: 2.4e-5 at the defaults)."""
+    spring: str = "motor"
+    """How the springs are made in pybullet: 'motor' - a force-limited position motor re-limited
+    every step to the spring-damper torque (stable at any dt); 'torque' - the explicit torque
+    -(k q + c q') every step (unstable at these inertias; kept to measure it)."""
+
+    def __post_init__(self) -> None:
+        o = "SegmentedConfig"
+        check_int("segments", self.segments, 1, 8, owner=o)
+        check_range("stiffness_pitch", self.stiffness_pitch, 0.0, 100.0, lo_open=True, owner=o)
+        check_range("stiffness_yaw", self.stiffness_yaw, 0.0, 100.0, lo_open=True, owner=o)
+        check_range("damping_pitch", self.damping_pitch, 0.0, 10.0, owner=o)
+        check_range("damping_yaw", self.damping_yaw, 0.0, 10.0, owner=o)
+        check_choice("spring", self.spring, SEGMENT_SPRINGS, owner=o)
+
+
+class SegmentedFingers(FingerKind):
+    """Layout, building and per-step springs of the segmented fingers of one scene: the carriage,
+    gimbal and segment links are appended to the gripper's createMultiBody lists before it is
+    created (``extend_gripper``), ``mount`` then gears the carriages to the cores and sets
+    friction, limits, inertias and the motors, and the springs are set before every physics step
+    (``before_step``). Joints 0 and 1 stay the prismatic fingers."""
+
+    name = "segmented"
+    config_type = SegmentedConfig
+    description = "sprung rigid segments on each core (the thesis' traditional fix)"
+
+    @classmethod
+    def pad_thickness(cls, config: FingerConfig, tissue: TissueConfig) -> float:
+        return SEGMENT_DEPTH
+
+    def __init__(self, scene_config) -> None:
+        super().__init__(scene_config)
+        cfg = scene_config
+        seg: SegmentedConfig = self.config
+        n = seg.segments
         fh = cfg.finger_half_extents
         width = (2.0 * fh[1] - (n - 1) * SEGMENT_GAP) / n
         if width <= 0.0:
-            raise ValueError(f"SceneConfig.finger_segments={n} leaves no width for a segment on a "
+            raise ValueError(f"SegmentedConfig.segments={n} leaves no width for a segment on a "
                              f"{2 * fh[1] * 1000:.0f} mm face")  # fmt: skip
         self.half_extents = (0.5 * SEGMENT_THICKNESS, 0.5 * width, fh[2])
         self.segment_mass = SEGMENT_DENSITY * SEGMENT_THICKNESS * width * 2.0 * fh[2]
@@ -136,19 +187,15 @@ class SegmentedFingers:
         self.carriage_links = [2, 3 + 2 * n]
         self.gimbal_links = [[c + 1 + 2 * i for i in range(n)] for c in self.carriage_links]
         self.segment_links = [[g + 1 for g in row] for row in self.gimbal_links]
-        self.finger_links: tuple[tuple[int, ...], tuple[int, ...]] = (
-            (0, *self.segment_links[0]),
-            (1, *self.segment_links[1]),
-        )
-        """Links whose contacts with the cylinder count as each finger's (core first)."""
+        self._finger_links = ((0, *self.segment_links[0]), (1, *self.segment_links[1]))
         self.pitch_joints = [j for row in self.gimbal_links for j in row]
         self.yaw_joints = [j for row in self.segment_links for j in row]
         self.joints = self.pitch_joints + self.yaw_joints
         """The passive joints (pitch first, then yaw)."""
-        self._k = np.array([cfg.segment_stiffness_pitch] * len(self.pitch_joints)
-                           + [cfg.segment_stiffness_yaw] * len(self.yaw_joints))  # fmt: skip
-        self._c = np.array([cfg.segment_damping_pitch] * len(self.pitch_joints)
-                           + [cfg.segment_damping_yaw] * len(self.yaw_joints))  # fmt: skip
+        self._k = np.array([seg.stiffness_pitch] * len(self.pitch_joints)
+                           + [seg.stiffness_yaw] * len(self.yaw_joints))  # fmt: skip
+        self._c = np.array([seg.damping_pitch] * len(self.pitch_joints)
+                           + [seg.damping_yaw] * len(self.yaw_joints))  # fmt: skip
         self.inertia = np.zeros(len(self.joints))
         """Effective inertia of each passive joint, 1 / (M^-1)_jj at rest [kg m^2] (set by attach)."""
         self.damping_applied = self._c.copy()
@@ -157,16 +204,21 @@ class SegmentedFingers:
         self.client: BulletClient | None = None
         self.gripper = -1
 
+    @property
+    def finger_links(self) -> tuple[tuple[int, ...], tuple[int, ...]]:
+        """Each finger's core and its segments: their contacts with the cylinder are the finger's."""
+        return self._finger_links
+
     # --- building --------------------------------------------------------------------------------
 
-    def extend_links(self, links: dict[str, list], client: BulletClient) -> None:
+    def extend_gripper(self, links: dict[str, list], client: BulletClient) -> None:
         """Append the carriages, gimbals and segments to the gripper's createMultiBody link lists
         (which hold the two cores)."""
         if len(links["linkMasses"]) != 2:
             raise ValueError("the segmented fingers' links go right after the two finger cores")
-        fh = self.config.finger_half_extents
+        fh = self.scene_config.finger_half_extents
         seg_col = client.createCollisionShape(p.GEOM_BOX, halfExtents=self.half_extents)
-        seg_vis = client.createVisualShape(p.GEOM_BOX, halfExtents=self.half_extents, rgbaColor=[0.2, 0.6, 0.75, 1.0])
+        seg_vis = client.createVisualShape(p.GEOM_BOX, halfExtents=self.half_extents, rgbaColor=list(SEGMENT_RGBA))
         # pivot depth in front of the core's centre: the inner face, the boss, half a segment
         depth = fh[0] + SEGMENT_STANDOFF + 0.5 * SEGMENT_THICKNESS
         for k, inward in ((0, 1.0), (1, -1.0)):  # the left core's inner face is +x, the right's -x
@@ -196,13 +248,15 @@ class SegmentedFingers:
         links["linkJointTypes"].append(joint)
         links["linkJointAxis"].append(axis)
 
-    def attach(self, client: BulletClient, gripper: int, *, gear_force: float, gear_erp: float) -> None:
+    def mount(self, site: FingerSite) -> list[TissueSpec]:
         """After createMultiBody: check the link order, gear each carriage to its core, set segment
         friction, inertias, joint limits, and replace the passive joints' default velocity motors
         by the spring motors."""
-        self.client = c = client
-        self.gripper = g = gripper
-        cfg = self.config
+        super().mount(site)
+        self.client = c = site.client
+        self.gripper = g = site.gripper
+        gear_force, gear_erp = site.gear_force, site.gear_erp
+        cfg = self.scene_config
         for j, kind in [(0, p.JOINT_PRISMATIC), (1, p.JOINT_PRISMATIC)] + [(j, p.JOINT_PRISMATIC) for j in self.carriage_links] \
                 + [(j, p.JOINT_REVOLUTE) for j in self.joints]:  # fmt: skip
             if c.getJointInfo(g, j)[2] != kind:
@@ -245,8 +299,12 @@ class SegmentedFingers:
         self.inertia = np.array([1.0 / inv_diag[base + j] for j in self.joints])
         self.damping_applied = np.minimum(self._c, MAX_STEP_DAMPING * self.inertia / cfg.sim.dt)
         self.apply_springs()
+        return []
 
     # --- every step ------------------------------------------------------------------------------
+
+    def before_step(self) -> None:
+        self.apply_springs()
 
     def joint_states(self) -> tuple[np.ndarray, np.ndarray]:
         """Angles [rad] and rates [rad/s] of the passive joints (pitch joints first, then yaw)."""
@@ -259,7 +317,7 @@ class SegmentedFingers:
         q, v = self.joint_states()
         c = self.client
         n = len(self.joints)
-        if self.config.segment_spring == "torque":
+        if self.config.spring == "torque":
             tau = -(self._k * q + self._c * v)
             c.setJointMotorControlArray(self.gripper, self.joints, p.TORQUE_CONTROL, forces=tau.tolist())
             return
@@ -278,7 +336,7 @@ class SegmentedFingers:
     def step_stiffness(self) -> np.ndarray:
         """a = k dt^2 / I of each passive joint (pitch first): the saturated motor spring settles
         under a free load for a < 3 (module docstring)."""
-        return self._k * self.config.sim.dt**2 / self.inertia
+        return self._k * self.scene_config.sim.dt**2 / self.inertia
 
     def is_finite(self) -> bool:
         q, v = self.joint_states()
@@ -300,5 +358,12 @@ class SegmentedFingers:
             return f"a finger segment turning at {rate:.0f} rad/s (limit {DIVERGED_JOINT_RATE:g} rad/s)"
         return None
 
+    def visuals(self) -> list[Visual]:
+        """The cores and every segment, as boxes at their links' poses."""
+        return super().visuals() + [
+            Visual("box", np.asarray(SEGMENT_RGBA), body=self.gripper, link=link, half_extents=self.half_extents)
+            for row in self.segment_links for link in row
+        ]  # fmt: skip
 
-__all__ = ["SegmentedFingers"]
+
+__all__ = ["SEGMENT_DEPTH", "SEGMENT_SPRINGS", "SegmentedConfig", "SegmentedFingers"]

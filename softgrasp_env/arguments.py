@@ -1,0 +1,323 @@
+"""``gym.make`` keyword arguments -> the configs an env is made of, in one place with one validator.
+
+:class:`EnvArguments` holds every argument (its fields are the env card's argument table:
+:func:`argument_table`), checks each with softgrasp_env/validation.py, and derives what the env
+composes: the base :class:`~softgrasp_env.scene.SceneConfig`, the task (``make_task``), the
+gripper's actions (``make_actions``), the physics steps per env step. Old spellings keep working
+with a DeprecationWarning (:meth:`EnvArguments.from_kwargs`). The corners of the randomisation
+ranges are checked here, when the env is made, as pure geometry (no scene is built).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import MISSING, dataclass, field, fields, replace
+from typing import Any
+
+from . import presets
+from .config import SimConfig, TissueConfig
+from .fingers import FINGERS, FemConfig, FingerConfig, TissueFingerConfig, finger_config
+from .observation import CARRY_OBS_NAMES, OBS_NAMES
+from .scene import GRIP_TOP, GripperActions, SceneConfig, Workspace, fit_error, geometry_error
+from .tasks import TASKS, CarryTest, StartRanges, Task
+from .tasks.carry import CARRY_AMPLITUDE, CARRY_DURATION, CARRY_FREQUENCY, CARRY_START
+from .tasks.reach import APPROACH
+from .validation import check_bool, check_choice, check_int, check_range, check_type, deprecated
+
+MAX_ARM_STEP = 1.0 / 120.0
+"""Farthest the arm's target may move in one physics step, gripper_speed * dt [m]: 3.3 cm tore
+the tissue in 2 of 5 probe episodes, 1.7 cm in 2 of 8 (1/60 s with the strongest fingers,
+tests/test_extremes.py); the default moves 0.6 mm."""
+GRIP_TOP_MARGIN = 0.01
+"""The start's grip point stays this far below the top of the arm's workspace [m]."""
+MIN_CYLINDER_RADIUS = 0.005
+"""The smallest cylinder radius a draw may reach [m] (SceneConfig's lower end)."""
+
+
+def _arg(default: Any, doc: str, *, type_: str) -> Any:
+    return field(default=default, metadata={"doc": doc, "type": type_})
+
+
+@dataclass(frozen=True)
+class EnvArguments:
+    """The env's keyword arguments, validated (each field's metadata has its card entry)."""
+
+    fingers: str | FingerConfig = _arg("tissue", "The finger kind: 'tissue' (oriented-particle tissue on rigid cores, "
+        "the thesis), 'rigid' (the bare cores), 'segmented' (sprung rigid segments), 'fem' (pybullet's FEM pads); "
+        "or a kind's config (`SegmentedConfig(segments=4)`) for its own settings", type_="str or FingerConfig")
+    tissue_faces: str | None = _arg(None, "fingers='tissue': 'contact' (the inner face and tip of each core) or "
+        "'all' faces get tissue; None: the kind's default, 'contact'", type_="str")
+    fem_resolution: str | None = _arg(None, "fingers='fem': the pads' mesh, 'coarse' or 'fine' (several times "
+        "slower); None: 'coarse'", type_="str")
+    preset: str = _arg("default", "Tissue and solver settings to start from ('fast', 'default', 'accurate', "
+        "softgrasp_env/presets.py); `tissue`, `sim` and the tissue arguments override them", type_="str")
+    task: str = _arg("reach", "The start: 'reach' (above and away from the cylinder, misaligned fingers) or "
+        "'easy' (v0's gentle start, for debugging)", type_="str")
+    reward_type: str = _arg("dense", "'dense' (lift + reach) or 'sparse' (1 while held)", type_="str")
+    control_frequency: float = _arg(20.0, "Env steps per second [Hz]; must divide the physics rate 1 / sim.dt",
+                                    type_="float")
+    gripper_speed: float = _arg(0.15, "Arm speed at full action [m/s], at most 2 and at most 1/120 m per physics "
+        "step (gripper_speed * sim.dt)", type_="float")
+    particle_density: float | None = _arg(None, "Tissue particles per m² of core surface (None: the preset's, "
+        "4,000); `tissue_density` before 0.3", type_="float")
+    friction_static: float | None = _arg(None, "μ_s of the finger surface (None: the preset's, 0.9; the rigid "
+        "kinds' pybullet coefficient)", type_="float")
+    friction_dynamic: float | None = _arg(None, "μ_k of the tissue (None: the preset's, 0.7)", type_="float")
+    tissue: TissueConfig | None = _arg(None, "A whole TissueConfig to start from (None: the preset's)",
+                                       type_="TissueConfig")
+    sim: SimConfig | None = _arg(None, "A whole SimConfig (dt, iterations, coupling; None: the preset's)",
+                                 type_="SimConfig")
+    cylinder_radius: float = _arg(0.03, "Cylinder radius [m]", type_="float")
+    cylinder_height: float = _arg(0.10, "Cylinder height [m]", type_="float")
+    cylinder_mass: float = _arg(0.1, "Cylinder mass [kg]", type_="float")
+    finger_force: float = _arg(3.0, "Force limit of each finger's motor [N]", type_="float")
+    success_height: float = _arg(0.05, "Lift that counts as picked up [m]", type_="float")
+    reach_weight: float = _arg(0.1, "Weight of the reach shaping term", type_="float")
+    max_tilt: float = _arg(math.pi / 4, "Tilt of the cylinder that ends the episode (knocked over) [rad]",
+                           type_="float")
+    carry: bool | None = _arg(None, "The carry test (None: on for task 'reach', off for 'easy')", type_="bool")
+    carry_start: float = _arg(CARRY_START, "When the carry begins after reset [s]", type_="float")
+    carry_duration: float = _arg(CARRY_DURATION, "How long the arm carries [s]", type_="float")
+    carry_amplitude: float = _arg(CARRY_AMPLITUDE, "Amplitude of the sideways sway [m]", type_="float")
+    carry_frequency: float = _arg(CARRY_FREQUENCY, "Frequency of the sway [Hz]; the sway may move the arm's "
+        "target at most 1/120 m per physics step", type_="float")
+    cylinder_position_range: float | None = _arg(None, "Cylinder at U(±range) in x and y [m] (None: the task's, "
+        "0.07 reach / 0.01 easy)", type_="float")
+    lateral_offset_range: float = _arg(0.005, "Palm offset along the faces, U(±range) [m]", type_="float")
+    yaw_range: float | None = _arg(None, "Palm yaw U(±range) [rad] (None: π/4 reach / 5° easy)", type_="float")
+    jaw_wedge_range: float | None = _arg(None, "Wedge between the faces U(±range) [rad] (None: 0.15 reach / 0 "
+        "easy)", type_="float")
+    approach_range: tuple[float, float] = _arg(APPROACH, "task='reach': the annulus the grip starts in, around the "
+        "origin [m]", type_="(float, float)")
+    friction_range: float = _arg(0.0, "Every friction coefficient × U(1 ± range)", type_="float")
+    cylinder_radius_range: float = _arg(0.0, "Cylinder radius ± U(range) [m]", type_="float")
+    cylinder_mass_range: float = _arg(0.0, "Cylinder mass × U(1 ± range)", type_="float")
+    render_width: int = _arg(480, "Width of an rgb_array frame [px]", type_="int")
+    render_height: int = _arg(360, "Height of an rgb_array frame [px]", type_="int")
+
+    # --- derived in __post_init__ ------------------------------------------------------------------
+    start: type = field(init=False, repr=False, compare=False)
+    """The task's class (TASKS[task])."""
+    substeps: int = field(init=False, repr=False, compare=False)
+    """Physics steps per env step."""
+    scene: SceneConfig = field(init=False, repr=False, compare=False)
+    """The base scene every episode's draw starts from."""
+    ranges: StartRanges = field(init=False, repr=False, compare=False)
+    workspace: Workspace = field(init=False, repr=False, compare=False)
+    obs_names: tuple[str, ...] = field(init=False, repr=False, compare=False)
+    """The observation's entries, in order."""
+
+    def __post_init__(self) -> None:
+        check_choice("task", self.task, tuple(TASKS))
+        self._set("start", TASKS[self.task])
+        defaults = self.start.defaults
+        for name in ("cylinder_position", "yaw", "jaw_wedge"):
+            if getattr(self, f"{name}_range") is None:
+                object.__setattr__(self, f"{name}_range", defaults[name])
+        if self.carry is None:
+            object.__setattr__(self, "carry", defaults["carry"])
+        check_bool("carry", self.carry, hint=" (or None: the task's default)")
+        try:
+            a_lo, a_hi = (float(v) for v in self.approach_range)
+        except (TypeError, ValueError):
+            raise ValueError(f"approach_range must be (min, max) distances in m, got {self.approach_range!r}") from None
+        if not (math.isfinite(a_lo) and math.isfinite(a_hi) and 0.0 <= a_lo <= a_hi <= 0.14):
+            raise ValueError("approach_range must be 0 <= min <= max <= 0.14 m (the grip's workspace is +-0.15 m), "
+                             f"got {self.approach_range!r}")  # fmt: skip
+        object.__setattr__(self, "approach_range", (a_lo, a_hi))
+        fingers = finger_config(self.fingers)
+        if self.tissue_faces is not None:
+            if not isinstance(fingers, TissueFingerConfig):
+                raise ValueError(f"tissue_faces is a setting of fingers='tissue', but fingers={fingers.kind!r}")
+            fingers = replace(fingers, faces=self.tissue_faces)
+        if self.fem_resolution is not None:
+            if not isinstance(fingers, FemConfig):
+                raise ValueError(f"fem_resolution is a setting of fingers='fem', but fingers={fingers.kind!r}")
+            fingers = replace(fingers, resolution=self.fem_resolution)
+        object.__setattr__(self, "fingers", fingers)
+        check_choice("reward_type", self.reward_type, ("dense", "sparse"))
+        check_range("control_frequency", self.control_frequency, 0.5, 240.0)
+        check_range("gripper_speed", self.gripper_speed, 0.0, 2.0, lo_open=True)
+        check_range("success_height", self.success_height, 0.0, 0.15, lo_open=True)
+        check_range("reach_weight", self.reach_weight, 0.0, 10.0)
+        check_range("max_tilt", self.max_tilt, 0.0, math.pi, lo_open=True)
+        check_range("carry_start", self.carry_start, 0.0, 600.0)
+        check_range("carry_duration", self.carry_duration, 0.0, 600.0, lo_open=True)
+        check_range("carry_amplitude", self.carry_amplitude, 0.0, 0.05)
+        check_range("carry_frequency", self.carry_frequency, 0.0, 10.0, lo_open=True)
+        check_range("cylinder_position_range", self.cylinder_position_range, 0.0, 0.08)
+        check_range("lateral_offset_range", self.lateral_offset_range, 0.0, 0.05)
+        check_range("yaw_range", self.yaw_range, 0.0, math.pi / 4)
+        check_range("jaw_wedge_range", self.jaw_wedge_range, 0.0, math.pi / 6)
+        check_range("friction_range", self.friction_range, 0.0, 0.9)
+        check_range("cylinder_radius_range", self.cylinder_radius_range, 0.0, 0.02)
+        check_range("cylinder_mass_range", self.cylinder_mass_range, 0.0, 0.9)
+        check_int("render_width", self.render_width, 16, 4096)
+        check_int("render_height", self.render_height, 16, 4096)
+        self._derive_physics()
+        self._derive_scene()
+        self._check_range_corners()
+
+    def _set(self, name: str, value: Any) -> None:
+        object.__setattr__(self, name, value)
+
+    def _derive_physics(self) -> None:
+        check_choice("preset", self.preset, tuple(presets.PRESETS))
+        p_cfg = presets.scene_config(self.preset)
+        tissue = self.tissue if self.tissue is not None else p_cfg.tissue
+        check_type("tissue", tissue, TissueConfig)
+        overrides = {k: v for k, v in (("particle_density", self.particle_density),
+                                       ("friction_static", self.friction_static),
+                                       ("friction_dynamic", self.friction_dynamic)) if v is not None}  # fmt: skip
+        self._set("tissue", replace(tissue, **overrides))  # validated by TissueConfig
+        sim = self.sim if self.sim is not None else p_cfg.sim
+        check_type("sim", sim, SimConfig)
+        self._set("sim", sim)
+        ratio = 1.0 / (sim.dt * self.control_frequency)
+        substeps = int(round(ratio))
+        if abs(ratio - substeps) > 1e-9 * ratio or substeps < 1:
+            raise ValueError(f"control_frequency must divide the physics rate 1/sim.dt = {1.0 / sim.dt:g} Hz, "
+                             f"got {self.control_frequency!r}")  # fmt: skip
+        self._set("substeps", substeps)
+        if self.gripper_speed * sim.dt > MAX_ARM_STEP + 1e-12:
+            raise ValueError(f"gripper_speed={self.gripper_speed:g} m/s with sim.dt={sim.dt:g} s moves the arm "
+                             f"{self.gripper_speed * sim.dt * 100:.2f} cm per physics step, more than "
+                             f"{MAX_ARM_STEP * 100:.2f} cm; at this dt gripper_speed must be at most "
+                             f"{MAX_ARM_STEP / sim.dt:.3g} m/s")  # fmt: skip
+        # The carry moves the arm's target by at most 2 pi f A dt per physics step (MAX_ARM_STEP).
+        carry_step = 2.0 * math.pi * self.carry_frequency * self.carry_amplitude * sim.dt
+        if self.carry and carry_step > MAX_ARM_STEP + 1e-12:
+            raise ValueError(f"the carry (carry_amplitude={self.carry_amplitude:g} m at carry_frequency="
+                             f"{self.carry_frequency:g} Hz) moves the arm up to {carry_step * 100:.2f} cm per physics "
+                             f"step at sim.dt={sim.dt:g} s, more than {MAX_ARM_STEP * 100:.2f} cm")  # fmt: skip
+
+    def _derive_scene(self) -> None:
+        """The base scene: the start height is the task's, decided once; the pad must fit the
+        open fingers before the start is judged, so a pad too thick is named as such."""
+        check_range("cylinder_height", self.cylinder_height, 0.01, 0.5)
+        check_range("cylinder_radius", self.cylinder_radius, 0.005, 0.2)
+        field_defaults = SceneConfig.__dataclass_fields__
+        fh = field_defaults["finger_half_extents"].default
+        max_opening = field_defaults["finger_max_opening"].default
+        kind = FINGERS[self.fingers.kind]
+        pad = kind.pad_thickness(self.fingers, self.tissue)
+        error = fit_error(cylinder_radius=self.cylinder_radius, jaw_wedge=0.0, finger_max_opening=max_opening,
+                          pad=pad, finger_half_height=fh[2], kind=self.fingers.kind)  # fmt: skip
+        if error is not None:
+            raise ValueError(error)
+        start_height = self.start.start_height(self.cylinder_height, fh[2], pad)
+        top = GRIP_TOP - GRIP_TOP_MARGIN
+        grip_z = 0.5 * self.cylinder_height + start_height
+        if grip_z > top:
+            raise ValueError(f"cylinder_height={self.cylinder_height:g} m is too tall for task={self.task!r}: the grip "
+                             f"would start {grip_z:.3f} m up, too near the top of the arm's workspace ({GRIP_TOP:g} "
+                             f"m); at most {self.start.tallest_cylinder(top, fh[2], pad):.3f} m")  # fmt: skip
+        base = SceneConfig(fingers=self.fingers, cylinder_radius=self.cylinder_radius,
+                           cylinder_height=self.cylinder_height, cylinder_mass=self.cylinder_mass,
+                           finger_force=self.finger_force, tissue=self.tissue, sim=self.sim,
+                           start_height=start_height)  # fmt: skip
+        self._set("scene", base)
+        if self.cylinder_radius - self.cylinder_radius_range < MIN_CYLINDER_RADIUS:
+            raise ValueError(f"cylinder_radius - cylinder_radius_range must be >= {MIN_CYLINDER_RADIUS} m, got "
+                             f"{self.cylinder_radius} - {self.cylinder_radius_range}")  # fmt: skip
+        self._set("ranges", StartRanges(
+            cylinder_position=float(self.cylinder_position_range), lateral_offset=float(self.lateral_offset_range),
+            yaw=float(self.yaw_range), jaw_wedge=float(self.jaw_wedge_range), friction=float(self.friction_range),
+            cylinder_radius=float(self.cylinder_radius_range), cylinder_mass=float(self.cylinder_mass_range)))  # fmt: skip
+        self._set("workspace", Workspace.of(base))
+        self._set("obs_names", CARRY_OBS_NAMES if self.carry else OBS_NAMES)
+
+    def _check_range_corners(self) -> None:
+        """Every corner of the randomisation ranges must be a scene that starts without overlap:
+        the largest cylinder with the widest wedge, at each corner of its square, against each
+        extreme of lateral offset and yaw (geometry_error on the values; no scene is built); and
+        the scaled quantities at their extremes stay in the configs' own ranges."""
+        rg, b = self.ranges, self.scene
+        p, lo, yw, w = rg.cylinder_position, rg.lateral_offset, rg.yaw, rg.jaw_wedge
+        r = b.cylinder_radius + rg.cylinder_radius
+        for sx, sy, so, syaw, sw in itertools.product((-1.0, 1.0), repeat=5):
+            error = geometry_error(b, cylinder_radius=r, cylinder_xy=(sx * p, sy * p), lateral_offset=so * lo,
+                                   yaw=syaw * yw, jaw_wedge=sw * w)  # fmt: skip
+            if error is not None:
+                raise ValueError(
+                    f"the randomisation ranges reach a scene that cannot start (cylinder_position_range={p:g}, "
+                    f"lateral_offset_range={lo:g}, yaw_range={yw:g}, jaw_wedge_range={w:g}, cylinder_radius_range="
+                    f"{rg.cylinder_radius:g}, task={self.task!r}): {error}")  # fmt: skip
+        # (a 9 kg cylinder with cylinder_mass_range=0.9 used to fail at some reset, at 17 kg)
+        for sign in (-1.0, 1.0):
+            scale = 1.0 + sign * rg.friction
+            try:
+                check_range("cylinder_mass", b.cylinder_mass * (1.0 + sign * rg.cylinder_mass), 0.001, 10.0,
+                            owner="SceneConfig")  # fmt: skip
+                check_range("friction_static", b.tissue.friction_static * scale, 0.0, 10.0, owner="TissueConfig")
+                check_range("friction_dynamic", b.tissue.friction_dynamic * scale, 0.0, 10.0, owner="TissueConfig")
+                check_range("ground_friction", b.ground_friction * scale, 0.0, 10.0, owner="SceneConfig")
+            except ValueError as e:
+                raise ValueError(
+                    f"the randomisation ranges reach a scene that cannot be built (friction_range={rg.friction:g}, "
+                    f"cylinder_mass_range={rg.cylinder_mass:g}, cylinder_mass={b.cylinder_mass:g}): {e}") from None  # fmt: skip
+
+    # --- what the env composes -------------------------------------------------------------------
+
+    def make_task(self) -> Task:
+        """A new task (it keeps per-episode state): the start, with the carry test if it is on."""
+        start = self.start(self.ranges, success_height=self.success_height, reach_weight=self.reach_weight,
+                           max_tilt=self.max_tilt, reward_type=self.reward_type,
+                           **({"approach": self.approach_range} if self.task == "reach" else {}))  # fmt: skip
+        if not self.carry:
+            return start
+        return CarryTest(start, workspace=self.workspace, dt=self.sim.dt, start=self.carry_start,
+                         duration=self.carry_duration, amplitude=self.carry_amplitude,
+                         frequency=self.carry_frequency)  # fmt: skip
+
+    def make_actions(self) -> GripperActions:
+        return GripperActions(self.gripper_speed / self.control_frequency, self.workspace,
+                              self.scene.finger_max_opening)  # fmt: skip
+
+    # --- construction from gym.make's kwargs -----------------------------------------------------
+
+    @classmethod
+    def from_kwargs(cls, **kwargs: Any) -> EnvArguments:
+        """The arguments from ``gym.make``'s keywords: unknown names are a TypeError listing the
+        known ones; the spellings of 0.2 (``soft=``, ``tissue_density=``) keep working with a
+        DeprecationWarning."""
+        if "soft" in kwargs:
+            soft = kwargs.pop("soft")
+            deprecated("the soft= argument", "fingers='tissue' or fingers='rigid'", stacklevel=5)
+            check_bool("soft", soft)
+            given = kwargs.get("fingers", "tissue")
+            kind = given.kind if isinstance(given, FingerConfig) else given
+            # soft chooses between the two kinds it used to; a kind it never named (segmented,
+            # fem) wins, as it did
+            if kind in ("tissue", "rigid"):
+                want = "tissue" if soft else "rigid"
+                if isinstance(given, FingerConfig) and kind != want:
+                    raise ValueError(f"soft={soft} contradicts fingers={given!r}: give fingers= alone")
+                kwargs["fingers"] = given if kind == want else want
+        if "tissue_density" in kwargs:
+            if "particle_density" in kwargs:
+                raise TypeError("give particle_density= (the new name of tissue_density=), not both")
+            deprecated("the tissue_density= argument (particles per m^2)", "particle_density=", stacklevel=5)
+            kwargs["particle_density"] = kwargs.pop("tissue_density")
+        known = {f.name for f in fields(cls) if f.init}
+        unknown = sorted(set(kwargs) - known)
+        if unknown:
+            raise TypeError(f"unknown argument(s) {unknown}; the env takes {sorted(known)}")
+        return cls(**kwargs)
+
+
+def argument_table() -> str:
+    """The env card's argument table (Gymnasium v5 style), from :class:`EnvArguments`'s fields."""
+    rows = ["| Parameter | Type | Default | Description |", "|---|---|---|---|"]
+    for f in fields(EnvArguments):
+        if not f.init:
+            continue
+        default = f.default if f.default is not MISSING else "-"
+        if isinstance(default, float) and default == math.pi / 4:
+            default = "π/4"
+        rows.append(f"| `{f.name}` | {f.metadata['type']} | `{default!r}` | {f.metadata['doc']} |")
+    return "\n".join(rows)
+
+
+__all__ = ["MAX_ARM_STEP", "EnvArguments", "argument_table"]

@@ -1,0 +1,155 @@
+"""Finger kind 'tissue' (the thesis): each finger core is a combined body, wrapped in
+oriented-particle tissue (Mueller & Chentanez 2011) that the world steps together with pybullet
+and couples both ways (thesis 5.1.3, 5.2.2; softgrasp_env/sim/world.py).
+
+The tissue's material and discretisation are ``SceneConfig.tissue`` (a TissueConfig: particle
+density, pad depth, stiffness, friction); this kind's own setting is which faces of a core get
+tissue. Its combination rules (``check``) refuse what tore the tissue in issue 12's probe.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..config import TissueConfig
+from ..sim.world import TissueSpec, World
+from ..tissue.builder import build_combined_body, core_shape_from_bullet
+from ..validation import check_choice
+from .base import FingerConfig, FingerKind, FingerSite, Visual
+
+TISSUE_FACES: tuple[str, ...] = ("all", "contact")
+"""Which faces of a core get tissue (TissueFingerConfig.faces)."""
+CONTACT_FACES = {0: ("+x", "-z"), 1: ("-x", "-z")}
+"""faces='contact', per core link, in the core's frame: the inner face (toward the other finger:
++x for the left core, -x for the right one) and the tip (-z). The back and top never meet the
+cylinder; the sides only when it is offset past the face's end, and then the bare core's pybullet
+contact takes it."""
+
+MAX_CONSISTENT_SQUEEZE_IMPULSE = 0.125
+"""Largest finger_force * dt the consistent coupling accepts [N s]: a core sliding on its joint
+under the motor's force is projected against the tissue every step, and a large impulse per step
+drives it through the pad. Probe of issue 12 (scripted grasps): 30 N at 1/60 s (0.5 N s) and
+100 N at 1/120 s (0.83) diverged in every episode, 30 N at 1/120 s (0.25) ran; the stability map
+saw 10-20 N fail at 1/60 s (0.17-0.33) on the easy task. 0.125 keeps below all of them."""
+MAX_PARTICLE_RADIUS = 0.0125
+"""Widest tangential particle radius (radius_scale * spacing) accepted on the fingers [m]. Wider
+particles overhang the cores' edges (a face is 4 cm wide) and catch on the cylinder's rim:
+3.5-6.7 cm tore the tissue within 10-50 random-action steps, 2.0 cm (900 per m^2) in one of five
+random-action episodes (issue 12's probe and the extremes tests); the `fast` preset's 1.2 cm
+(2,500 per m^2) and the default's 0.95 cm run."""
+MAX_TISSUE_SAG = 0.006
+"""Largest equilibrium sag g dt^2 / k of the tissue under gravity accepted [m]. Issue 12's probe:
+0.54-0.57 cm ran its five episodes (0.57 cm, stiffness 0.03 at 1/240 s, snagged once in eight
+more: stiffness now starts at 0.1), 1.7 cm tore one in three, more tore all."""
+MAX_PARTICLE_SPEED = 20.0
+"""A particle faster than this [m/s] has diverged (as a rigid body faster than 20 m/s)."""
+MAX_DEVIATION = 0.03
+"""A particle farther than this from the spot its core carries it to [m] is torn off."""
+
+TISSUE_RGBA = (0.95, 0.55, 0.6, 1.0)
+ATTACHED_RGBA = (0.75, 0.35, 0.45, 1.0)
+
+
+@dataclass(frozen=True, eq=False)
+class TissueFingerConfig(FingerConfig):
+    """Settings of the tissue fingers beyond the tissue's material (SceneConfig.tissue)."""
+
+    kind = "tissue"
+    faces: str = "contact"
+    """Which faces of a finger core get tissue: 'contact' (default) - only the inner face and the
+    tip, where the fingers can touch the cylinder (the rest of the core meets the world through
+    pybullet's contacts); or 'all' - every face (2.5x the particles, the same grasp: penetration
+    0.098 mm vs 0.095, at 0.6x the steps/s). Model no more than the scene needs."""
+
+    def __post_init__(self) -> None:
+        check_choice("faces", self.faces, TISSUE_FACES, owner="TissueFingerConfig")
+
+
+class TissueFingers(FingerKind):
+    name = "tissue"
+    config_type = TissueFingerConfig
+    has_tissue = True
+    description = "rigid cores wrapped in oriented-particle tissue (ours, the thesis)"
+
+    @classmethod
+    def pad_thickness(cls, config: FingerConfig, tissue: TissueConfig) -> float:
+        """The tissue out to its outer particles' ellipsoids: extrude plus their normal radius."""
+        return tissue.extrude + tissue.normal_radius
+
+    @classmethod
+    def check(cls, scene_config) -> None:
+        cfg, sim, tissue = scene_config, scene_config.sim, scene_config.tissue
+        # The consistent coupling's squeeze per step (MAX_CONSISTENT_SQUEEZE_IMPULSE).
+        impulse = cfg.finger_force * sim.dt
+        if sim.coupling == "consistent" and impulse > MAX_CONSISTENT_SQUEEZE_IMPULSE:
+            raise ValueError(
+                f"SceneConfig: coupling='consistent' with finger_force={cfg.finger_force:g} N at dt="
+                f"{sim.dt:g} s pushes {impulse:.3g} N s per step into the tissue, more than "
+                f"{MAX_CONSISTENT_SQUEEZE_IMPULSE:g} N s; at this dt finger_force must be at most "
+                f"{MAX_CONSISTENT_SQUEEZE_IMPULSE / sim.dt:.3g} N (or use coupling='thesis')")  # fmt: skip
+        # Shape matching pulls a particle a fraction k of the way to its goal per step
+        # (Mueller 2005, alpha = k), so gravity's g dt^2 per step settles at a sag of
+        # g dt^2 / k (MAX_TISSUE_SAG: at 1.7 cm the probe's tissue tore one episode in three).
+        sag = sim.gravity * sim.dt**2 / tissue.stiffness
+        if sag > MAX_TISSUE_SAG:
+            raise ValueError(
+                f"SceneConfig: the tissue is too slack for the time step: gravity={sim.gravity:g} m/s^2 "
+                f"times dt={sim.dt:g} s squared over stiffness={tissue.stiffness:g} sags it "
+                f"{sag * 100:.2f} cm, more than {MAX_TISSUE_SAG * 100:g} cm; raise the stiffness to at least "
+                f"{sim.gravity * sim.dt**2 / MAX_TISSUE_SAG:.3g} or shorten dt")  # fmt: skip
+        # Coarse pads of wide particles overhang the core's edges and catch on the cylinder.
+        reach = tissue.radius_scale * tissue.spacing
+        if reach > MAX_PARTICLE_RADIUS:
+            raise ValueError(
+                f"SceneConfig: the tissue particles are too wide: radius_scale={tissue.radius_scale:g} "
+                f"times the spacing {tissue.spacing:.4f} m (particle_density={tissue.particle_density:g} per m^2) "
+                f"gives {reach:.4f} m, more than {MAX_PARTICLE_RADIUS:g} m; raise the particle density to at least "
+                f"{(tissue.radius_scale / MAX_PARTICLE_RADIUS) ** 2:.0f} per m^2 or lower radius_scale")  # fmt: skip
+
+    def mount(self, site: FingerSite) -> list[TissueSpec]:
+        super().mount(site)
+        specs = []
+        for k, link in enumerate(site.core_links):
+            core, offset, orn = core_shape_from_bullet(site.client, site.gripper, link)
+            if abs(orn[3]) < 1.0 - 1e-12:
+                raise ValueError("finger collision shape must be aligned with its link frame")
+            faces = CONTACT_FACES[k] if self.config.faces == "contact" else None
+            body = build_combined_body(core, self.scene_config.tissue, shape_offset=offset, faces=faces)
+            specs.append(TissueSpec(body, site.core_shapes[k]))
+        return specs
+
+    def contact_force(self) -> np.ndarray:
+        """pybullet's core contacts plus the tissue's contacts with the cylinder."""
+        f = super().contact_force()
+        return f + self.world.solver.contact_normal_force(self.site.cylinder_shape)
+
+    def penetration(self) -> tuple[float, float]:
+        """The tissue's deepest overlap with any rigid shape (and of its outer particles with their
+        own core), and pybullet's contacts of the bare cores."""
+        pen, intrusion = self.world.penetration()
+        core_pen, _ = super().penetration()
+        return max(pen, core_pen), intrusion
+
+    def divergence(self) -> str | None:
+        w: World = self.world
+        pv = float(np.abs(w.state.particle_v).max())
+        if pv > MAX_PARTICLE_SPEED:
+            return f"a tissue particle at {pv:.1f} m/s (limit {MAX_PARTICLE_SPEED:g} m/s)"
+        dev = float(w.tissue_deviation())
+        if dev > MAX_DEVIATION:
+            return (f"tissue torn: a particle {dev * 100:.1f} cm from where its core holds it "
+                    f"(limit {MAX_DEVIATION * 100:g} cm)")  # fmt: skip
+        return None
+
+    def visuals(self) -> list[Visual]:
+        """The cores, and every particle as its ellipsoid (attached ones darker)."""
+        model, state = self.world.model, self.world.state
+        rgba = np.where(model.particle_attached[:, None], np.asarray(ATTACHED_RGBA), np.asarray(TISSUE_RGBA))
+        return super().visuals() + [Visual("points", rgba, radii=model.particle_radii,
+                                           positions=lambda: state.particle_x, orientations=lambda: state.particle_q)]  # fmt: skip
+
+
+__all__ = ["MAX_CONSISTENT_SQUEEZE_IMPULSE", "MAX_PARTICLE_RADIUS", "MAX_TISSUE_SAG", "TISSUE_FACES",
+           "TissueFingerConfig", "TissueFingers"]  # fmt: skip

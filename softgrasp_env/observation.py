@@ -1,0 +1,106 @@
+"""The observation: what the env reads off the scene once per env step, every entry by name.
+
+:func:`read` takes a :class:`Reading` of a scene; ``Reading.vector(names)`` is the observation
+vector in the order of ``names`` (``OBS_NAMES``, or ``CARRY_OBS_NAMES`` with the carry test's
+clock). Tasks read the same :class:`Reading` by name: nothing indexes the observation by number.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from .scene import GraspScene
+
+OBS_GROUPS: dict[str, tuple[str, ...]] = {
+    "grip": ("grip_x", "grip_y", "grip_z"),
+    "grip_v": ("grip_vx", "grip_vy", "grip_vz"),
+    "finger_gap": ("finger_gap",),
+    "cyl_rel": ("cyl_rel_x", "cyl_rel_y", "cyl_rel_z"),
+    "cyl_axis": ("cyl_axis_x", "cyl_axis_y", "cyl_axis_z"),
+    "cyl_v": ("cyl_vx", "cyl_vy", "cyl_vz"),
+    "cyl_w": ("cyl_wx", "cyl_wy", "cyl_wz"),
+    "force": ("force_left", "force_right"),
+    "lift": ("lift",),
+    "gripper_yaw": ("gripper_yaw",),
+    "time": ("time",),
+}
+"""Each field of a :class:`Reading` and the observation entries it fills, in observation order."""
+
+OBS_NAMES: tuple[str, ...] = tuple(n for g, names in OBS_GROUPS.items() if g != "time" for n in names)
+"""Names of the observation entries, in order (the env card documents each)."""
+CARRY_OBS_NAMES: tuple[str, ...] = OBS_NAMES + ("time",)
+"""With the carry test (``carry=True``, the v2 ids) the observation ends with the time since
+reset [s]: the carry comes at a fixed time, and a policy that cannot see the clock would face a
+task that is not Markov."""
+
+
+def obs_slice(names: tuple[str, ...], group: str) -> slice:
+    """Where the entries of ``group`` (a key of OBS_GROUPS) sit in an observation of ``names``."""
+    members = OBS_GROUPS[group]
+    start = names.index(members[0])
+    return slice(start, start + len(members))
+
+
+@dataclass(frozen=True, eq=False)
+class Reading:
+    """The scene as the env sees it after an env step, in SI units, world frame (z up)."""
+
+    grip: np.ndarray
+    """(3,) grip point: the midpoint of the two finger cores [m]."""
+    grip_v: np.ndarray
+    """(3,) the palm's linear velocity [m/s]."""
+    finger_gap: float
+    """Distance between the finger cores' inner faces [m]."""
+    cyl_rel: np.ndarray
+    """(3,) cylinder centre minus grip point [m]."""
+    cyl_axis: np.ndarray
+    """(3,) the cylinder's axis, a unit vector (its orientation up to its symmetry)."""
+    cyl_v: np.ndarray
+    """(3,) the cylinder's linear velocity [m/s]."""
+    cyl_w: np.ndarray
+    """(3,) the cylinder's angular velocity [rad/s]."""
+    force: np.ndarray
+    """(2,) normal force each finger (left, right) pressed on the cylinder with, mean over the env
+    step [N]."""
+    lift: float
+    """The cylinder centre's height above its resting height [m]."""
+    gripper_yaw: float
+    """The palm's yaw [rad]."""
+    time: float
+    """Time since reset [s]."""
+    cylinder_x: np.ndarray
+    """(3,) the cylinder centre [m] (not observed as such: the workspace check reads it)."""
+
+    @property
+    def tilt(self) -> float:
+        """Angle of the cylinder's axis from the vertical [rad]."""
+        return math.acos(float(np.clip(self.cyl_axis[2], -1.0, 1.0)))
+
+    def vector(self, names: tuple[str, ...]) -> np.ndarray:
+        """The observation of ``names`` (whole groups of OBS_GROUPS, in their order), float64."""
+        groups = [g for g, members in OBS_GROUPS.items() if members[0] in names]
+        return np.concatenate([np.atleast_1d(np.asarray(getattr(self, g), dtype=np.float64)) for g in groups])
+
+
+def read(scene: GraspScene, force: np.ndarray) -> Reading:
+    """A :class:`Reading` of ``scene`` now; ``force`` is the env step's mean finger force."""
+    grip = scene.grip_point()
+    palm_x, palm_q, palm_v, _ = scene.palm_state()
+    cyl_x, cyl_q, cyl_v, cyl_w = scene.cylinder_state()
+    x, y, z, w = cyl_q
+    axis = np.array([2.0 * (x * z + y * w), 2.0 * (y * z - x * w), 1.0 - 2.0 * (x * x + y * y)])
+    px, py, pz, pw = palm_q
+    yaw = math.atan2(2.0 * (pw * pz + px * py), 1.0 - 2.0 * (py * py + pz * pz))
+    gap = 2.0 * scene.config.finger_max_opening - float(scene.finger_closing().sum())
+    return Reading(grip=grip, grip_v=palm_v.copy(), finger_gap=gap, cyl_rel=cyl_x - grip, cyl_axis=axis,
+                   cyl_v=cyl_v.copy(), cyl_w=cyl_w.copy(), force=np.array(force, dtype=np.float64),
+                   lift=float(cyl_x[2] - scene.cylinder_rest_z), gripper_yaw=yaw,
+                   time=scene.steps * scene.config.sim.dt, cylinder_x=cyl_x.copy())  # fmt: skip
+
+
+__all__ = ["CARRY_OBS_NAMES", "OBS_GROUPS", "OBS_NAMES", "Reading", "obs_slice", "read"]

@@ -1,0 +1,10 @@
+"""The grasp scene: its settings (config.py), the gripper and its control (gripper.py), and the
+scene that builds and steps ground, cylinder, gripper and world (scene.py)."""
+
+from .config import GEOMETRY_MARGIN, SceneConfig, fit_error, geometry_error, scale_friction
+from .gripper import FINGER_DROP, GRIP_TOP, PALM_HALF_EXTENTS, Gripper, GripperActions, GripperControl, Workspace
+from .scene import CYLINDER_SHAPE, SHAPES, SLOTS, GraspScene
+
+__all__ = ["CYLINDER_SHAPE", "FINGER_DROP", "GEOMETRY_MARGIN", "GRIP_TOP", "PALM_HALF_EXTENTS", "SHAPES", "SLOTS",
+           "GraspScene", "Gripper", "GripperActions", "GripperControl", "SceneConfig", "Workspace", "fit_error",
+           "geometry_error", "scale_friction"]

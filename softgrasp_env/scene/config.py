@@ -1,0 +1,250 @@
+"""The grasp scene's settings (thesis 5.2.1): ground, a two-finger gripper with a finger kind, a
+cylinder, the start's misalignment, the tissue material and the time stepping.
+
+``SceneConfig`` validates itself field by field (softgrasp_env/validation.py), then asks its finger
+kind for the combinations that kind cannot run (softgrasp_env/fingers/), then checks the geometry
+as a whole (:func:`geometry_error`): a cylinder that does not fit the open fingers, fingers or palm
+that start inside it. Each is a ValueError naming the settings and the limit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+from ..config import SimConfig, TissueConfig
+from ..fingers import FINGERS, FemConfig, FingerConfig, SegmentedConfig, TissueFingerConfig, finger_config
+from ..validation import accept_old_names, check_range, check_type, deprecated
+from .gripper import FINGER_DROP, PALM_HALF_EXTENTS
+
+GEOMETRY_MARGIN = 0.001
+"""Clearance the start geometry must leave between the cylinder and the open fingers or palm [m]."""
+
+
+@dataclass(frozen=True)
+class SceneConfig:
+    """The grasp scene: ground, a two-finger gripper and a cylinder (thesis 5.2.1)."""
+
+    fingers: FingerConfig = field(default_factory=TissueFingerConfig)
+    """The finger kind and its own settings: a kind's name ('tissue', 'rigid', 'segmented', 'fem';
+    softgrasp_env.fingers.FINGERS) for its defaults, or its config (``SegmentedConfig(segments=4)``).
+    Held as the config, which compares equal to the kind's name (``cfg.fingers == "rigid"``).
+    'tissue' - each core a combined body, wrapped in oriented-particle tissue (the thesis);
+    'rigid' - the bare cores, through pybullet's own contacts (the rigid-only twin); 'segmented' -
+    sprung rigid segments on each core's face (the thesis' "traditional" fix); 'fem' - a fully
+    deformable pad on each core's inner face and tip, pybullet's FEM soft bodies."""
+    cylinder_radius: float = 0.03
+    """Cylinder radius [m]."""
+    cylinder_height: float = 0.10
+    """Cylinder height [m]."""
+    cylinder_mass: float = 0.1
+    """Cylinder mass [kg]."""
+    cylinder_friction: float = 1.0
+    """The cylinder's lateral friction in pybullet, which multiplies the other body's: 1 makes the
+    ground's and the rigid fingers' own coefficients the effective ones."""
+    finger_half_extents: tuple[float, float, float] = (0.008, 0.02, 0.03)
+    """Half extents of a finger core box [m]: x (closing direction), y, z."""
+    finger_mass: float = 0.05
+    """Mass of one finger core [kg]."""
+    finger_force: float = 3.0
+    """Force limit of each finger's closing motor [N]. 3 N holds the default cylinder 5.5 times over
+    (2 mu_s N / m g; measured within 1 % for a slow lift); at 10 N the motors push the cores through
+    the 1 cm tissue (PBD contact stiffness scales with particle mass / dt^2) and pybullet's
+    core-cylinder contact takes over."""
+    finger_speed: float = 0.1
+    """Maximum closing speed of a finger [m/s]. The deepest tissue penetration of the grasp comes
+    the moment the fingers meet the cylinder: 0.095 mm at 0.1 m/s, 0.058 mm at 0.05 m/s (thesis
+    coupling)."""
+    finger_max_opening: float = 0.06
+    """Largest distance of a finger core's inner face from the gripper centre [m]."""
+    palm_mass: float = 0.5
+    """Mass of the gripper palm [kg]."""
+    palm_force: float = 200.0
+    """Force limit of the constraint that drives the palm [N]."""
+    ground_friction: float = 0.5
+    """Friction coefficient of the ground [-]."""
+    lateral_offset: float = 0.0
+    """Misalignment: gripper offset along y (the finger face's long direction) [m]."""
+    yaw: float = 0.0
+    """Misalignment: gripper yaw about z [rad]."""
+    jaw_wedge: float = 0.0
+    """Misalignment: angle between the two finger faces [rad]. Each finger is tilted by half of it
+    about its face's long (y) axis, the gap wider at the top for a positive wedge, so a rigid
+    face meets the cylinder along a short edge instead of a line."""
+    cylinder_xy: tuple[float, float] = (0.0, 0.0)
+    """Where the cylinder stands on the ground [m]."""
+    gripper_xy: tuple[float, float] = (0.0, 0.0)
+    """Where the grip point (the palm's centre line) starts horizontally [m]; ``lateral_offset``
+    adds to its y."""
+    start_height: float = 0.05
+    """Height of the grip point (the finger centres) above the cylinder's mid height at the start
+    [m]. 0.05 starts the open fingers around the top of the default cylinder; the reach task
+    starts them above it (``cylinder_height / 2 + finger half height + clearance``)."""
+    tissue: TissueConfig = field(default_factory=TissueConfig)
+    """The finger surface's material: friction for every kind (a rigid finger's pybullet
+    coefficient is ``friction_static``), pad depth and mass density for the tissue and the FEM
+    pads, the particles' discretisation for the tissue."""
+    sim: SimConfig = field(default_factory=SimConfig)
+
+    def __post_init__(self) -> None:
+        o = "SceneConfig"
+        object.__setattr__(self, "fingers", finger_config(self.fingers))
+        check_range("cylinder_radius", self.cylinder_radius, 0.005, 0.2, owner=o)
+        check_range("cylinder_height", self.cylinder_height, 0.01, 0.5, owner=o)
+        check_range("cylinder_mass", self.cylinder_mass, 0.001, 10.0, owner=o)
+        check_range("cylinder_friction", self.cylinder_friction, 0.0, 10.0, owner=o)
+        if len(self.finger_half_extents) != 3:
+            raise ValueError(f"SceneConfig.finger_half_extents must have 3 entries, got {self.finger_half_extents!r}")
+        for i, h in enumerate(self.finger_half_extents):
+            check_range(f"finger_half_extents[{i}]", h, 0.001, 0.2, owner=o)
+        check_range("finger_mass", self.finger_mass, 0.001, 10.0, owner=o)
+        check_range("finger_force", self.finger_force, 0.0, 1000.0, lo_open=True, owner=o)
+        check_range("finger_speed", self.finger_speed, 0.0, 10.0, lo_open=True, owner=o)
+        check_range("finger_max_opening", self.finger_max_opening, 0.005, 0.3, owner=o)
+        check_range("palm_mass", self.palm_mass, 0.01, 100.0, owner=o)
+        check_range("palm_force", self.palm_force, 0.0, 1e4, lo_open=True, owner=o)
+        check_range("ground_friction", self.ground_friction, 0.0, 10.0, owner=o)
+        check_range("lateral_offset", self.lateral_offset, -0.1, 0.1, owner=o)
+        check_range("yaw", self.yaw, -math.pi / 4, math.pi / 4, owner=o)
+        check_range("jaw_wedge", self.jaw_wedge, -math.pi / 6, math.pi / 6, owner=o)
+        for name, lim in (("cylinder_xy", 0.1), ("gripper_xy", 0.15)):
+            xy = getattr(self, name)
+            if len(xy) != 2:
+                raise ValueError(f"SceneConfig.{name} must have 2 entries, got {xy!r}")
+            for i, v in enumerate(xy):
+                check_range(f"{name}[{i}]", v, -lim, lim, owner=o)
+        check_range("start_height", self.start_height, 0.0, 0.3, owner=o)
+        check_type("tissue", self.tissue, TissueConfig, owner=o)
+        check_type("sim", self.sim, SimConfig, owner=o)
+        self.kind.check(self)
+        error = geometry_error(self)
+        if error is not None:
+            raise ValueError(error)
+
+    @property
+    def kind(self):
+        """The finger kind's class (softgrasp_env.fingers.FINGERS[name])."""
+        return FINGERS[self.fingers.kind]
+
+    @property
+    def soft(self) -> bool:
+        """True if the fingers are wrapped in tissue (``fingers == 'tissue'``)."""
+        return self.kind.has_tissue
+
+    @property
+    def pad_thickness(self) -> float:
+        """How far a finger's pad reaches out from its core's inner face and tip [m]."""
+        return self.kind.pad_thickness(self.fingers, self.tissue)
+
+
+def open_half_gap(finger_max_opening: float, pad: float, finger_half_height: float, jaw_wedge: float) -> float:
+    """The narrowest half gap of the open fingers [m]: a wedge turns one edge of each face inwards."""
+    return finger_max_opening - pad - finger_half_height * math.sin(0.5 * abs(jaw_wedge))
+
+
+def fit_error(*, cylinder_radius: float, jaw_wedge: float, finger_max_opening: float, pad: float,
+              finger_half_height: float, kind: str) -> str | None:  # fmt: skip
+    """Why a cylinder of ``cylinder_radius`` does not fit between the open fingers with their pads
+    on, or None."""
+    r, gap = cylinder_radius, open_half_gap(finger_max_opening, pad, finger_half_height, jaw_wedge)
+    if r + GEOMETRY_MARGIN > gap:
+        return (f"SceneConfig: the cylinder (cylinder_radius={r:g} m) does not fit between the open fingers: "
+                f"finger_max_opening={finger_max_opening:g} m less the {kind} pad ({pad:g} m) and the "
+                f"jaw_wedge={jaw_wedge:g} rad leave a half gap of {gap:.4f} m; the radius must be at most "
+                f"{gap - GEOMETRY_MARGIN:.4f} m")  # fmt: skip
+    return None
+
+
+def geometry_error(cfg: SceneConfig, **changes: Any) -> str | None:
+    """Why the scene ``cfg`` - with ``changes`` to its misalignment, cylinder or start, if given -
+    cannot start, or None: the cylinder must fit between the open fingers with their pads on, and
+    neither a finger nor the palm may start inside it. A pure function of the settings, so the env
+    checks the corners of its ranges without building a config for each."""
+
+    def get(name: str):
+        return changes[name] if name in changes else getattr(cfg, name)
+
+    fh = cfg.finger_half_extents
+    pad = cfg.pad_thickness
+    wedge, r, h = get("jaw_wedge"), get("cylinder_radius"), get("cylinder_height")
+    error = fit_error(cylinder_radius=r, jaw_wedge=wedge, finger_max_opening=cfg.finger_max_opening, pad=pad,
+                      finger_half_height=fh[2], kind=cfg.fingers.kind)  # fmt: skip
+    if error is not None:
+        return error
+    gap = open_half_gap(cfg.finger_max_opening, pad, fh[2], wedge)
+    start_height, cyl_xy, grip_xy = get("start_height"), get("cylinder_xy"), get("gripper_xy")
+    lateral, yaw = get("lateral_offset"), get("yaw")
+    grip_z = 0.5 * h + start_height
+    dx = cyl_xy[0] - grip_xy[0]
+    dy = cyl_xy[1] - grip_xy[1] - lateral
+    across = abs(dx * math.cos(yaw) + dy * math.sin(yaw))  # along the closing axis
+    along = abs(-dx * math.sin(yaw) + dy * math.cos(yaw))  # along the faces
+    tips = grip_z - fh[2] - pad
+    if tips < h and along < fh[1] + r and across + r + GEOMETRY_MARGIN > gap:
+        return (f"SceneConfig: the open fingers start inside the cylinder: their tips ({tips:.3f} m up, start_height="
+                f"{start_height:g}) are below its top (cylinder_height={h:g}) and it stands {across:.4f} m across "
+                f"the closing axis from the grip (cylinder_xy={cyl_xy}, gripper_xy={grip_xy}, "
+                f"lateral_offset={lateral:g}, yaw={yaw:g}); with cylinder_radius={r:g} at most "
+                f"{gap - r - GEOMETRY_MARGIN:.4f} m fits")  # fmt: skip
+    palm_bottom = grip_z + fh[2] + FINGER_DROP
+    if palm_bottom < h + GEOMETRY_MARGIN and across < PALM_HALF_EXTENTS[0] + r and along < PALM_HALF_EXTENTS[1] + r:
+        return (f"SceneConfig: the palm starts inside the cylinder: its underside is {palm_bottom:.3f} m up, the "
+                f"cylinder (cylinder_height={h:g}) reaches {h:g} m; raise start_height={start_height:g} by "
+                f"{h + GEOMETRY_MARGIN - palm_bottom:.3f} m or lower the cylinder")  # fmt: skip
+    return None
+
+
+def scale_friction(cfg: SceneConfig, scale: float) -> SceneConfig:
+    """``cfg`` with every friction coefficient (the finger surface's static and kinetic, the
+    ground's) scaled by ``scale``: how the env's ``friction_range`` and the ``friction_scale``
+    reset option act."""
+    tissue = replace(cfg.tissue, friction_static=cfg.tissue.friction_static * scale,
+                     friction_dynamic=cfg.tissue.friction_dynamic * scale)  # fmt: skip
+    return replace(cfg, tissue=tissue, ground_friction=cfg.ground_friction * scale)
+
+
+# --- the spellings of 0.2: a finger kind's settings were flat fields of SceneConfig ---------------
+
+_LEGACY_FIELDS: dict[str, tuple[type[FingerConfig], str]] = {
+    "tissue_faces": (TissueFingerConfig, "faces"),
+    "fem_resolution": (FemConfig, "resolution"),
+    "fem_substeps": (FemConfig, "substeps"),
+    "finger_segments": (SegmentedConfig, "segments"),
+    "segment_stiffness_pitch": (SegmentedConfig, "stiffness_pitch"),
+    "segment_stiffness_yaw": (SegmentedConfig, "stiffness_yaw"),
+    "segment_damping_pitch": (SegmentedConfig, "damping_pitch"),
+    "segment_damping_yaw": (SegmentedConfig, "damping_yaw"),
+    "segment_spring": (SegmentedConfig, "spring"),
+}
+
+
+def _translate_legacy(kwargs: dict) -> dict:
+    """``SceneConfig(fingers="segmented", finger_segments=4)`` (0.2) as
+    ``SceneConfig(fingers=SegmentedConfig(segments=4))``, with a DeprecationWarning; a setting of
+    another kind than ``fingers`` is an error, as it would be lost."""
+    legacy = {k: kwargs.pop(k) for k in list(kwargs) if k in _LEGACY_FIELDS}
+    if not legacy:
+        return kwargs
+    fingers = finger_config(kwargs.get("fingers", "tissue"))
+    for old, value in legacy.items():
+        cls, new = _LEGACY_FIELDS[old]
+        deprecated(f"SceneConfig({old}=...)", f"SceneConfig(fingers={cls.__name__}({new}=...))", stacklevel=4)
+        if type(fingers) is not cls:
+            raise ValueError(f"SceneConfig.{old} is a setting of fingers={cls.kind!r}, but fingers={fingers.kind!r}")
+        fingers = replace(fingers, **{new: value})
+    kwargs["fingers"] = fingers
+    return kwargs
+
+
+accept_old_names(SceneConfig, {}, translate=_translate_legacy)
+for _old, (_cls, _new) in _LEGACY_FIELDS.items():
+
+    def _read(self, _old=_old, _cls=_cls, _new=_new):
+        deprecated(f"SceneConfig.{_old}", f"SceneConfig.fingers.{_new}")
+        return getattr(self.fingers if type(self.fingers) is _cls else _cls(), _new)
+
+    setattr(SceneConfig, _old, property(_read, doc=f"Deprecated: ``fingers.{_new}`` of a {_cls.__name__}."))
+
+
+__all__ = ["GEOMETRY_MARGIN", "SceneConfig", "fit_error", "geometry_error", "open_half_gap", "scale_friction"]

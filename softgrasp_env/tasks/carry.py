@@ -1,0 +1,115 @@
+"""The carry test (the v2 ids), a composition over the reach task: for the episode's last
+``duration`` the arm, not the policy, sways the palm sideways, and success needs the cylinder
+still held once the carry is over.
+
+The sway is ``amplitude * sin(2 pi frequency t)`` about where the arm's target was when the carry
+began, horizontal and across the jaw (perpendicular to the fingers' closing axis: a grasp held at
+two contact points is weakest that way, it swings about the line through them). It is set before
+every physics step, so it is smooth at any dt; the policy's finger command still acts, its arm
+command is ignored meanwhile. The observation gains the time since reset: the carry comes at a
+fixed time, and a policy that cannot see the clock would face a task that is not Markov.
+
+Defaults: from 3.5 s (step 70 of the 100 at 20 Hz) for 1.5 s, 1 cm at 2 Hz: peak speed
+2 pi f A = 0.13 m/s (below the arm's 0.15 m/s), peak acceleration (2 pi f)^2 A = 1.6 m/s^2
+(0.16 g). The scripted policy holds the cylinder 5 cm up after 1.85 s (median) and 2.5 s at the
+latest over seeds 1000-1099, so it has a second to spare. Measured with the v1 baselines (seeds
+1000-1029): scripted soft 30 / 30 held, SAC soft 26 / 26, scripted rigid 0 / 12, SAC rigid 5 / 28;
+at 1.25 and 1.5 Hz the scripted rigid grasp held 12 / 12 (tilting 21-28 degrees).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..scene.gripper import GripperControl, Workspace
+from .base import Outcome, Task
+
+if TYPE_CHECKING:
+    from ..observation import Reading
+    from ..scene import GraspScene, SceneConfig
+
+CARRY_START = 3.5
+"""The carry begins this long after reset [s]."""
+CARRY_DURATION = 1.5
+"""How long the arm carries [s]: three periods at CARRY_FREQUENCY, ending where it began."""
+CARRY_AMPLITUDE = 0.01
+"""Sideways displacement amplitude of the carry [m]."""
+CARRY_FREQUENCY = 2.0
+"""Frequency of the sway [Hz]."""
+_EPS = 1e-9
+"""Slack on the carry's time window [s]: physics steps land on its ends up to rounding."""
+
+
+class CarryTest(Task):
+    """``task`` with the carry test after it (see the module docstring)."""
+
+    observation_extras = ("time",)
+
+    def __init__(self, task: Task, *, workspace: Workspace, dt: float, start: float = CARRY_START,
+                 duration: float = CARRY_DURATION, amplitude: float = CARRY_AMPLITUDE,
+                 frequency: float = CARRY_FREQUENCY) -> None:  # fmt: skip
+        self.task = task
+        self.workspace = workspace
+        self.dt = float(dt)
+        self.start, self.duration = float(start), float(duration)
+        self.amplitude, self.frequency = float(amplitude), float(frequency)
+        self.name = task.name
+        self.reward_terms = task.reward_terms
+        self.reset_options = task.reset_options
+        self._anchor: np.ndarray | None = None
+
+    # --- the wrapped task's part -----------------------------------------------------------------
+
+    def start_height(self, *args: float) -> float:
+        return self.task.start_height(*args)
+
+    def tallest_cylinder(self, *args: float) -> float:
+        return self.task.tallest_cylinder(*args)
+
+    def draw(self, rng: np.random.Generator, options: Mapping[str, Any], base: SceneConfig) -> SceneConfig:
+        return self.task.draw(rng, options, base)
+
+    def begin(self, scene: GraspScene, rng: np.random.Generator) -> None:
+        self.task.begin(scene, rng)
+        self._anchor = None
+
+    # --- the carry -------------------------------------------------------------------------------
+
+    def phase(self, steps: int) -> float | None:
+        """Seconds into the carry at the end of physics step ``steps`` (counted from reset), or
+        None outside it."""
+        t = steps * self.dt - self.start
+        return t if -_EPS < t <= self.duration + _EPS else None
+
+    def over(self, steps: int) -> bool:
+        return steps * self.dt >= self.start + self.duration - _EPS
+
+    def carrying(self, steps: int) -> bool:
+        return self.phase(steps) is not None and not self.over(steps)
+
+    def steer(self, scene: GraspScene, control: GripperControl) -> GripperControl:
+        """During the carry the palm's target is the sway about the arm's target when the carry
+        began, kept in the workspace; the finger command is the policy's."""
+        t = self.phase(scene.steps + 1)  # the physics step about to run
+        if t is None:
+            return control
+        if self._anchor is None:
+            self._anchor = np.asarray(control.palm_target, dtype=np.float64).copy()
+        yaw = scene.config.yaw
+        across = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
+        target = self._anchor + across * (self.amplitude * math.sin(2.0 * math.pi * self.frequency * t))
+        grip_to_palm = scene.grip_to_palm()
+        return replace(control, palm_target=self.workspace.clip(target - grip_to_palm) + grip_to_palm)
+
+    def evaluate(self, reading: Reading, scene: GraspScene) -> Outcome:
+        out = self.task.evaluate(reading, scene)
+        steps = scene.steps
+        return replace(out, success=out.held and self.over(steps), carrying=self.carrying(steps))
+
+
+__all__ = ["CARRY_AMPLITUDE", "CARRY_DURATION", "CARRY_FREQUENCY", "CARRY_START", "CarryTest"]

@@ -1,0 +1,88 @@
+"""The goal variant (SoftGraspGoal-v1), a composition over a lift task for hindsight experience
+replay: the cylinder centre is the achieved goal, a point above the cylinder's start the desired
+one, and the reward is -1 while they are farther apart than ``distance_threshold``, else 0
+(``compute_reward``, vectorised over leading batch dimensions as HER needs). Success is exactly
+"compute_reward gives 0" on the goals the agent sees, so relabelled and online rewards agree.
+It has no carry test: HER relabels goals alone, and a time-bound test would break that."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import replace
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .base import Outcome, Task
+
+if TYPE_CHECKING:
+    from ..observation import Reading
+    from ..scene import GraspScene, SceneConfig
+
+DISTANCE_THRESHOLD = 0.02
+"""Default goal tolerance [m]."""
+GOAL_HEIGHT_RANGE = (0.05, 0.08)
+"""Default range of the goal's height above the cylinder's resting height [m]."""
+
+
+class GoalTask(Task):
+    """``task`` with a goal drawn per episode (see the module docstring)."""
+
+    diverged_reward = -1.0
+
+    def __init__(self, task: Task, *, distance_threshold: float = DISTANCE_THRESHOLD,
+                 goal_height_range: tuple[float, float] = GOAL_HEIGHT_RANGE) -> None:  # fmt: skip
+        self.task = task
+        self.distance_threshold = float(distance_threshold)
+        self.goal_height_range = (float(goal_height_range[0]), float(goal_height_range[1]))
+        self.name = task.name
+        self.reward_terms = task.reward_terms
+        self.reset_options = task.reset_options
+        self.observation_extras = task.observation_extras
+        self.goal = np.zeros(3)
+        """The desired goal of the running episode [m]."""
+
+    def start_height(self, *args: float) -> float:
+        return self.task.start_height(*args)
+
+    def tallest_cylinder(self, *args: float) -> float:
+        return self.task.tallest_cylinder(*args)
+
+    def draw(self, rng: np.random.Generator, options: Mapping[str, Any], base: SceneConfig) -> SceneConfig:
+        return self.task.draw(rng, options, base)
+
+    def begin(self, scene: GraspScene, rng: np.random.Generator) -> None:
+        """The goal: above the cylinder's start, its resting height plus U(goal_height_range)
+        (drawn after the scene's draws, from the same generator)."""
+        self.task.begin(scene, rng)
+        h = float(rng.uniform(*self.goal_height_range))
+        x, y = scene.config.cylinder_xy
+        self.goal = np.array([x, y, scene.cylinder_rest_z + h])
+
+    def steer(self, scene, control):
+        return self.task.steer(scene, control)
+
+    def carrying(self, steps: int) -> bool:
+        return self.task.carrying(steps)
+
+    @staticmethod
+    def achieved_goal(reading: Reading) -> np.ndarray:
+        """The cylinder centre, as the observation gives it: grip point plus the cylinder's offset
+        from it (float64)."""
+        return reading.cyl_rel + reading.grip
+
+    def compute_reward(self, achieved_goal, desired_goal, info) -> np.ndarray | float:
+        d = np.linalg.norm(np.asarray(achieved_goal, dtype=np.float64) - np.asarray(desired_goal, dtype=np.float64),
+                           axis=-1)  # fmt: skip
+        r = -(d > self.distance_threshold).astype(np.float32)
+        return float(r) if np.ndim(r) == 0 else r
+
+    def evaluate(self, reading: Reading, scene: GraspScene) -> Outcome:
+        out = self.task.evaluate(reading, scene)
+        # the goals as the agent sees them (float32), so that a relabelled reward equals this one
+        reward = float(self.compute_reward(self.achieved_goal(reading).astype(np.float32), self.goal.astype(np.float32),
+                                           None))  # fmt: skip
+        return replace(out, reward=reward, success=reward == 0.0)
+
+
+__all__ = ["DISTANCE_THRESHOLD", "GOAL_HEIGHT_RANGE", "GoalTask"]
