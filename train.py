@@ -168,7 +168,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--env", default=None, choices=softgrasp_env.ENV_IDS, help="default: SoftGrasp-v2")
     parser.add_argument("--env-kwargs", nargs="+", type=parse_kwarg, default=None, metavar="KEY=VALUE",
                         help="keyword arguments of gym.make (values as Python literals, else strings), "
-                             "recorded in run.json; e.g. cylinder_mass=0.2 soft=False")  # fmt: skip
+                             "recorded in run.json; e.g. cylinder_mass=0.2 fingers=rigid")  # fmt: skip
     parser.add_argument("--algo", choices=ALGOS, default=None, help="default: her-sac for the goal env, else sac")
     parser.add_argument("--algo-kwargs", nargs="+", type=parse_kwarg, default=None, metavar="KEY=VALUE",
                         help="override the algo preset (any keyword of the SB3 class), e.g. n_steps=256")  # fmt: skip

@@ -21,6 +21,53 @@ import softgrasp_env
 
 
 @dataclass
+class Episode:
+    """One episode as :func:`run_episode` ran it."""
+
+    steps: int
+    total_reward: float
+    terminated: bool
+    truncated: bool
+    observation: object
+    """The last observation."""
+    info: dict
+    """The last step's info (the reset's if no step ran)."""
+    successes: int
+    """Steps with ``info["is_success"]``."""
+    max_lift: float
+    """Highest ``info["lift_height"]`` over the steps [m]."""
+
+    @property
+    def success(self) -> bool:
+        """``is_success`` on the last step: what an episode counts as."""
+        return bool(self.info["is_success"])
+
+    @property
+    def diverged(self) -> bool:
+        return bool(self.info["diverged"])
+
+
+def run_episode(env: gym.Env, policy: Callable[[object], np.ndarray], *, seed: int | None = None,
+                options: dict | None = None, max_steps: int | None = None,
+                on_step: Callable[[object, float, bool, bool, dict], None] | None = None) -> Episode:  # fmt: skip
+    """Reset ``env`` (``seed``, ``options``) and step ``policy(obs) -> action`` until the episode
+    ends, or for ``max_steps`` steps; ``on_step(obs, reward, terminated, truncated, info)`` sees
+    every step. The one episode loop the evaluator, the benchmarks and the tests share."""
+    obs, info = env.reset(seed=seed, options=options)
+    steps, total, successes, max_lift = 0, 0.0, 0, -np.inf
+    terminated = truncated = False
+    while not (terminated or truncated) and (max_steps is None or steps < max_steps):
+        obs, reward, terminated, truncated, info = env.step(policy(obs))
+        steps += 1
+        total += float(reward)
+        successes += bool(info["is_success"])
+        max_lift = max(max_lift, float(info["lift_height"]))
+        if on_step is not None:
+            on_step(obs, reward, terminated, truncated, info)
+    return Episode(steps, total, bool(terminated), bool(truncated), obs, info, successes, float(max_lift))
+
+
+@dataclass
 class Evaluation:
     episodes: int
     success_rate: float
@@ -38,16 +85,11 @@ def evaluate(env: gym.Env, policy: Callable[[object], np.ndarray], *, episodes: 
         raise ValueError(f"episodes must be >= 1, got {episodes}")
     successes, returns, lifts, diverged = [], [], [], 0
     for k in range(episodes):
-        obs, info = env.reset(seed=seed + k)
-        total, done = 0.0, False
-        while not done:
-            obs, r, term, trunc, info = env.step(policy(obs))
-            total += float(r)
-            done = term or trunc
-        successes.append(bool(info["is_success"]))
-        returns.append(total)
-        lifts.append(float(info["lift_height"]))
-        diverged += bool(info["diverged"])
+        ep = run_episode(env, policy, seed=seed + k)
+        successes.append(ep.success)
+        returns.append(ep.total_reward)
+        lifts.append(float(ep.info["lift_height"]))
+        diverged += ep.diverged
     return Evaluation(episodes, float(np.mean(successes)), float(np.mean(returns)), float(np.mean(lifts)), diverged)
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from softgrasp_env.env import CARRY_OBS_NAMES, OBS_NAMES
+from softgrasp_env.observation import CARRY_OBS_NAMES, OBS_NAMES
 
 _I = {name: k for k, name in enumerate(OBS_NAMES)}
 _SIZES = (len(OBS_NAMES), len(CARRY_OBS_NAMES))

@@ -26,8 +26,8 @@ from dataclasses import replace
 
 from softgrasp_env import accuracy, presets
 from softgrasp_env.accuracy import GraspPlan, coulomb_hold_bound, find_hold_bound, run_grasp
-from softgrasp_env.config import SceneConfig, SimConfig, TissueConfig
-from softgrasp_env.scene import GraspScene
+from softgrasp_env.config import SimConfig, TissueConfig
+from softgrasp_env.scene import GraspScene, SceneConfig
 from softgrasp_env.tissue.builder import build_free_block
 from softgrasp_env.tissue.rigid import empty_colliders
 from softgrasp_env.tissue.solver import TissueSolver

@@ -15,8 +15,7 @@ import time
 import tracemalloc
 from dataclasses import replace
 
-from softgrasp_env.config import SceneConfig
-from softgrasp_env.scene import GraspScene
+from softgrasp_env.scene import GraspScene, SceneConfig
 from softgrasp_env.tissue.builder import memory_estimate
 
 
@@ -28,7 +27,7 @@ def main(argv: list[str] | None = None) -> int:
     GraspScene(base).close()  # warm: numba's cached kernels loaded, pybullet up
     print(f"{'density /m^2':>13} {'particles':>10} {'build s':>8} {'peak MB':>8} {'estimate MB':>12} {'bytes/particle':>15}")
     for factor in ns.factors:
-        cfg = replace(base, tissue=replace(base.tissue, density=base.tissue.density * factor))
+        cfg = replace(base, tissue=replace(base.tissue, particle_density=base.tissue.particle_density * factor))
         tracemalloc.start()
         tic = time.perf_counter()
         scene = GraspScene(cfg)
@@ -38,7 +37,7 @@ def main(argv: list[str] | None = None) -> int:
         n = scene.world.state.particle_x.shape[0]
         scene.close()
         est = memory_estimate(n, cfg.tissue.group_size)
-        print(f"{cfg.tissue.density:13,.0f} {n:10,d} {seconds:8.2f} {peak / 1e6:8.1f} {est / 1e6:12.1f} {peak / n:15,.0f}",
+        print(f"{cfg.tissue.particle_density:13,.0f} {n:10,d} {seconds:8.2f} {peak / 1e6:8.1f} {est / 1e6:12.1f} {peak / n:15,.0f}",
               flush=True)  # fmt: skip
     return 0
 

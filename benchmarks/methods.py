@@ -3,7 +3,7 @@
     PYTHONPATH=. python benchmarks/methods.py [--quick] [--no-bound]
 
 Methods (all in the same scene, the same scripted grasp, seed-free: the scene is deterministic):
-- rigid blocks (``fingers="rigid"``), and whatever other finger kinds config.FINGER_KINDS offers;
+- rigid blocks (``fingers="rigid"``), and whatever other finger kinds softgrasp_env.fingers.FINGERS offers;
 - ours, oriented-particle tissue, ``coupling="thesis"`` and ``"consistent"``, swept one knob at a
   time around the default over iterations, time step (substeps: dt / k), particle density, group
   size and the faces covered (``tissue_faces="all"``: every face, not only where contact can
@@ -31,8 +31,8 @@ import numpy as np
 
 from softgrasp_env import presets
 from softgrasp_env.accuracy import GraspPlan, coulomb_hold_bound, find_hold_bound, pose_error, run_grasp
-from softgrasp_env.config import FINGER_KINDS, SceneConfig
-from softgrasp_env.scene import GraspScene
+from softgrasp_env.fingers import FINGERS, FemConfig, TissueFingerConfig
+from softgrasp_env.scene import GraspScene, SceneConfig
 
 OUT = Path(__file__).resolve().parent / "out"
 PLAN = GraspPlan()
@@ -42,7 +42,7 @@ NO_BOUND = ("fem",)
 hold at ~10 world steps/s) takes about 200 s, ten of them half an hour; their bound column is NaN."""
 TINY_SKIP = ("fem",)
 """Finger kinds the --tiny run leaves out: pybullet's FEM pads run at ~10 world steps/s (8
-substeps of explicit elasticity, SceneConfig.fem_substeps), so their one grasp alone would take
+substeps of explicit elasticity, FemConfig.substeps), so their one grasp alone would take
 minutes; tests/test_fem.py runs it (marked slow)."""
 
 
@@ -88,14 +88,14 @@ def settings(quick: bool, tiny: bool = False) -> list[tuple[str, str, SceneConfi
     base = SceneConfig()
     rows: list[tuple[str, str, SceneConfig]] = []
     if tiny:  # CI: one point per family and the resolution sweep the test checks
-        rows += [(kind, kind, replace(base, fingers=kind)) for kind in FINGER_KINDS if kind not in ("tissue", *TINY_SKIP)]
+        rows += [(kind, kind, replace(base, fingers=kind)) for kind in FINGERS if kind not in ("tissue", *TINY_SKIP)]
         rows += [("preset", name, presets.scene_config(name)) for name in presets.PRESETS]
         rows += [("tissue, thesis", "default", base), ("tissue, thesis", "dt/2", replace(base, sim=replace(base.sim, dt=base.sim.dt / 2)))]
         return rows
-    for kind in FINGER_KINDS:
+    for kind in FINGERS:
         if kind != "tissue":
             rows.append((kind, kind, replace(base, fingers=kind)))
-    rows.append(("fem", "fem fine", replace(base, fingers="fem", fem_resolution="fine")))
+    rows.append(("fem", "fem fine", replace(base, fingers=FemConfig(resolution="fine"))))
     for name in presets.PRESETS:
         rows.append(("preset", name, presets.scene_config(name)))
     iters = (1, 2, 4, 8) if not quick else (2, 4)
@@ -112,9 +112,9 @@ def settings(quick: bool, tiny: bool = False) -> list[tuple[str, str, SceneConfi
             rows.append((fam, f"dt/{k}", replace(c0, sim=replace(sim0, dt=sim0.dt / k))))
         if coupling == "thesis":
             for f in dens:
-                rows.append((fam, f"density x{f:g}", replace(c0, tissue=replace(base.tissue, density=f * base.tissue.density))))
+                rows.append((fam, f"density x{f:g}", replace(c0, tissue=replace(base.tissue, particle_density=f * base.tissue.particle_density))))
             rows.append((fam, "group size 6", replace(c0, tissue=replace(base.tissue, group_size=6))))
-            rows.append((fam, "all faces", replace(c0, tissue_faces="all")))
+            rows.append((fam, "all faces", replace(c0, fingers=TissueFingerConfig(faces="all"))))
     return rows
 
 
@@ -153,7 +153,7 @@ def main() -> None:
         rows = [r for r in rows if r[0] in wanted]
     base = SceneConfig()
     k = 2 if args.tiny else 4
-    ref_cfg = replace(base, tissue=replace(base.tissue, density=k * base.tissue.density),
+    ref_cfg = replace(base, tissue=replace(base.tissue, particle_density=k * base.tissue.particle_density),
                       sim=replace(base.sim, iterations=4 * k, dt=base.sim.dt / k))  # fmt: skip
     reference = None
     if any(cfg.fingers == "tissue" for _, _, cfg in rows):  # the converged run only the tissue is compared with

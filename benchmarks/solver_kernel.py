@@ -19,7 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from softgrasp_env.config import SceneConfig, SimConfig, TissueConfig
+from softgrasp_env.config import SimConfig, TissueConfig
+from softgrasp_env.scene import SceneConfig
 from softgrasp_env.tissue.builder import build_free_block
 from softgrasp_env.tissue.rigid import Colliders, empty_colliders
 from softgrasp_env.tissue.solver import TissueSolver

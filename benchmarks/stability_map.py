@@ -12,7 +12,7 @@ Maps (rows x columns):
 A cell is one 5 s episode of SoftGraspEnv with agents.scripted.ScriptedGraspPolicy:
 2 = held (lifted and held at the end), 1 = slipped (lifted, then lost), 0 = dropped (never lifted),
 -1 = diverged, -2 = refused (gym.make raises a ValueError: the setting is outside what the
-method accepts, e.g. the consistent coupling's squeeze impulse limit, config.py). Methods: the finger kinds of config.FINGER_KINDS, ours with both couplings. Writes
+method accepts, e.g. the consistent coupling's squeeze impulse limit, config.py). Methods: the finger kinds of softgrasp_env.fingers.FINGERS, ours with both couplings. Writes
 benchmarks/out/stability_map.csv and .png (one heatmap per method and map) and prints the grids.
 """
 
@@ -28,7 +28,8 @@ import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
 from agents.scripted import ScriptedGraspPolicy
-from softgrasp_env.config import FINGER_KINDS, SimConfig
+from softgrasp_env.config import SimConfig
+from softgrasp_env.fingers import FINGERS
 
 OUT = Path(__file__).resolve().parent / "out"
 LABELS = {2: "held", 1: "slipped", 0: "dropped", -1: "diverged", -2: "refused"}
@@ -36,14 +37,14 @@ LABELS = {2: "held", 1: "slipped", 0: "dropped", -1: "diverged", -2: "refused"}
 
 TINY_SKIP = ("fem",)
 """Finger kinds the --tiny map leaves out: pybullet's FEM pads run at ~10 world steps/s (8
-substeps of explicit elasticity, SceneConfig.fem_substeps), and the tiny map's two 5 s episodes
+substeps of explicit elasticity, FemConfig.substeps), and the tiny map's two 5 s episodes
 would add about 5 minutes to CI; tests/test_fem.py runs the fem grasp (marked slow)."""
 
 
 def methods(*, tiny: bool = False) -> dict[str, dict]:
     """Every method: env arguments (without TINY_SKIP's kinds if ``tiny``)."""
     out = {}
-    for kind in FINGER_KINDS:
+    for kind in FINGERS:
         if tiny and kind in TINY_SKIP:
             continue
         if kind == "tissue":

@@ -19,8 +19,9 @@ from dataclasses import replace
 import numpy as np
 
 from softgrasp_env import presets
-from softgrasp_env.config import SceneConfig, TissueConfig
-from softgrasp_env.scene import GraspScene
+from softgrasp_env.config import TissueConfig
+from softgrasp_env.fingers import TissueFingerConfig
+from softgrasp_env.scene import GraspScene, GripperControl, SceneConfig
 
 
 def steps_per_second(cfg: SceneConfig, steps: int, repeats: int = 3) -> tuple[float, int]:
@@ -30,9 +31,9 @@ def steps_per_second(cfg: SceneConfig, steps: int, repeats: int = 3) -> tuple[fl
     for _ in range(repeats):
         scene = GraspScene(cfg)
         try:
-            scene.set_palm_target(np.array([0.0, 0.0, scene.grasp_height + scene.palm_offset]))
-            scene.set_finger_target(cfg.finger_max_opening)
-            for _ in range(240):  # settle into the squeeze, and compile anything not cached
+            squeeze = GripperControl(np.array([0.0, 0.0, scene.grasp_height + scene.palm_offset]), cfg.finger_max_opening)
+            scene.step(squeeze)
+            for _ in range(239):  # settle into the squeeze, and compile anything not cached
                 scene.step()
             tic = time.perf_counter()
             for _ in range(steps):
@@ -63,7 +64,8 @@ def main() -> None:
     rows = [("rigid-only fingers", SceneConfig(fingers="rigid"))]
     rows += [(f"soft, preset {name!r}", presets.scene_config(name)) for name in presets.PRESETS]
     # the defaults before issue 9 chose the preset: every face covered at 10,000 particles per m^2
-    rows.append(("soft, all faces, 10k/m^2", replace(base, tissue_faces="all", tissue=replace(base.tissue, density=10_000.0))))
+    rows.append(("soft, all faces, 10k/m^2", replace(base, fingers=TissueFingerConfig(faces="all"),
+                                                         tissue=replace(base.tissue, particle_density=10_000.0))))
     print(f"{'scene':<28}{'particles':>10}{'steps/s':>12}{'/ rigid':>10}")
     rigid = None
     for label, cfg in rows:
@@ -74,7 +76,7 @@ def main() -> None:
     print()
     print(f"{'density scale':<28}{'particles':>10}{'steps/s':>12}{'us/particle-step':>18}")
     for scale in (1, 2, 4):
-        tissue = TissueConfig(density=base.tissue.density * scale)
+        tissue = TissueConfig(particle_density=base.tissue.particle_density * scale)
         sps, n = steps_per_second(SceneConfig(tissue=tissue), args.steps // scale)
         print(f"{str(scale) + 'x':<28}{n:>10}{sps:>12.0f}{1e6 / sps / n:>18.3f}")
     print()

@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -123,7 +123,7 @@ def _min_jerk(u: float) -> float:
 def _relative_pose(scene: GraspScene) -> tuple[np.ndarray, np.ndarray]:
     """Cylinder pose in the palm's frame (position [m], quaternion [x, y, z, w])."""
     c = scene.client
-    pp, pq = c.getBasePositionAndOrientation(scene.gripper)
+    pp, pq = c.getBasePositionAndOrientation(scene.gripper.body)
     cp, cq = c.getBasePositionAndOrientation(scene.cylinder)
     ip, iq = c.invertTransform(pp, pq)
     rp, rq = c.multiplyTransforms(ip, iq, cp, cq)
@@ -146,6 +146,7 @@ def run_grasp(
     dt = scene.config.sim.dt
     world = scene.world
     start = scene.palm_target.copy()
+    control = scene.control
     grasp = start.copy()
     grasp[2] = scene.grasp_height + scene.palm_offset
     close_to = scene.config.finger_max_opening
@@ -171,16 +172,15 @@ def run_grasp(
         for k in range(n):
             if phase == "approach":
                 # reach the grasp height at 80 % of the phase, then settle
-                scene.set_palm_target(start + (grasp - start) * min(1.0, (k / n) * 1.25))
+                control = replace(control, palm_target=start + (grasp - start) * min(1.0, (k / n) * 1.25))
             elif phase == "squeeze":
-                if scene.finger_target != close_to:
-                    scene.set_finger_target(close_to)
+                control = replace(control, finger_closing=close_to)
             elif phase == "lift":
                 target = grasp.copy()
                 target[2] += plan.lift_distance * _min_jerk((k + 1) / n)
-                scene.set_palm_target(target)
+                control = replace(control, palm_target=target)
             tic = time.perf_counter()
-            scene.step()
+            scene.step(control)
             seconds += time.perf_counter() - tic
             if scene.diverged():
                 finite = False

@@ -16,15 +16,19 @@ import time
 import numpy as np
 
 from .accuracy import GraspPlan, run_grasp
-from .config import SceneConfig, SimConfig, TissueConfig
-from .scene import GraspScene
+from .config import SimConfig, TissueConfig
+from .scene import GraspScene, SceneConfig
+
+_OLD_FLAGS = {"particle_density": "--density", "mass_density": "--tissue-density"}
+"""Flags of 0.2, before TissueConfig's fields were renamed (both spellings work)."""
 
 
 def _add_dataclass_flags(parser: argparse.ArgumentParser, cls: type, prefix: str = "") -> None:
     for f in dataclasses.fields(cls):
         if f.type in ("float", "int", float, int):
             kind = float if f.type in ("float", float) else int
-            parser.add_argument(f"--{prefix}{f.name.replace('_', '-')}", type=kind, default=None,
+            flags = [f"--{prefix}{f.name.replace('_', '-')}"] + ([_OLD_FLAGS[f.name]] if f.name in _OLD_FLAGS else [])
+            parser.add_argument(*flags, dest=prefix + f.name, type=kind, default=None,
                                 help=f"{cls.__name__}.{f.name} (default {f.default})")  # fmt: skip
 
 

@@ -1,10 +1,12 @@
-"""Views of a grasp scene that show the tissue, not only the cores. Read-only on the simulation.
+"""Views of a grasp scene that show every finger kind, not only its cores. Read-only on the
+simulation: what to draw comes from ``GraspScene.visuals()`` (the scene's cylinder and palm, then
+the finger kind's own: cores, tissue particles, segments, FEM pad nodes; softgrasp_env/fingers/).
 
-``rgb_array``: a separate pybullet server (DIRECT) holds visual-only copies of the ground, cylinder,
-palm, finger cores and one ellipsoid per tissue particle; each frame copies the poses over and draws
-with pybullet's CPU renderer, so rendering never touches the physics server.
-``human``: the physics server is the pybullet GUI; visual-only particle bodies (no collision shape,
-no mass, so they take no part in the dynamics) are added to it and moved each frame.
+``rgb_array``: a separate pybullet server (DIRECT) holds visual-only copies of everything; each
+frame copies the poses over and draws with pybullet's CPU renderer, so rendering never touches the
+physics server. ``human``: the physics server is the pybullet GUI, which draws its own bodies;
+only what is not a pybullet body there (the tissue particles) is added as visual-only bodies (no
+collision shape, no mass: they take no part in the dynamics) and moved each frame.
 """
 
 from __future__ import annotations
@@ -14,11 +16,12 @@ import math
 import numpy as np
 import pybullet as p
 
-from .scene import PALM_HALF_EXTENTS, GraspScene
+from .fingers import Visual
+from .scene import GraspScene
 from .sim.bullet import connect
 
-_TISSUE_RGBA = (0.95, 0.55, 0.6, 1.0)
-_ATTACHED_RGBA = (0.75, 0.35, 0.45, 1.0)
+GROUND_RGBA = (0.82, 0.84, 0.86, 1.0)
+GROUND_HALF_EXTENTS = (0.3, 0.3, 0.001)
 
 
 def ellipsoid_mesh(radii: tuple[float, float, float], *, rings: int = 6, segments: int = 10):
@@ -53,8 +56,13 @@ class SceneRenderer:
         self.human = human
         self._client = None  # the viewer server (rgb_array) or the scene's GUI server (human)
         self._scene: GraspScene | None = None
-        self._particles: list[int] = []
-        self._mirror: dict[str, int] = {}
+        self._rigid: list[tuple[Visual, int]] = []  # (what, its mirror body)
+        self._points: list[tuple[Visual, list[int]]] = []  # (what, a mirror body per point)
+
+    @property
+    def particle_bodies(self) -> list[int]:
+        """The bodies drawn for the tissue particles (and pad nodes), in the scene's order."""
+        return [b for _, bodies in self._points for b in bodies]
 
     def invalidate(self) -> None:
         """The scene was rebuilt: build the copies again on the next frame."""
@@ -65,20 +73,18 @@ class SceneRenderer:
             self._build(scene)
         cid = self._client._client
         sc = scene.client
-        if not self.human:
-            for name, (body, link) in (("cylinder", (scene.cylinder, -1)), ("palm", (scene.gripper, -1)),
-                                       ("left", (scene.gripper, 0)), ("right", (scene.gripper, 1))):  # fmt: skip
-                if link < 0:
-                    pos, orn = sc.getBasePositionAndOrientation(body)
-                else:
-                    st = sc.getLinkState(body, link)
-                    pos, orn = st[4], st[5]  # the link (visual) frame
-                p.resetBasePositionAndOrientation(self._mirror[name], pos, orn, physicsClientId=cid)
-        state = scene.world.state
-        if state is not None:
-            x, q = state.particle_x, state.particle_q
-            for k, body in enumerate(self._particles):
-                p.resetBasePositionAndOrientation(body, x[k].tolist(), q[k].tolist(), physicsClientId=cid)
+        for v, mirror in self._rigid:
+            if v.link < 0:
+                pos, orn = sc.getBasePositionAndOrientation(v.body)
+            else:
+                pos, orn = sc.getLinkState(v.body, v.link)[4:6]  # the link (visual) frame
+            p.resetBasePositionAndOrientation(mirror, pos, orn, physicsClientId=cid)
+        for v, bodies in self._points:
+            x = v.positions()
+            q = v.orientations() if v.orientations is not None else None
+            for k, body in enumerate(bodies):
+                p.resetBasePositionAndOrientation(body, x[k].tolist(), (0.0, 0.0, 0.0, 1.0) if q is None else q[k].tolist(),
+                                                  physicsClientId=cid)  # fmt: skip
         if self.human:
             return None
         # A fixed camera on the cylinder's start, so a video shows the lift as motion.
@@ -94,58 +100,54 @@ class SceneRenderer:
         return np.ascontiguousarray(rgba[:, :, :3])
 
     def _build(self, scene: GraspScene) -> None:
+        visuals = scene.visuals()
         if self.human:
-            self._client = scene.client  # resetSimulation in a rebuild already removed old copies
-            self._client.configureDebugVisualizer(p.COV_ENABLE_GUI, 0)
-            self._client.resetDebugVisualizerCamera(0.34, 35.0, -25.0, [0.0, 0.0, 0.07])
+            self._client = c = scene.client  # resetSimulation in a rebuild already removed old copies
+            c.configureDebugVisualizer(p.COV_ENABLE_GUI, 0)
+            c.resetDebugVisualizerCamera(0.34, 35.0, -25.0, [0.0, 0.0, 0.07])
+            # The GUI redraws after every body it is sent; hundreds of particle bodies took ~20 s
+            # that way. Pausing its rendering while they are created is pybullet's usual remedy.
+            c.configureDebugVisualizer(p.COV_ENABLE_RENDERING, 0)
+            visuals = [v for v in visuals if not v.in_scene]  # the GUI draws the scene's own bodies
         else:
             if self._client is None:
                 self._client = connect()
-            self._client.resetSimulation()
-            self._mirror_rigid(scene)
-        self._particles = []
-        model = scene.world.model
-        if self.human:
-            # The GUI redraws after every body it is sent; hundreds of particle bodies took ~20 s
-            # that way. Pausing its rendering while they are created is pybullet's usual remedy.
-            self._client.configureDebugVisualizer(p.COV_ENABLE_RENDERING, 0)
-        if model is not None:
             c = self._client
-            radii = np.round(model.particle_radii, 9)
-            ids = np.empty(model.particle_count, dtype=np.int64)
-            # One visual shape per distinct (radii, attached) and one batched createMultiBody each.
-            keys = np.concatenate([radii, model.particle_attached[:, None].astype(np.float64)], axis=1)
-            uniq, inverse = np.unique(keys, axis=0, return_inverse=True)
-            for u, key in enumerate(uniq):
-                members = np.flatnonzero(inverse.ravel() == u)
-                verts, idx, normals = ellipsoid_mesh(tuple(key[:3]))
-                vis = c.createVisualShape(p.GEOM_MESH, vertices=verts, indices=idx, normals=normals,
-                                          rgbaColor=_ATTACHED_RGBA if key[3] else _TISSUE_RGBA)  # fmt: skip
-                pos = scene.world.state.particle_x[members].tolist()
-                bodies = c.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=-1, baseVisualShapeIndex=vis,
-                                           batchPositions=pos)  # fmt: skip
-                bodies = [bodies] if isinstance(bodies, int) else list(bodies)
-                ids[members] = bodies
-            self._particles = ids.tolist()
+            c.resetSimulation()
+            ground = c.createVisualShape(p.GEOM_BOX, halfExtents=list(GROUND_HALF_EXTENTS), rgbaColor=list(GROUND_RGBA))
+            c.createMultiBody(baseMass=0.0, baseVisualShapeIndex=ground, basePosition=[0.0, 0.0, -GROUND_HALF_EXTENTS[2]])
+        self._rigid, self._points = [], []
+        for v in visuals:
+            if v.kind == "points":
+                self._points.append((v, self._point_bodies(c, v)))
+            else:
+                if v.kind == "cylinder":
+                    shape = c.createVisualShape(p.GEOM_CYLINDER, radius=v.half_extents[0], length=2.0 * v.half_extents[2],
+                                                rgbaColor=list(v.rgba))  # fmt: skip
+                else:
+                    shape = c.createVisualShape(p.GEOM_BOX, halfExtents=list(v.half_extents), rgbaColor=list(v.rgba))
+                self._rigid.append((v, c.createMultiBody(baseMass=0.0, baseVisualShapeIndex=shape)))
         if self.human:
-            self._client.configureDebugVisualizer(p.COV_ENABLE_RENDERING, 1)
+            c.configureDebugVisualizer(p.COV_ENABLE_RENDERING, 1)
         self._scene = scene
 
-    def _mirror_rigid(self, scene: GraspScene) -> None:
-        c = self._client
-        cfg = scene.config
-        ground = c.createVisualShape(p.GEOM_BOX, halfExtents=[0.3, 0.3, 0.001], rgbaColor=[0.82, 0.84, 0.86, 1])
-        c.createMultiBody(baseMass=0.0, baseVisualShapeIndex=ground, basePosition=[0.0, 0.0, -0.001])
-        cyl = c.createVisualShape(p.GEOM_CYLINDER, radius=cfg.cylinder_radius, length=cfg.cylinder_height,
-                                  rgbaColor=[0.9, 0.6, 0.2, 1.0])  # fmt: skip
-        palm = c.createVisualShape(p.GEOM_BOX, halfExtents=PALM_HALF_EXTENTS, rgbaColor=[0.4, 0.4, 0.45, 1])
-        finger = c.createVisualShape(p.GEOM_BOX, halfExtents=cfg.finger_half_extents, rgbaColor=[0.3, 0.3, 0.8, 1])
-        self._mirror = {
-            "cylinder": c.createMultiBody(baseMass=0.0, baseVisualShapeIndex=cyl),
-            "palm": c.createMultiBody(baseMass=0.0, baseVisualShapeIndex=palm),
-            "left": c.createMultiBody(baseMass=0.0, baseVisualShapeIndex=finger),
-            "right": c.createMultiBody(baseMass=0.0, baseVisualShapeIndex=finger),
-        }
+    @staticmethod
+    def _point_bodies(c, v: Visual) -> list[int]:
+        """A visual-only body per point: one visual shape per distinct (radii, colour), and one
+        batched createMultiBody each."""
+        n = len(v.radii)
+        ids = np.empty(n, dtype=np.int64)
+        keys = np.concatenate([np.round(v.radii, 9), np.asarray(v.rgba, dtype=np.float64).reshape(n, 4)], axis=1)
+        uniq, inverse = np.unique(keys, axis=0, return_inverse=True)
+        x = v.positions()
+        for u, key in enumerate(uniq):
+            members = np.flatnonzero(inverse.ravel() == u)
+            verts, idx, normals = ellipsoid_mesh(tuple(key[:3]))
+            shape = c.createVisualShape(p.GEOM_MESH, vertices=verts, indices=idx, normals=normals, rgbaColor=key[3:].tolist())
+            bodies = c.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=-1, baseVisualShapeIndex=shape,
+                                       batchPositions=x[members].tolist())  # fmt: skip
+            ids[members] = [bodies] if isinstance(bodies, int) else list(bodies)
+        return ids.tolist()
 
     def close(self) -> None:
         if self._client is not None and not self.human:

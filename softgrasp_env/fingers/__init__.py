@@ -17,15 +17,17 @@ FINGERS: dict[str, type[FingerKind]] = {
 'segmented' (the thesis' traditional fix), 'fem' (pybullet's FEM pads)."""
 
 
-def finger_config(fingers: str | FingerConfig) -> FingerConfig:
-    """The kind's settings: a name gives its defaults, a config is checked to be a registered kind's."""
+def finger_config(fingers: str | FingerConfig, *, owner: str | None = None) -> FingerConfig:
+    """The kind's settings: a name gives its defaults, a config is checked to be a registered kind's.
+    ``owner`` prefixes the name in the error (``SceneConfig.fingers``; bare: the gym.make argument)."""
+    label = f"{owner}.fingers" if owner else "fingers"
     if isinstance(fingers, FingerConfig):
         kind = FINGERS.get(fingers.kind)
         if kind is None or type(fingers) is not kind.config_type:
-            raise ValueError(f"fingers={fingers!r} is not the config of a registered finger kind {tuple(FINGERS)}")
+            raise ValueError(f"{label}={fingers!r} is not the config of a registered finger kind {tuple(FINGERS)}")
         return fingers
     if not isinstance(fingers, str) or fingers not in FINGERS:
-        raise ValueError(f"fingers must be one of {tuple(FINGERS)} or a finger kind's config, got {fingers!r}")
+        raise ValueError(f"{label} must be one of {tuple(FINGERS)} or a finger kind's config, got {fingers!r}")
     return FINGERS[fingers].config_type()
 
 

@@ -80,13 +80,15 @@ class FingerSite:
     """Share of a gear's position error corrected per step."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Visual:
     """Something a renderer draws for a finger kind (softgrasp_env/render.py).
 
     ``kind="box"``: the link ``link`` of ``body`` as a box of ``half_extents``, at the link's pose.
     ``kind="points"``: ellipsoids of ``radii`` (N, 3) at ``positions()`` (N, 3) turned by
-    ``orientations()`` (N, 4, xyzw; ``None``: unturned), coloured ``rgba`` (N, 4)."""
+    ``orientations()`` (N, 4, xyzw; ``None``: unturned), coloured ``rgba`` (N, 4).
+    ``in_scene``: the physics server has it as a body already (a GUI draws it itself); False for
+    what only the tissue solver knows (the particles)."""
 
     kind: str
     rgba: np.ndarray
@@ -96,6 +98,7 @@ class Visual:
     radii: np.ndarray | None = None
     positions: Callable[[], np.ndarray] | None = None
     orientations: Callable[[], np.ndarray] | None = None
+    in_scene: bool = True
 
 
 CORE_RGBA = (0.3, 0.3, 0.8, 1.0)

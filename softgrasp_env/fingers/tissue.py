@@ -148,7 +148,8 @@ class TissueFingers(FingerKind):
         model, state = self.world.model, self.world.state
         rgba = np.where(model.particle_attached[:, None], np.asarray(ATTACHED_RGBA), np.asarray(TISSUE_RGBA))
         return super().visuals() + [Visual("points", rgba, radii=model.particle_radii,
-                                           positions=lambda: state.particle_x, orientations=lambda: state.particle_q)]  # fmt: skip
+                                           positions=lambda: state.particle_x, orientations=lambda: state.particle_q,
+                                           in_scene=False)]  # fmt: skip
 
 
 __all__ = ["MAX_CONSISTENT_SQUEEZE_IMPULSE", "MAX_PARTICLE_RADIUS", "MAX_TISSUE_SAG", "TISSUE_FACES",

@@ -1,8 +1,8 @@
 """The grasp scene: its settings (config.py), the gripper and its control (gripper.py), and the
 scene that builds and steps ground, cylinder, gripper and world (scene.py)."""
 
-from .config import GEOMETRY_MARGIN, SceneConfig, fit_error, geometry_error, scale_friction
-from .gripper import FINGER_DROP, GRIP_TOP, PALM_HALF_EXTENTS, Gripper, GripperActions, GripperControl, Workspace
+from .config import FINGER_DROP, GEOMETRY_MARGIN, PALM_HALF_EXTENTS, SceneConfig, fit_error, geometry_error, scale_friction
+from .gripper import GRIP_TOP, Gripper, GripperActions, GripperControl, Workspace
 from .scene import CYLINDER_SHAPE, SHAPES, SLOTS, GraspScene
 
 __all__ = ["CYLINDER_SHAPE", "FINGER_DROP", "GEOMETRY_MARGIN", "GRIP_TOP", "PALM_HALF_EXTENTS", "SHAPES", "SLOTS",

@@ -16,8 +16,11 @@ from typing import Any
 from ..config import SimConfig, TissueConfig
 from ..fingers import FINGERS, FemConfig, FingerConfig, SegmentedConfig, TissueFingerConfig, finger_config
 from ..validation import accept_old_names, check_range, check_type, deprecated
-from .gripper import FINGER_DROP, PALM_HALF_EXTENTS
-
+PALM_HALF_EXTENTS = (0.09, 0.03, 0.01)
+"""Half extents of the gripper's palm box [m]."""
+FINGER_DROP = 0.04
+"""Gap between the palm's underside and the top of a finger core [m] (the finger's upper part is
+not modelled: only the fingertip segment touches anything)."""
 GEOMETRY_MARGIN = 0.001
 """Clearance the start geometry must leave between the cylinder and the open fingers or palm [m]."""
 
@@ -89,7 +92,7 @@ class SceneConfig:
 
     def __post_init__(self) -> None:
         o = "SceneConfig"
-        object.__setattr__(self, "fingers", finger_config(self.fingers))
+        object.__setattr__(self, "fingers", finger_config(self.fingers, owner=o))
         check_range("cylinder_radius", self.cylinder_radius, 0.005, 0.2, owner=o)
         check_range("cylinder_height", self.cylinder_height, 0.01, 0.5, owner=o)
         check_range("cylinder_mass", self.cylinder_mass, 0.001, 10.0, owner=o)
@@ -226,7 +229,7 @@ def _translate_legacy(kwargs: dict) -> dict:
     legacy = {k: kwargs.pop(k) for k in list(kwargs) if k in _LEGACY_FIELDS}
     if not legacy:
         return kwargs
-    fingers = finger_config(kwargs.get("fingers", "tissue"))
+    fingers = finger_config(kwargs.get("fingers", "tissue"), owner="SceneConfig")
     for old, value in legacy.items():
         cls, new = _LEGACY_FIELDS[old]
         deprecated(f"SceneConfig({old}=...)", f"SceneConfig(fingers={cls.__name__}({new}=...))", stacklevel=4)
@@ -247,4 +250,4 @@ for _old, (_cls, _new) in _LEGACY_FIELDS.items():
     setattr(SceneConfig, _old, property(_read, doc=f"Deprecated: ``fingers.{_new}`` of a {_cls.__name__}."))
 
 
-__all__ = ["GEOMETRY_MARGIN", "SceneConfig", "fit_error", "geometry_error", "open_half_gap", "scale_friction"]
+__all__ = ["FINGER_DROP", "GEOMETRY_MARGIN", "PALM_HALF_EXTENTS", "SceneConfig", "fit_error", "geometry_error", "open_half_gap", "scale_friction"]

@@ -23,15 +23,10 @@ import pybullet as p
 from gymnasium import spaces
 from pybullet_utils.bullet_client import BulletClient
 
+from .config import FINGER_DROP, PALM_HALF_EXTENTS, SceneConfig
+
 if TYPE_CHECKING:
     from ..fingers import FingerKind
-    from .config import SceneConfig
-
-PALM_HALF_EXTENTS = (0.09, 0.03, 0.01)
-"""Half extents of the gripper's palm box [m]."""
-FINGER_DROP = 0.04
-"""Gap between the palm's underside and the top of a finger core [m] (the finger's upper part is
-not modelled: only the fingertip segment touches anything)."""
 FINGER_GEAR_FORCE = 100.0
 """Force limit of the gear that keeps both fingers' travel equal [N]: far above what the motors
 (``finger_force``) or the tissue can make, so it never gives way."""
@@ -215,4 +210,4 @@ class GripperActions:
         return GripperControl(target, 0.5 * (float(action[3]) + 1.0) * self.finger_max_opening)
 
 
-__all__ = ["FINGER_DROP", "GRIP_TOP", "PALM_HALF_EXTENTS", "Gripper", "GripperActions", "GripperControl", "Workspace"]
+__all__ = ["GRIP_TOP", "Gripper", "GripperActions", "GripperControl", "Workspace"]

@@ -21,8 +21,8 @@ from pybullet_utils.bullet_client import BulletClient
 from ..fingers import FingerKind, FingerSite, Visual
 from ..sim.bullet import RigidRef, connect
 from ..sim.world import ShapeSpec, World
-from .config import SceneConfig
-from .gripper import FINGER_GEAR_ERP, FINGER_GEAR_FORCE, PALM_HALF_EXTENTS, PALM_RGBA, Gripper, GripperControl
+from .config import PALM_HALF_EXTENTS, SceneConfig
+from .gripper import FINGER_GEAR_ERP, FINGER_GEAR_FORCE, PALM_RGBA, Gripper, GripperControl
 
 SLOTS = ("left_core", "right_core", "cylinder", "palm")
 """The rigid bodies the world tracks, in the order of its rigid arrays (``world.colliders``)."""
