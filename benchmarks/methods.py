@@ -43,7 +43,7 @@ hold at ~10 world steps/s) takes about 200 s, ten of them half an hour; their bo
 TINY_SKIP = ("fem",)
 """Finger kinds the --tiny run leaves out: pybullet's FEM pads run at ~10 world steps/s (8
 substeps of explicit elasticity, FemConfig.substeps), so their one grasp alone would take
-minutes; tests/test_fem.py runs it (marked slow)."""
+minutes; tests/fingers/test_fem.py runs it (marked slow)."""
 
 
 def measure(cfg: SceneConfig, *, bound: bool, reference: np.ndarray | None) -> dict:

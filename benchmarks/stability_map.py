@@ -38,7 +38,7 @@ LABELS = {2: "held", 1: "slipped", 0: "dropped", -1: "diverged", -2: "refused"}
 TINY_SKIP = ("fem",)
 """Finger kinds the --tiny map leaves out: pybullet's FEM pads run at ~10 world steps/s (8
 substeps of explicit elasticity, FemConfig.substeps), and the tiny map's two 5 s episodes
-would add about 5 minutes to CI; tests/test_fem.py runs the fem grasp (marked slow)."""
+would add about 5 minutes to CI; tests/fingers/test_fem.py runs the fem grasp (marked slow)."""
 
 
 def methods(*, tiny: bool = False) -> dict[str, dict]:

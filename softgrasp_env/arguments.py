@@ -313,10 +313,10 @@ def argument_table() -> str:
     for f in fields(EnvArguments):
         if not f.init:
             continue
-        default = f.default if f.default is not MISSING else "-"
-        if isinstance(default, float) and default == math.pi / 4:
+        default = f"`{f.default!r}`" if f.default is not MISSING else "-"
+        if f.default == math.pi / 4:
             default = "π/4"
-        rows.append(f"| `{f.name}` | {f.metadata['type']} | `{default!r}` | {f.metadata['doc']} |")
+        rows.append(f"| `{f.name}` | {f.metadata['type']} | {default} | {f.metadata['doc']} |")
     return "\n".join(rows)
 
 

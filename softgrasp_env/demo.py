@@ -20,7 +20,16 @@ from .config import SimConfig, TissueConfig
 from .scene import GraspScene, SceneConfig
 
 _OLD_FLAGS = {"particle_density": "--density", "mass_density": "--tissue-density"}
-"""Flags of 0.2, before TissueConfig's fields were renamed (both spellings work)."""
+"""Flags of 0.2, before TissueConfig's fields were renamed: both spellings work, the old one
+with a note on stderr."""
+
+
+class _Deprecated(argparse.Action):
+    def __call__(self, parser, namespace, values, option_string=None):
+        if option_string in _OLD_FLAGS.values():
+            new = "--" + self.dest.replace("_", "-")
+            print(f"note: {option_string} is deprecated, use {new}", file=sys.stderr)
+        setattr(namespace, self.dest, values)
 
 
 def _add_dataclass_flags(parser: argparse.ArgumentParser, cls: type, prefix: str = "") -> None:
@@ -28,7 +37,7 @@ def _add_dataclass_flags(parser: argparse.ArgumentParser, cls: type, prefix: str
         if f.type in ("float", "int", float, int):
             kind = float if f.type in ("float", float) else int
             flags = [f"--{prefix}{f.name.replace('_', '-')}"] + ([_OLD_FLAGS[f.name]] if f.name in _OLD_FLAGS else [])
-            parser.add_argument(*flags, dest=prefix + f.name, type=kind, default=None,
+            parser.add_argument(*flags, dest=prefix + f.name, type=kind, default=None, action=_Deprecated,
                                 help=f"{cls.__name__}.{f.name} (default {f.default})")  # fmt: skip
 
 

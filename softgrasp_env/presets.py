@@ -1,7 +1,7 @@
 """Named settings of the soft fingers, chosen at the knee of the speed/accuracy chart
 (benchmarks/methods.py; docs/RESULTS.md has the figures): model no more than the scene needs.
 Every preset covers only the faces where the fingers can touch the cylinder (each core's inner
-face and tip, ``SceneConfig.tissue_faces='contact'``); the backs and sides meet the world through
+face and tip, ``TissueFingerConfig(faces='contact')``); the backs and sides meet the world through
 pybullet's contacts.
 
 - ``fast``: 2,500 particles per m^2 of face (32 particles in all, 20 mm spacing), 2 iterations at

@@ -16,45 +16,13 @@ from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import softgrasp_env
-from agents.scripted import ScriptedGraspPolicy
 from softgrasp_env import ENV_IDS
-from softgrasp_env.env import OBS_NAMES, SoftGraspEnv
+from softgrasp_env.env import SoftGraspEnv
+from softgrasp_env.observation import OBS_NAMES, obs_slice
+from tests.helpers import assert_same, obs_vector, rollout, run_episode
 
 # Gymnasium's checker notes unbounded observation boxes; like its MuJoCo envs, ours are unbounded.
 _INF_BOUND = "observation space m"
-
-
-def _obs_vec(obs) -> np.ndarray:
-    return obs["observation"] if isinstance(obs, dict) else obs
-
-
-def _assert_same(a, b) -> None:
-    """Bit-identical (arrays, dicts, scalars)."""
-    if isinstance(a, (tuple, list)):
-        assert len(a) == len(b)
-        for x, y in zip(a, b):
-            _assert_same(x, y)
-    elif isinstance(a, dict):
-        assert a.keys() == b.keys()
-        for k in a:
-            _assert_same(a[k], b[k])
-    elif isinstance(a, np.ndarray):
-        assert a.dtype == b.dtype and a.shape == b.shape
-        assert a.tobytes() == b.tobytes()
-    else:
-        assert a == b
-
-
-def _rollout(env, seed: int, steps: int, action_seed: int) -> list:
-    out = [env.reset(seed=seed)]
-    rng = np.random.default_rng(action_seed)
-    for _ in range(steps):
-        a = rng.uniform(-1.0, 1.0, size=4).astype(np.float32)
-        res = env.step(a)
-        out.append(res)
-        if res[2] or res[3]:
-            out.append(env.reset())
-    return out
 
 
 # --- registration ---------------------------------------------------------------------------------
@@ -67,8 +35,8 @@ def test_ids_are_registered_with_time_limits():
         spec = gym.spec(env_id)
         assert spec.max_episode_steps == 100
     for version, carry in (("v2", True), ("v1", False)):
-        assert gym.spec(f"SoftGrasp-{version}").kwargs["soft"] is True
-        assert gym.spec(f"SoftGraspRigid-{version}").kwargs["soft"] is False
+        assert gym.spec(f"SoftGrasp-{version}").kwargs["fingers"] == "tissue"
+        assert gym.spec(f"SoftGraspRigid-{version}").kwargs["fingers"] == "rigid"
         for name in ("SoftGrasp", "SoftGraspRigid", "SoftGraspSparse"):
             assert gym.spec(f"{name}-{version}").kwargs["carry"] is carry
 
@@ -107,28 +75,21 @@ def test_sb3_check_env(env_id):
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS)
-def test_same_seed_bit_identical_and_reset_restores_everything(env_id):
-    a = gym.make(env_id)
-    b = gym.make(env_id)
-    run_a = _rollout(a, seed=11, steps=200, action_seed=5)
+def test_same_seed_bit_identical_and_reset_restores_everything(env_id, make_env):
+    a = make_env(env_id)
+    b = make_env(env_id)
+    run_a = rollout(a, seed=11, steps=200, action_seed=5)
     # b first lives through another episode; its reset must leave no trace of it.
-    _rollout(b, seed=3, steps=40, action_seed=9)
-    run_b = _rollout(b, seed=11, steps=200, action_seed=5)
-    assert len(run_a) == len(run_b)
-    for ra, rb in zip(run_a, run_b):
-        assert len(ra) == len(rb)
-        for xa, xb in zip(ra, rb):
-            _assert_same(xa, xb)
-    a.close()
-    b.close()
+    rollout(b, seed=3, steps=40, action_seed=9)
+    run_b = rollout(b, seed=11, steps=200, action_seed=5)
+    assert_same(run_a, run_b)
 
 
-def test_different_seeds_give_different_starts():
-    env = gym.make("SoftGraspRigid-v2")
+def test_different_seeds_give_different_starts(make_env):
+    env = make_env("SoftGraspRigid-v2")
     o1, _ = env.reset(seed=1)
     o2, _ = env.reset(seed=2)
     assert not np.array_equal(o1, o2)
-    env.close()
 
 
 # --- robustness -----------------------------------------------------------------------------------
@@ -150,7 +111,7 @@ def test_thousand_random_steps_stay_finite(env_id):
     for _ in range(1000):
         obs, r, term, trunc, info = env.step(env.action_space.sample())
         assert env.observation_space.contains(obs)
-        assert np.isfinite(_obs_vec(obs)).all()
+        assert np.isfinite(obs_vector(obs)).all()
         assert math.isfinite(r)
         diverged += info["diverged"]
         if info["diverged"]:
@@ -187,7 +148,7 @@ def test_out_of_range_actions_are_clipped_and_reported():
         ra = a.step(big)
         rb = b.step(np.clip(big, -1, 1).astype(np.float32))
         assert ra[4]["action_clipped"] is True and rb[4]["action_clipped"] is False
-        _assert_same(ra[0], rb[0])
+        assert_same(ra[0], rb[0])
         assert ra[1] == rb[1]
     a.close()
     b.close()
@@ -200,15 +161,15 @@ def test_bad_arguments_raise_naming_the_argument():
         SoftGraspEnv(reward_type="shaped")
     with pytest.raises(ValueError, match="yaw_range"):
         SoftGraspEnv(yaw_range=-0.1)
-    with pytest.raises(ValueError, match="density"):
-        SoftGraspEnv(tissue_density=-5.0)
+    with pytest.raises(ValueError, match="particle_density"):
+        SoftGraspEnv(particle_density=-5.0)
     with pytest.raises(ValueError, match="cylinder_mass"):
         SoftGraspEnv(cylinder_mass=0.0)
     with pytest.raises(ValueError, match="render_mode"):
         SoftGraspEnv(render_mode="ascii")
     with pytest.raises(ValueError, match="render_width"):
         SoftGraspEnv(render_width=3)
-    env = SoftGraspEnv(soft=False)
+    env = SoftGraspEnv(fingers="rigid")
     with pytest.raises(ValueError, match="unknown reset option"):
         env.reset(seed=0, options={"yaww": 0.1})
     env.close()
@@ -235,13 +196,13 @@ def test_nan_in_the_tissue_ends_the_episode_with_a_finite_observation():
     obs, r, term, trunc, info = env.step(np.zeros(4, dtype=np.float32))
     assert term and info["diverged"] and not info["is_success"]
     assert np.isfinite(obs).all() and r == 0.0
-    _assert_same(obs, obs1)  # the last finite observation
+    assert_same(obs, obs1)  # the last finite observation
     # Stepping on does not touch the poisoned simulation and stays finite.
     obs, r, term, *_ = env.step(np.zeros(4, dtype=np.float32))
     assert term and np.isfinite(obs).all()
     # reset rebuilds a healthy world
     obs, info = env.reset(seed=0)
-    _assert_same(obs, obs0)
+    assert_same(obs, obs0)
     env.close()
 
 
@@ -269,86 +230,42 @@ def test_knocked_over_cylinder_terminates():
 
 
 @pytest.mark.parametrize("env_id", ["SoftGraspEasy-v1", "SoftGraspEasyRigid-v1"])
-def test_scripted_policy_lifts_and_fingers_press_with_the_motor_force(env_id):
+def test_scripted_policy_lifts_and_fingers_press_with_the_motor_force(env_id, make_env, scripted):
     """From the gentle start (aligned fingers: the rigid twin holds too) the scripted grasp lifts the cylinder 5 cm in every seed, and
     in the held state each finger's normal force equals its motor's force limit (3 N): the motor
     pushes, the tissue (or the rigid contact) pushes back. Measured: rigid 3.00 N; soft 2.83 /
     2.84 N at every iteration count (1-8): the default pad's particles sit 16 mm apart on a 3 cm
     cylinder, so the off-centre ones touch it obliquely and their friction carries part of the
     squeeze (every face at 10,000 per m^2: 2.90 N)."""
-    env = gym.make(env_id)
-    policy = ScriptedGraspPolicy()
+    env = make_env(env_id)
     for seed in range(4):
-        obs, _ = env.reset(seed=seed)
-        successes = 0
-        for _ in range(100):
-            obs, r, term, trunc, info = env.step(policy(obs))
-            successes += info["is_success"]
-            assert not term
-        assert info["is_success"] and successes >= 50
-        f = obs[OBS_NAMES.index("force_left") : OBS_NAMES.index("force_right") + 1]
-        np.testing.assert_allclose(f, 3.0, rtol=0.08)
-        assert r == pytest.approx(1.0 + info["reward_terms"]["reach"])
-    env.close()
+        rewards = []
+        ep = run_episode(env, scripted, seed=seed, on_step=lambda obs, r, term, trunc, info: rewards.append(r))
+        assert ep.steps == 100 and not ep.terminated  # never knocked over: the time limit ends it
+        assert ep.success and ep.successes >= 50
+        np.testing.assert_allclose(ep.observation[obs_slice(OBS_NAMES, "force")], 3.0, rtol=0.08)
+        assert rewards[-1] == pytest.approx(1.0 + ep.info["reward_terms"]["reach"])
 
 
-def test_dense_and_sparse_rewards_follow_their_definitions():
-    dense = gym.make("SoftGrasp-v2")
-    sparse = gym.make("SoftGraspSparse-v2")
-    policy = ScriptedGraspPolicy()
-    od, _ = dense.reset(seed=2)
-    os_, _ = sparse.reset(seed=2)
-    seen_success = False
-    for _ in range(100):  # the reach task: over to the cylinder, down, grip, lift
-        od, rd, *_, infd = dense.step(policy(od))
-        os_, rs, *_, infs = sparse.step(policy(os_))
-        _assert_same(od, os_)  # the reward type changes nothing else
+def test_dense_and_sparse_rewards_follow_their_definitions(make_env, scripted):
+    """The reach task (over to the cylinder, down, grip, lift), the same seed under both reward
+    types: the same episode step for step, each reward as defined."""
+    steps = {}
+    for env_id in ("SoftGrasp-v2", "SoftGraspSparse-v2"):
+        seen = steps[env_id] = []
+        ep = run_episode(make_env(env_id), scripted, seed=2,
+                         on_step=lambda obs, r, term, trunc, info, seen=seen: seen.append((obs, r, info)))  # fmt: skip
+        assert ep.steps == 100
+    for (od, rd, infd), (os_, rs, infs) in zip(steps["SoftGrasp-v2"], steps["SoftGraspSparse-v2"], strict=True):
+        assert_same(od, os_)  # the reward type changes nothing else
         terms = infd["reward_terms"]
         assert rd == pytest.approx(terms["lift"] + terms["reach"])
         assert 0.0 <= terms["lift"] <= 1.0 and -0.1 <= terms["reach"] <= 0.0
         assert terms["lift"] == pytest.approx(min(max(infd["lift_height"] / 0.05, 0.0), 1.0))
         assert rs == float(infs["held"])  # held: before, during and after the carry
         assert not infs["is_success"] or infs["held"]
-        seen_success |= infs["is_success"]
-    assert seen_success and infs["is_success"]  # success only once the carry is over: the last step
-    dense.close()
-    sparse.close()
-
-
-def test_goal_env_compute_reward_is_vectorised_and_matches_step():
-    env = gym.make("SoftGraspGoal-v1")
-    obs, _ = env.reset(seed=0)
-    u = env.unwrapped
-    policy = ScriptedGraspPolicy(lift_to=obs["desired_goal"][2] - 0.05)
-    rewards = []
-    for _ in range(60):
-        obs, r, term, trunc, info = env.step(policy(obs))
-        assert r == u.compute_reward(obs["achieved_goal"], obs["desired_goal"], info)
-        assert info["is_success"] == (r == 0.0)
-        rewards.append(r)
-    assert rewards[0] == -1.0 and rewards[-1] == 0.0
-    ag = np.zeros((5, 3), dtype=np.float32)
-    dg = np.zeros((5, 3), dtype=np.float32)
-    dg[:, 2] = [0.0, 0.01, 0.019, 0.021, 0.5]
-    np.testing.assert_array_equal(u.compute_reward(ag, dg, [{}] * 5), [0, 0, 0, -1, -1])
-    env.close()
-
-
-def test_her_trains_on_the_goal_env():
-    from stable_baselines3 import SAC, HerReplayBuffer
-
-    env = gym.make("SoftGraspGoal-v1", max_episode_steps=20)
-    model = SAC("MultiInputPolicy", env, replay_buffer_class=HerReplayBuffer,
-                replay_buffer_kwargs={"n_sampled_goal": 2, "goal_selection_strategy": "future"},
-                learning_starts=40, batch_size=32, seed=0, device="cpu")  # fmt: skip
-    model.learn(total_timesteps=80)
-    assert model.replay_buffer.size() == 80
-    # relabelled samples carry the env's own reward for their (achieved, desired) pair
-    batch = model.replay_buffer.sample(64)
-    want = env.unwrapped.compute_reward(batch.next_observations["achieved_goal"].numpy(),
-                                        batch.next_observations["desired_goal"].numpy(), [{}] * 64)  # fmt: skip
-    np.testing.assert_array_equal(batch.rewards.numpy().ravel(), want)
-    env.close()
+    assert any(info["is_success"] for _, _, info in steps["SoftGraspSparse-v2"])
+    assert infs["is_success"]  # success only once the carry is over: the last step
 
 
 # --- rendering ------------------------------------------------------------------------------------
@@ -359,9 +276,9 @@ def _tissue_pixels(img: np.ndarray) -> int:
     return int(((r > 150) & (r - g > 40) & (b - g > 5) & (abs(r - 2 * b + g) < 200)).sum())
 
 
-def test_rgb_array_shows_the_tissue():
-    soft = gym.make("SoftGraspEasy-v1", render_mode="rgb_array", render_width=160, render_height=120)
-    rigid = gym.make("SoftGraspEasyRigid-v1", render_mode="rgb_array", render_width=160, render_height=120)
+def test_rgb_array_shows_the_tissue(make_env):
+    soft = make_env("SoftGraspEasy-v1", render_mode="rgb_array", render_width=160, render_height=120)
+    rigid = make_env("SoftGraspEasyRigid-v1", render_mode="rgb_array", render_width=160, render_height=120)
     soft.reset(seed=0)
     rigid.reset(seed=0)
     img_s = soft.render()
@@ -374,8 +291,6 @@ def test_rgb_array_shows_the_tissue():
     for _ in range(5):
         soft.step(np.array([0.0, 0.0, -1.0, 0.0], dtype=np.float32))
     assert not np.array_equal(soft.render(), img_s)
-    soft.close()
-    rigid.close()
 
 
 def test_rendering_does_not_change_the_trajectory():
@@ -389,9 +304,7 @@ def test_rendering_does_not_change_the_trajectory():
         ra.append(a.step(act)[:3])
         a.render()
         rb.append(b.step(act)[:3])
-    for x, y in zip(ra, rb):
-        for u, v in zip(x, y):
-            _assert_same(u, v)
+    assert_same(ra, rb)
     a.close()
     b.close()
 
@@ -416,11 +329,7 @@ def test_record_video_writes_an_episode(tmp_path):
     pytest.importorskip("moviepy")
     env = gym.make("SoftGrasp-v2", render_mode="rgb_array", render_width=96, render_height=64, max_episode_steps=8)
     env = gym.wrappers.RecordVideo(env, str(tmp_path / "videos"), episode_trigger=lambda e: True, disable_logger=True)
-    env.reset(seed=0)
-    done = False
-    while not done:
-        _, _, term, trunc, _ = env.step(env.action_space.sample())
-        done = term or trunc
+    run_episode(env, lambda obs: env.action_space.sample(), seed=0)
     env.close()
     videos = list((tmp_path / "videos").glob("*.mp4"))
     assert len(videos) == 1 and videos[0].stat().st_size > 1000
@@ -432,10 +341,9 @@ def test_record_video_writes_an_episode(tmp_path):
 def test_pickled_fresh_env_behaves_like_the_original():
     env = gym.make("SoftGrasp-v2")
     twin = pickle.loads(pickle.dumps(env))
-    _assert_same(env.reset(seed=0), twin.reset(seed=0))
+    assert_same(env.reset(seed=0), twin.reset(seed=0))
     act = np.array([0.3, -0.2, -0.5, 0.1], dtype=np.float32)
-    for x, y in zip(env.step(act), twin.step(act)):
-        _assert_same(x, y)
+    assert_same(env.step(act), twin.step(act))
     env.close()
     twin.close()
 
@@ -451,10 +359,9 @@ def test_deepcopy_mid_episode_is_exact(env_id):
     assert twin.unwrapped.scene.client._client != env.unwrapped.scene.client._client
     for _ in range(10):
         act = rng.uniform(-1, 1, 4).astype(np.float32)
-        for x, y in zip(env.step(act), twin.step(act)):
-            _assert_same(x, y)
+        assert_same(env.step(act), twin.step(act))
     # the generator state travelled too: the next random reset is the same
-    _assert_same(env.reset()[0], twin.reset()[0])
+    assert_same(env.reset()[0], twin.reset()[0])
     env.close()
     twin.close()
 
@@ -472,18 +379,18 @@ def test_a_copy_replays_only_the_steps_since_the_last_reset():
     for _ in range(7):
         env.step(rng.uniform(-1, 1, 4).astype(np.float32))
     replayed = []
-    simulate = SoftGraspEnv._apply_and_simulate
+    simulate = SoftGraspEnv._simulate
 
     def spy(self, action):
         replayed.append(action)
         return simulate(self, action)
 
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(SoftGraspEnv, "_apply_and_simulate", spy)
+        mp.setattr(SoftGraspEnv, "_simulate", spy)
         twin = copy.deepcopy(env)
     assert len(replayed) == 7
     act = np.zeros(4, dtype=np.float32)
-    _assert_same(env.step(act)[0], twin.step(act)[0])
+    assert_same(env.step(act)[0], twin.step(act)[0])
     env.close()
     twin.close()
 
@@ -511,22 +418,15 @@ def test_create_and_close_100_envs_leaves_no_client_connected():
     env.close()
 
 
-def test_jaw_wedge_defeats_rigid_fingers_but_not_soft_ones():
+def test_jaw_wedge_defeats_rigid_fingers_but_not_soft_ones(make_env, scripted):
     """The thesis' case for soft fingers: aligned only approximately (here a 0.1 rad wedge between
     the finger faces, 0.1 rad yaw, 5 mm offset), rigid boxes touch the cylinder at two points and
     it swings out of the grasp and topples; the tissue conforms and holds it upright."""
     options = {"jaw_wedge": 0.1, "yaw": 0.1, "lateral_offset": 0.005, "cylinder_xy": (0.0, 0.0)}
-    policy = ScriptedGraspPolicy()
     outcome = {}
     for env_id in ("SoftGraspRigid-v2", "SoftGrasp-v2"):
-        env = gym.make(env_id)
-        obs, _ = env.reset(seed=0, options=options)
-        for _ in range(100):
-            obs, r, term, trunc, info = env.step(policy(obs))
-            if term:
-                break
-        outcome[env_id] = (term, info["is_success"], float(obs[OBS_NAMES.index("cyl_axis_z")]))
-        env.close()
+        ep = run_episode(make_env(env_id), scripted, seed=0, options=options)
+        outcome[env_id] = (ep.terminated, ep.success, float(ep.observation[OBS_NAMES.index("cyl_axis_z")]))
     rigid_term, rigid_success, rigid_axis_z = outcome["SoftGraspRigid-v2"]
     assert rigid_term and not rigid_success and rigid_axis_z < math.cos(math.pi / 4)
     soft_term, soft_success, soft_axis_z = outcome["SoftGrasp-v2"]
@@ -534,27 +434,22 @@ def test_jaw_wedge_defeats_rigid_fingers_but_not_soft_ones():
 
 
 @pytest.mark.skipif(not softgrasp_env.env._display_available(), reason="needs a display (CI runs under xvfb-run)")
-def test_human_mode_runs_the_gui_with_the_particles_shown():
-    env = gym.make("SoftGrasp-v2", render_mode="human")
-    ref = gym.make("SoftGrasp-v2")
-    obs, _ = env.reset(seed=0)
-    ref_obs, _ = ref.reset(seed=0)
-    policy = ScriptedGraspPolicy()
-    for _ in range(10):
-        obs, *_ = env.step(policy(obs))
-        ref_obs, *_ = ref.step(policy(ref_obs))
-    _assert_same(obs, ref_obs)  # the visual-only particle bodies take no part in the dynamics
+def test_human_mode_runs_the_gui_with_the_particles_shown(make_env, scripted):
+    env = make_env("SoftGrasp-v2", render_mode="human")
+    ref = make_env("SoftGrasp-v2")
+    ep = run_episode(env, scripted, seed=0, max_steps=10)
+    ref_ep = run_episode(ref, scripted, seed=0, max_steps=10)
+    assert_same(ep.observation, ref_ep.observation)  # the visual-only particle bodies take no part in the dynamics
     u = env.unwrapped
     c = u.scene.client
     assert c.getConnectionInfo()["connectionMethod"] == p.GUI
     state = u.scene.world.state
-    assert len(u._renderer._particles) == state.particle_x.shape[0]
-    n = len(u._renderer._particles)
+    bodies = u._renderer.particle_bodies
+    assert len(bodies) == state.particle_x.shape[0]
+    n = len(bodies)
     for k in (0, n // 2, n - 1):
-        pos, _ = c.getBasePositionAndOrientation(u._renderer._particles[k])
+        pos, _ = c.getBasePositionAndOrientation(bodies[k])
         np.testing.assert_allclose(pos, state.particle_x[k], atol=1e-9)
-    env.close()
-    ref.close()
 
 
 @pytest.mark.parametrize("action", [np.array([0.1 + 1j, 0, 0, 0]), np.array([0.1 + 0j, 0, 0, 0]), ["a", "b", "c", "d"],

@@ -3,8 +3,9 @@ grid of combinations, run episodes without divergence; a seeded fuzz over the do
 gives no NaN and no exception but the documented ValueErrors, and no divergence.
 
 Where a range's end did not run it was narrowed, with the measurement in the docstring of the
-setting (config.py: SimConfig.dt, TissueConfig.stiffness / tissue_density / group_size, the sag,
-particle-width and consistent-squeeze rules of SceneConfig; env.py: MAX_ARM_STEP)."""
+setting (config.py: SimConfig.dt, TissueConfig.stiffness / mass_density / group_size; fingers/
+tissue.py: the sag, particle-width and consistent-squeeze rules of the tissue kind; arguments.py:
+MAX_ARM_STEP)."""
 
 from __future__ import annotations
 
@@ -14,30 +15,29 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import softgrasp_env  # noqa: F401
 from agents.scripted import ScriptedGraspPolicy
 from softgrasp_env.config import SimConfig, TissueConfig
+from tests.helpers import run_episode
+
+
+def _finite(obs, reward, term, trunc, info) -> None:
+    assert np.isfinite(obs).all() and math.isfinite(reward)
 
 
 def _episodes(kwargs: dict, *, seeds=(0,), scripted=(0,), env_id: str = "SoftGrasp-v2") -> list[str]:
     """Random-action episodes on ``seeds`` and scripted ones on ``scripted``; the divergences,
-    each with its reason (empty when none)."""
+    each with its reason (empty when none). A divergence ends its episode: it is the last step."""
     env = gym.make(env_id, **kwargs)
     problems = []
     try:
         for mode, episode_seeds in (("random", seeds), ("scripted", scripted)):
             for seed in episode_seeds:
                 rng = np.random.default_rng(seed)
-                policy = ScriptedGraspPolicy()
-                obs, _ = env.reset(seed=seed)
-                for step in range(100):
-                    action = rng.uniform(-1, 1, 4).astype(np.float32) if mode == "random" else policy(obs)
-                    obs, reward, term, trunc, info = env.step(action)
-                    assert np.isfinite(obs).all() and math.isfinite(reward)
-                    if info["diverged"]:
-                        problems.append(f"{mode} seed {seed} step {step}: {info['divergence']}")
-                    if term or trunc:
-                        break
+                policy = ScriptedGraspPolicy() if mode == "scripted" else (
+                    lambda obs, rng=rng: rng.uniform(-1, 1, 4).astype(np.float32))  # fmt: skip
+                ep = run_episode(env, policy, seed=seed, max_steps=100, on_step=_finite)
+                if ep.diverged:
+                    problems.append(f"{mode} seed {seed} step {ep.steps - 1}: {ep.info['divergence']}")
     finally:
         env.close()
     return problems
@@ -58,16 +58,16 @@ ENDS = {
     "contact_margin 0": dict(sim=SimConfig(contact_margin=0.0)),
     "contact_margin 0.1": dict(sim=SimConfig(contact_margin=0.1)),
     "coupling consistent": dict(sim=SimConfig(coupling="consistent")),
-    # TissueConfig. density: the particle-width rule sets the low end at the default radius_scale
+    # TissueConfig. particle_density: the particle-width rule sets the low end at the default radius_scale
     # ((0.6 / 0.0125)^2 = 2,304 per m^2); the top end (1e7) is refused by the memory check or builds for minutes.
-    "density 2304": dict(tissue_density=2304.0),
-    "density 20000": dict(tissue_density=20_000.0),
+    "density 2304": dict(particle_density=2304.0),
+    "density 20000": dict(particle_density=20_000.0),
     "extrude 0.001": dict(tissue=TissueConfig(extrude=0.001)),
     "extrude 0.02 (thickest pad that fits)": dict(tissue=TissueConfig(extrude=0.02)),
     "group_size 4": dict(tissue=TissueConfig(group_size=4)),
     "group_size 16": dict(tissue=TissueConfig(group_size=16)),
-    "tissue mass density 100": dict(tissue=TissueConfig(tissue_density=100.0)),
-    "tissue mass density 1e4": dict(tissue=TissueConfig(tissue_density=1e4)),
+    "tissue mass density 100": dict(tissue=TissueConfig(mass_density=100.0)),
+    "tissue mass density 1e4": dict(tissue=TissueConfig(mass_density=1e4)),
     "stiffness 0.1": dict(tissue=TissueConfig(stiffness=0.1)),
     "stiffness 1": dict(tissue=TissueConfig(stiffness=1.0)),
     "radius_scale 0.05": dict(tissue=TissueConfig(radius_scale=0.05)),
@@ -107,9 +107,9 @@ COMBINATIONS = {
                                                          gripper_speed=2.0),  # fmt: skip
     "1 iteration, group_size 16, stiffness 0.1": dict(sim=SimConfig(iterations=1),
                                                       tissue=TissueConfig(group_size=16, stiffness=0.1)),  # fmt: skip
-    "heaviest tissue, stiffness 0.1": dict(tissue=TissueConfig(tissue_density=1e4, stiffness=0.1)),
-    "lightest tissue, stiffness 0.1": dict(tissue=TissueConfig(tissue_density=100.0, stiffness=0.1)),
-    "gravity 100, heaviest tissue": dict(sim=SimConfig(gravity=100.0), tissue=TissueConfig(tissue_density=1e4)),
+    "heaviest tissue, stiffness 0.1": dict(tissue=TissueConfig(mass_density=1e4, stiffness=0.1)),
+    "lightest tissue, stiffness 0.1": dict(tissue=TissueConfig(mass_density=100.0, stiffness=0.1)),
+    "gravity 100, heaviest tissue": dict(sim=SimConfig(gravity=100.0), tissue=TissueConfig(mass_density=1e4)),
     "cylinder 10 kg, finger_force 1000": dict(cylinder_mass=10.0, finger_force=1000.0),
     "cylinder 1 g, finger_force 1000": dict(cylinder_mass=0.001, finger_force=1000.0),
     "every randomisation range wide": dict(cylinder_position_range=0.08, lateral_offset_range=0.02,
@@ -162,7 +162,7 @@ def test_slow_ends_run(kwargs):
     (dict(sim=SimConfig(dt=1 / 60), tissue=TissueConfig(stiffness=0.1)),
      r"too slack for the time step.*sags it 2\.73 cm.*at least 0\.454"),
     (dict(tissue=TissueConfig(radius_scale=2.0)), r"particles are too wide.*0\.0316 m.*at least 25600 per m\^2"),
-    (dict(tissue_density=900.0), r"particles are too wide.*0\.0200 m"),
+    (dict(particle_density=900.0), r"particles are too wide.*0\.0200 m"),
     (dict(tissue=TissueConfig(normal_radius=0.03)), r"tissue pad \(0\.038 m\)"),
     (dict(tissue=TissueConfig(extrude=0.1)), r"does not fit between the open fingers.*tissue pad \(0\.103 m\)"),
     (dict(sim=SimConfig(dt=1 / 60, coupling="consistent"), finger_force=30.0),
@@ -186,9 +186,9 @@ def _draw(rng: np.random.Generator) -> dict:
         fingers=str(rng.choice(["tissue", "tissue", "rigid", "segmented"])),
         sim=SimConfig(dt=1.0 / rate, iterations=int(rng.integers(1, 8)), damping=lu(1e-3, 1e4),
                       coupling=str(rng.choice(["thesis", "consistent"])), gravity=float(rng.uniform(0, 20))),
-        tissue=TissueConfig(density=lu(2304, 2e4), stiffness=float(rng.uniform(0.1, 1.0)), tissue_density=lu(100, 1e4),
-                            group_size=int(rng.integers(4, 17)), radius_scale=float(rng.uniform(0.05, 1.0)),
-                            normal_radius=lu(1e-4, 0.01), extrude=lu(0.002, 0.02), friction_static=mu_s,
+        tissue=TissueConfig(particle_density=lu(2304, 2e4), stiffness=float(rng.uniform(0.1, 1.0)),
+                            mass_density=lu(100, 1e4), group_size=int(rng.integers(4, 17)),
+                            radius_scale=float(rng.uniform(0.05, 1.0)), normal_radius=lu(1e-4, 0.01), extrude=lu(0.002, 0.02), friction_static=mu_s,
                             friction_dynamic=mu_s * float(rng.uniform(0.3, 1.0))),
         cylinder_mass=lu(0.001, 10.0), finger_force=lu(0.01, 1000.0), gripper_speed=float(rng.uniform(0.01, 2.0)),
         control_frequency=float(rng.choice([f for f in (10, 20, 30, 60) if rate % f == 0])),

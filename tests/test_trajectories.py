@@ -11,6 +11,9 @@ import softgrasp_env  # noqa: F401  (registers the ids)
 from tests.trajectories import CASES, DATA, fingerprint, record
 
 _GOLDEN = np.load(DATA)
+REPLAY_STEPS = {"fem/scripted": 4}
+"""Cases replayed over a prefix of their recording: pybullet's FEM pads run ~0.6 s per env step
+(every recorded row is a prefix of the next, so a shorter replay is compared row for row)."""
 
 
 @pytest.mark.parametrize(("name", "env_id", "kwargs", "policy", "steps"), CASES, ids=[c[0] for c in CASES])
@@ -19,9 +22,9 @@ def test_trajectory_is_bit_identical_to_the_recording(name, env_id, kwargs, poli
     if here != there:
         pytest.skip(f"recorded on {there!r}, this is {here!r}: bit-identity is promised on the same machine and "
                     f"libraries only (re-record with python -m tests.trajectories at the recording's commit)")  # fmt: skip
-    got = record(env_id, kwargs, policy, steps)
+    got = record(env_id, kwargs, policy, REPLAY_STEPS.get(name, steps))
     for key, arr in got.items():
-        want = _GOLDEN[f"{name}/{key}"]
+        want = _GOLDEN[f"{name}/{key}"][: len(arr)]
         assert arr.shape == want.shape, f"{name}/{key}: shape {arr.shape} != recorded {want.shape}"
         if arr.tobytes() != want.tobytes():
             first = int(np.flatnonzero((arr != want).reshape(len(arr), -1).any(axis=1))[0])

@@ -11,7 +11,7 @@ The pad
 An L-shaped block over the core's inner face (the one toward the other finger) and its tip (-z),
 ``TissueConfig.extrude`` (8 mm) thick, as the tissue it replaces: the inner face is what squeezes
 the cylinder, the tip what meets the ground first; the back, sides and top never touch anything in
-the grasp (the tissue kind's ``tissue_faces='contact'`` covers the same two faces). It is a
+the grasp (the tissue kind's ``faces='contact'`` covers the same two faces). It is a
 structured hex grid, each hex split into 6 tetrahedra around its main diagonal (Kuhn / Freudenthal
 split): with every hex split the same way neighbouring hexes share their face diagonals, so the
 mesh is conforming without any search. One such split is chiral, and the pad then pushed what it
@@ -58,7 +58,7 @@ from ..config import TissueConfig
 from ..sim.bullet import _quiet_c_stdout
 from ..sim.world import World
 from ..validation import check_choice, check_int
-from .base import FingerConfig, FingerKind, FingerSite, Visual
+from .base import FingerConfig, FingerKind, Visual
 
 FEM_CELLS_THROUGH = {"coarse": 1, "fine": 2}
 """Tetrahedral-mesh resolution: hex cells through the pad's thickness (8 mm: 8 or 4 mm cells)."""

@@ -127,9 +127,9 @@ class Gripper:
         self._orientation = c.getQuaternionFromEuler([0.0, 0.0, self.yaw])
         self.control: GripperControl | None = None
         """The control applied last."""
-        self._set_palm_target(np.asarray(start_palm, dtype=np.float64))
+        self.control = GripperControl(np.array(start_palm, dtype=np.float64), 0.0)
+        self._set_palm_target(self.control.palm_target)
         self._set_finger_closing(0.0)
-        self.control = GripperControl(np.asarray(start_palm, dtype=np.float64).copy(), 0.0)
 
     @staticmethod
     def palm_offset_of(cfg: SceneConfig) -> float:
@@ -138,14 +138,16 @@ class Gripper:
 
     def apply(self, control: GripperControl) -> None:
         """Hand ``control`` to pybullet for the coming steps: the arm's target (the palm keeps the
-        start yaw) and the finger motors' target, each only if it changed."""
+        start yaw) and the finger motors' target, each only if it is new. A control is a value:
+        it is kept as given, so its arrays must not be changed afterwards."""
         last = self.control
-        if not np.array_equal(control.palm_target, last.palm_target):
+        if control is last:  # the same control for every physics step of an env step
+            return
+        if control.palm_target is not last.palm_target:  # a new target (setting an equal one again changes nothing)
             self._set_palm_target(control.palm_target)
         if control.finger_closing != last.finger_closing:
             self._set_finger_closing(control.finger_closing)
-        self.control = GripperControl(np.asarray(control.palm_target, dtype=np.float64).copy(),
-                                      float(control.finger_closing))  # fmt: skip
+        self.control = control
 
     def _set_palm_target(self, pos: np.ndarray) -> None:
         self.client.changeConstraint(self.palm_constraint, jointChildPivot=[float(v) for v in pos],

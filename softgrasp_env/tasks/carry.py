@@ -62,6 +62,16 @@ class CarryTest(Task):
         self.reward_terms = task.reward_terms
         self.reset_options = task.reset_options
         self._anchor: np.ndarray | None = None
+        # The physics steps whose end lies in the carry's window, exactly as phase() says (t grows
+        # with the step, so the window is a range): found near the estimate, then checked step by
+        # step, so that steer() needs no float arithmetic outside the window.
+        first = max(0, math.floor((self.start - _EPS) / self.dt) - 2)
+        while first <= math.floor((self.start - _EPS) / self.dt) + 3 and self.phase(first) is None:
+            first += 1
+        last = math.floor((self.start + self.duration + _EPS) / self.dt) + 2
+        while last >= first and self.phase(last) is None:
+            last -= 1
+        self._first, self._last = first, last
 
     # --- the wrapped task's part -----------------------------------------------------------------
 
@@ -95,16 +105,17 @@ class CarryTest(Task):
     def steer(self, scene: GraspScene, control: GripperControl) -> GripperControl:
         """During the carry the palm's target is the sway about the arm's target when the carry
         began, kept in the workspace; the finger command is the policy's."""
-        t = self.phase(scene.steps + 1)  # the physics step about to run
-        if t is None:
+        n = scene.steps + 1  # the physics step about to run
+        if n < self._first or n > self._last:
             return control
+        t = self.phase(n)
         if self._anchor is None:
             self._anchor = np.asarray(control.palm_target, dtype=np.float64).copy()
         yaw = scene.config.yaw
         across = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
         target = self._anchor + across * (self.amplitude * math.sin(2.0 * math.pi * self.frequency * t))
         grip_to_palm = scene.grip_to_palm()
-        return replace(control, palm_target=self.workspace.clip(target - grip_to_palm) + grip_to_palm)
+        return GripperControl(self.workspace.clip(target - grip_to_palm) + grip_to_palm, control.finger_closing)
 
     def evaluate(self, reading: Reading, scene: GraspScene) -> Outcome:
         out = self.task.evaluate(reading, scene)

@@ -109,7 +109,7 @@ def test_the_zoo_hyperparameter_files_say_what_the_presets_say():
 
     from agents.baselines import PRESETS
 
-    root = Path(__file__).resolve().parents[1] / "agents" / "hyperparams"
+    root = Path(__file__).resolve().parents[2] / "agents" / "hyperparams"
     for name, sections in (("ppo.yml", {"SoftGrasp-v2": "ppo"}), ("sac.yml", {"SoftGrasp-v2": "sac", "SoftGraspGoal-v1": "her-sac"})):
         text = (root / name).read_text()
         for env_id, algo in sections.items():

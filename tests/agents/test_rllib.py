@@ -3,7 +3,7 @@ cluster on this machine; an RLlib checkpoint evaluated by agents.evaluate; an en
 mid-run and restarted. Runs in the RLlib venv (scripts/setup.sh --rllib; RLlib pins its own
 gymnasium), skipped where Ray is not installed:
 
-    .venv-rllib/bin/python -m pytest -q tests/test_rllib.py
+    .venv-rllib/bin/python -m pytest -q tests/agents/test_rllib.py
 """
 
 from __future__ import annotations

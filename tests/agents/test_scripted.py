@@ -3,32 +3,33 @@ vectorised observations, and SB3's own evaluator runs it."""
 
 from __future__ import annotations
 
-import gymnasium as gym
 import numpy as np
 import pytest
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.evaluation import evaluate_policy
 
-import softgrasp_env  # noqa: F401
 from agents.scripted import ScriptedGraspPolicy
+from tests.helpers import run_episode
 
 
-def _observations(env_id: str, steps: int = 40) -> list:
-    env = gym.make(env_id)
+def _observations(env, steps: int = 40) -> list:
+    """The reset's observation and those of ``steps`` scripted steps (seed 3)."""
+    seen = []
     policy = ScriptedGraspPolicy()
-    obs, _ = env.reset(seed=3)
-    seen = [obs]
-    for _ in range(steps):
-        obs, *_ = env.step(policy(obs))
+
+    def act(obs):
         seen.append(obs)
-    env.close()
-    return seen
+        return policy(obs)
+
+    ep = run_episode(env, act, seed=3, max_steps=steps)
+    return seen + [ep.observation]
 
 
 @pytest.mark.parametrize("env_id", ["SoftGraspRigid-v2", "SoftGraspRigid-v1", "SoftGraspGoal-v1"])
-def test_predict_matches_the_callable_single_and_batched(env_id):
+def test_predict_matches_the_callable_single_and_batched(env_id, make_env):
     policy = ScriptedGraspPolicy()
-    seen = _observations(env_id)
+    seen = _observations(make_env(env_id))
+    assert len(seen) == 41
     for obs in seen:
         action, state = policy.predict(obs, state="s", episode_start=np.array([False]), deterministic=False)
         assert state == "s" and np.array_equal(action, policy(obs))

@@ -65,7 +65,7 @@ def tiny_run(tmp_path_factory):
 
 def test_parse_kwarg_reads_literals_and_falls_back_to_text():
     assert train.parse_kwarg("cylinder_mass=0.2") == ("cylinder_mass", 0.2)
-    assert train.parse_kwarg("soft=False") == ("soft", False)
+    assert train.parse_kwarg("carry=False") == ("carry", False)
     assert train.parse_kwarg("goal_height_range=(0.05, 0.07)") == ("goal_height_range", (0.05, 0.07))
     assert train.parse_kwarg("fingers=segmented") == ("fingers", "segmented")
     assert train.parse_kwarg("fingers='segmented'") == ("fingers", "segmented")

@@ -13,6 +13,7 @@ import pytest
 from agents import cards
 from agents.evaluate import evaluate
 from agents.runs import load_run, make_env, saved_algo
+from tests.helpers import run_episode
 
 MODELS = cards.shipped()
 CARD_KEYS = {"name", "env", "env_version", "env_kwargs", "algo", "hyperparameters_file", "hyperparameters",
@@ -65,14 +66,14 @@ def test_model_loads_and_runs_an_episode(model_dir):
     try:
         loaded = load_run(model_dir, env=env)  # HER loads its buffer onto this env
         assert loaded.model.num_timesteps == card["timesteps"]
-        obs, _ = env.reset(seed=cards.SEED)
-        steps, done, info = 0, False, {}
-        while not done:
+
+        def act(obs):
             action = loaded.policy(obs)
             assert env.action_space.contains(np.asarray(action, dtype=np.float32))
-            obs, _, term, trunc, info = env.step(action)
-            steps, done = steps + 1, term or trunc
-        assert 1 <= steps <= 100 and "is_success" in info
+            return action
+
+        ep = run_episode(env, act, seed=cards.SEED)
+        assert 1 <= ep.steps <= 100 and "is_success" in ep.info
     finally:
         env.close()
 

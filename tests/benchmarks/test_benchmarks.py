@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def run(script: str, *args: str, out: Path) -> str:
@@ -24,13 +24,13 @@ def test_methods_chart_has_every_method_and_ours_converges_with_the_time_step(tm
     out = run("methods.py", "--tiny", "--no-bound", out=tmp_path)
     rows = list(csv.DictReader(open(tmp_path / "methods.csv")))
     assert (tmp_path / "methods.png").stat().st_size > 10_000
-    from softgrasp_env.config import FINGER_KINDS
+    from softgrasp_env.fingers import FINGERS
     from softgrasp_env.presets import PRESETS
 
     from benchmarks.methods import TINY_SKIP
 
     families = {r["method"] for r in rows}
-    assert {k for k in FINGER_KINDS if k not in ("tissue", *TINY_SKIP)} <= families and "tissue, thesis" in families
+    assert {k for k in FINGERS if k not in ("tissue", *TINY_SKIP)} <= families and "tissue, thesis" in families
     assert {r["setting"] for r in rows if r["method"] == "preset"} == set(PRESETS)
     by = {(r["method"], r["setting"]): r for r in rows}
     assert all(r["held"] == "True" for r in rows), [(r["method"], r["setting"]) for r in rows if r["held"] != "True"]
@@ -48,9 +48,9 @@ def test_stability_map_sees_rigid_fingers_fail_where_the_tissue_holds(tmp_path):
     rows = list(csv.DictReader(open(tmp_path / "stability_map.csv")))
     outcome = {(r["method"], float(r["row_value"])): r["label"] for r in rows}
     from benchmarks.stability_map import TINY_SKIP
-    from softgrasp_env.config import FINGER_KINDS
+    from softgrasp_env.fingers import FINGERS
 
-    kinds = {k for k in FINGER_KINDS if k not in ("tissue", *TINY_SKIP)}
+    kinds = {k for k in FINGERS if k not in ("tissue", *TINY_SKIP)}
     assert {r["method"] for r in rows} >= kinds | {"tissue, thesis", "tissue, consistent"}
     assert outcome["rigid", 0.0] == "held" and outcome["rigid", 0.1] != "held"
     assert outcome["tissue, thesis", 0.1] == "held" and outcome["tissue, consistent", 0.1] == "held"

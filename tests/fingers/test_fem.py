@@ -1,26 +1,27 @@
-"""Finger kind 'fem': pybullet's own FEM soft bodies as the fingers' pads (softgrasp_env/fem.py).
+"""Finger kind 'fem': pybullet's own FEM soft bodies as the fingers' pads
+(softgrasp_env/fingers/fem.py).
 
 The pad mesh is checked against geometry (volume, surface, orientation, conformity, symmetry, the
-anchors on the core), the scene and the env are built and stepped, and the grasp is measured:
-with the default 8 substeps it lifts and holds the default cylinder (slow test); with 1 substep
-(pybullet at the scene's own 1/240 s) it blows up at first contact, as recorded in
-SceneConfig.fem_substeps."""
+anchors on the core), the scene is built, stepped and rebuilt, and the grasp is measured: with the
+default 8 substeps it lifts and holds the default cylinder (slow test); with 1 substep (pybullet at
+the scene's own 1/240 s) it blows up at first contact, as recorded in FemConfig.substeps. What
+every kind shares (validated fields, scripted hold, determinism, rendering, divergence) is in
+tests/fingers/test_contract.py."""
 
 from __future__ import annotations
 
 from collections import Counter
 from dataclasses import replace
 
-import gymnasium as gym
 import numpy as np
 import pytest
 
-import softgrasp_env  # noqa: F401
 from softgrasp_env.accuracy import GraspPlan, run_grasp
-from softgrasp_env.config import FEM_RESOLUTIONS, SceneConfig
-from softgrasp_env.fem import FEM_CELLS_THROUGH, pad_mesh, vtk_file
-from softgrasp_env.scene import GraspScene
+from softgrasp_env.fingers import FemConfig
+from softgrasp_env.fingers.fem import FEM_CELLS_THROUGH, pad_mesh, vtk_file
+from softgrasp_env.scene import GraspScene, SceneConfig
 
+FEM_RESOLUTIONS = tuple(FEM_CELLS_THROUGH)
 CFG = SceneConfig(fingers="fem")
 HX, HY, HZ = CFG.finger_half_extents
 T = CFG.tissue.extrude
@@ -94,15 +95,16 @@ def test_vtk_file_is_cached_by_content(tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("resolution", FEM_RESOLUTIONS)
 def test_scene_builds_with_the_pads_on_the_cores_and_they_hang_still(resolution):
-    sc = GraspScene(replace(CFG, fem_resolution=resolution, cylinder_xy=(0.1, 0.1)))  # cylinder out of reach
+    sc = GraspScene(replace(CFG, fingers=FemConfig(resolution=resolution), cylinder_xy=(0.1, 0.1)))  # out of reach
     try:
         c = sc.client
         assert c.getNumBodies() == 5  # ground, cylinder, gripper, two pads
         for _ in range(3):
             sc.step()
-        for link, mesh, x in zip(sc.fem.links, sc.fem.meshes, sc.fem.node_positions()):
+        pads = sc.fingers.pads
+        for link, mesh, x in zip(pads.links, pads.meshes, pads.node_positions()):
             assert len(x) == mesh.node_count
-            pos, orn = c.getLinkState(sc.gripper, link)[4:6]
+            pos, orn = c.getLinkState(sc.gripper.body, link)[4:6]
             rest = mesh.node_x @ np.asarray(c.getMatrixFromQuaternion(orn)).reshape(3, 3).T + pos
             assert np.linalg.norm(x - rest, axis=1).max() < 5e-4  # anchored, sagging well under 0.5 mm
         assert sc.penetration() == (0.0, 0.0)
@@ -112,11 +114,11 @@ def test_scene_builds_with_the_pads_on_the_cores_and_they_hang_still(resolution)
 
 
 def test_one_substep_blows_up_at_first_contact_as_recorded():
-    """The failure that fem_substeps is there for: pybullet's deformable world integrates the
+    """The failure that FemConfig.substeps is there for: pybullet's deformable world integrates the
     elastic forces explicitly, and at the scene's 1/240 s the pads' nodes went 25 mm into the
     cylinder at the first squeeze and threw it off at 6 m/s (measured; 8 substeps: 0 mm, held).
     The scene's penetration sees it through the fem hook."""
-    sc = GraspScene(replace(CFG, fem_substeps=1))
+    sc = GraspScene(replace(CFG, fingers=FemConfig(substeps=1)))
     try:
         rec = run_grasp(sc, GraspPlan(approach=0.5, squeeze=0.4, lift=0.0, hold=0.0))
         assert rec.max_penetration > 0.01
@@ -125,35 +127,16 @@ def test_one_substep_blows_up_at_first_contact_as_recorded():
         sc.close()
 
 
-def test_config_rejects_bad_fem_fields():
-    with pytest.raises(ValueError, match="fem_resolution"):
-        SceneConfig(fingers="fem", fem_resolution="medium")
-    with pytest.raises(ValueError, match="fem_substeps"):
-        SceneConfig(fingers="fem", fem_substeps=0)
-
-
-def test_env_resets_repeatedly_without_leaking_pads_and_is_deterministic():
-    runs = []
-    for _ in range(2):
-        env = gym.make("SoftGrasp-v2", fingers="fem")
-        traj = []
-        for _ in range(2):
-            obs, _ = env.reset(seed=7)
-            sc = env.unwrapped.scene
-            assert sc.client.getNumBodies() == 5 and sc.fem is not None
-            obs2, _, _, _, info = env.step(np.array([0.0, 0.0, -0.5, 0.5], dtype=np.float32))
-            assert np.isfinite(obs2).all() and not info["diverged"]
-            traj.append(np.concatenate([obs, obs2]))
-        env.close()
-        np.testing.assert_array_equal(traj[0], traj[1])  # reset restores everything
-        runs.append(traj[0])
-    np.testing.assert_array_equal(runs[0], runs[1])  # two envs, same seed
+def test_no_substeps_is_refused_naming_the_field():
+    """At least one pybullet step per world step (the contract test gives every field a non-number)."""
+    with pytest.raises(ValueError, match=r"FemConfig\.substeps"):
+        FemConfig(substeps=0)
 
 
 @pytest.mark.slow
 def test_scripted_grasp_lifts_and_holds_the_default_cylinder():
     """Measured (coarse, 8 substeps): lift 49.5 mm, hold slip 0.11 mm, no penetration. With 4
-    substeps the same grasp slid 17 mm in the hold (fem_substeps)."""
+    substeps the same grasp slid 17 mm in the hold (FemConfig.substeps)."""
     plan = GraspPlan()
     sc = GraspScene(CFG)
     try:

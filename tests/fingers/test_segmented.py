@@ -1,26 +1,25 @@
-"""Segmented rigid fingers (SceneConfig(fingers='segmented'), softgrasp_env/segmented.py): layout,
-springs, grasp, misalignment, env and input checks, against physics measured first (numbers in
-each test's docstring; this 2-core machine, pybullet 3.2.x)."""
+"""Segmented rigid fingers (SceneConfig(fingers=SegmentedConfig(...)), softgrasp_env/fingers/
+segmented.py): layout, springs, grasp, misalignment and the ranges of its settings, against physics
+measured first (numbers in each test's docstring; this 2-core machine, pybullet 3.2.x). What every
+kind shares (builds, validated fields, scripted hold, determinism, rendering, divergence) is in
+tests/fingers/test_contract.py."""
 
 from __future__ import annotations
 
 import math
 
-import gymnasium as gym
 import numpy as np
 import pybullet as p
 import pytest
 
-import softgrasp_env  # noqa: F401  (registers the ids)
-from agents.scripted import ScriptedGraspPolicy
-from softgrasp_env import segmented
 from softgrasp_env.accuracy import GraspPlan, run_grasp
-from softgrasp_env.config import SceneConfig
-from softgrasp_env.scene import GraspScene
+from softgrasp_env.fingers import SegmentedConfig, segmented
+from softgrasp_env.scene import GraspScene, SceneConfig
+from tests.helpers import run_episode
 
 
-def _scene(**kw) -> GraspScene:
-    return GraspScene(SceneConfig(fingers="segmented", **kw))
+def _scene(fingers: SegmentedConfig | None = None, **kw) -> GraspScene:
+    return GraspScene(SceneConfig(fingers=fingers or SegmentedConfig(), **kw))
 
 
 # --- layout ----------------------------------------------------------------------------------------
@@ -31,9 +30,9 @@ def test_builds_with_links_where_segmented_says(n: int) -> None:
     """2 cores + per finger a carriage and a gimbal and a segment per segment: 4 + 4 n joints. Each
     segment's inner face centre sits SEGMENT_STANDOFF + SEGMENT_THICKNESS in front of its core's
     inner face at centres_y, in the core's (tilted, yawed) frame, and its box has half_extents."""
-    sc = _scene(finger_segments=n, jaw_wedge=0.1, yaw=0.2)
+    sc = _scene(SegmentedConfig(segments=n), jaw_wedge=0.1, yaw=0.2)
     try:
-        c, g, s = sc.client, sc.gripper, sc.segments
+        c, g, s = sc.client, sc.gripper.body, sc.fingers
         assert c.getNumJoints(g) == 4 + 4 * n
         assert len(s.segment_links[0]) == len(s.segment_links[1]) == n
         fh = sc.config.finger_half_extents
@@ -67,15 +66,15 @@ def _static_deflection(axis: str, tau: float, *, steps: int = 480, **kw) -> tupl
     axis for ``steps`` steps, fingers open (no contact); (final angle, tau / k, every angle)."""
     sc = _scene(**kw)
     try:
-        s = sc.segments
+        s, g = sc.fingers, sc.gripper.body
         joint = s.pitch_joints[0] if axis == "pitch" else s.yaw_joints[0]
-        k = sc.config.segment_stiffness_pitch if axis == "pitch" else sc.config.segment_stiffness_yaw
+        k = sc.config.fingers.stiffness_pitch if axis == "pitch" else sc.config.fingers.stiffness_yaw
         vec = [0.0, tau, 0.0] if axis == "pitch" else [0.0, 0.0, tau]
         qs = []
         for _ in range(steps):
-            sc.client.applyExternalTorque(sc.gripper, s.segment_links[0][0], vec, p.WORLD_FRAME)
+            sc.client.applyExternalTorque(g, s.segment_links[0][0], vec, p.WORLD_FRAME)
             sc.step()
-            qs.append(sc.client.getJointState(sc.gripper, joint)[0])
+            qs.append(sc.client.getJointState(g, joint)[0])
         return qs[-1], tau / k, np.array(qs)
     finally:
         sc.close()
@@ -99,27 +98,28 @@ def test_spring_stability_margin_at_the_defaults() -> None:
     segments the narrow segments' yaw inertia gives a = 29: documented, there only a blocking
     contact gives the static stiffness exactly (it still grasps, test_scripted_grasp_...)."""
     for n, pitch, yaw in ((3, 1.39, 2.58), (8, 4.25, 29.4)):
-        sc = _scene(finger_segments=n)
+        sc = _scene(SegmentedConfig(segments=n))
         try:
-            a = sc.segments.step_stiffness()
-            npj = len(sc.segments.pitch_joints)
+            s = sc.fingers
+            a = s.step_stiffness()
+            npj = len(s.pitch_joints)
             assert a[:npj] == pytest.approx(pitch, rel=0.01)
             assert a[npj:] == pytest.approx(yaw, rel=0.01)
-            assert (sc.segments.damping_applied * sc.config.sim.dt / sc.segments.inertia <= 0.5 + 1e-12).all()
+            assert (s.damping_applied * sc.config.sim.dt / s.inertia <= 0.5 + 1e-12).all()
         finally:
             sc.close()
 
 
-def test_torque_springs_diverge_and_the_env_says_so() -> None:
-    """segment_spring='torque' (explicit -(k q + c q')): at the defaults c dt / I = 4.1 (yaw) > 2,
+def test_torque_springs_diverge_and_the_env_says_so(make_env, scripted) -> None:
+    """SegmentedConfig(spring='torque') (explicit -(k q + c q')): at the defaults c dt / I = 4.1 (yaw) > 2,
     so a segment kicked by 0.01 rad reaches pybullet's 100 rad/s joint-rate clamp within 5 steps
     (measured: 100 rad/s at step 3) and slams between its joint limits from then on, finite
     throughout. SegmentedFingers.diverged() flags it, and the env ends the episode with
     info['diverged'] (at env step 2 in the scripted episode; never with the 'motor' springs)."""
-    sc = _scene(segment_spring="torque")
+    sc = _scene(SegmentedConfig(spring="torque"))
     try:
-        s = sc.segments
-        sc.client.resetJointState(sc.gripper, s.yaw_joints[1], 0.01, 0.0)
+        s = sc.fingers
+        sc.client.resetJointState(sc.gripper.body, s.yaw_joints[1], 0.01, 0.0)
         assert not s.diverged()
         rates = []
         for _ in range(10):
@@ -129,20 +129,14 @@ def test_torque_springs_diverge_and_the_env_says_so() -> None:
         assert s.is_finite() and s.diverged()
     finally:
         sc.close()
-    env = gym.make("SoftGrasp-v2", fingers="segmented")
-    try:
-        from dataclasses import replace
+    env = make_env("SoftGrasp-v2", fingers=SegmentedConfig(spring="torque"))
+    rewards = []
+    ep = run_episode(env, scripted, seed=0, max_steps=10, on_step=lambda obs, r, *_: rewards.append(r))
+    assert ep.diverged and ep.terminated and rewards[-1] == 0.0 and np.isfinite(ep.observation).all()
 
-        env.unwrapped._base = replace(env.unwrapped._base, segment_spring="torque")  # not an env argument
-        obs, _ = env.reset(seed=0)
-        policy = ScriptedGraspPolicy()
-        for _ in range(10):
-            obs, reward, term, trunc, info = env.step(policy(obs))
-            if term:
-                break
-        assert info["diverged"] and term and reward == 0.0 and np.isfinite(obs).all()
-    finally:
-        env.close()
+
+def _not_diverged(obs, reward, term, trunc, info) -> None:
+    assert not info["diverged"], info["divergence"]
 
 
 # --- grasp -----------------------------------------------------------------------------------------
@@ -153,7 +147,7 @@ def test_scripted_grasp_lifts_and_holds_without_slip(n: int) -> None:
     """The default plan (5 cm in 1 s, 2 s hold), default 0.1 kg cylinder. Measured (3 / 8
     segments): lift 49.99 / 49.99 mm, hold slip 0.001 / 0.007 mm, tilt 0.03 / 0.05 deg, finger
     forces 3.000 / 3.05 N against the motors' 3 N (tolerance 3 %)."""
-    sc = _scene(finger_segments=n)
+    sc = _scene(SegmentedConfig(segments=n))
     try:
         plan = GraspPlan()
         rec = run_grasp(sc, plan)
@@ -162,31 +156,22 @@ def test_scripted_grasp_lifts_and_holds_without_slip(n: int) -> None:
         assert rec.hold_slip < 1e-4
         assert rec.max_tilt < math.radians(0.5)
         np.testing.assert_allclose(sc.finger_forces(), sc.config.finger_force, rtol=0.03)
-        assert not sc.segments.diverged()
+        assert not sc.fingers.diverged()
     finally:
         sc.close()
 
 
-def test_segmented_holds_at_a_wedge_where_rigid_slips() -> None:
+def test_segmented_holds_at_a_wedge_where_rigid_slips(make_env, scripted) -> None:
     """The stability map's CI cell (jaw wedge 0.1 rad, yaw 0.1 rad, lateral offset 5 mm, the
     scripted policy, 5 s episode): the rigid twin lifts and loses the cylinder (it slips from a
     0.025 rad wedge on), the segmented fingers hold it. Measured over the map's wedge row 0 - 0.45
     rad x yaw 0 / 0.1 / 0.3: segmented held every cell, rigid only the 0 wedge."""
     outcome = {}
+    options = {"jaw_wedge": 0.1, "yaw": 0.1, "lateral_offset": 0.005, "cylinder_xy": (0.0, 0.0)}
     for fingers in ("rigid", "segmented"):
-        env = gym.make("SoftGrasp-v1", fingers=fingers)  # the static hold of the map (v1: no carry test)
-        try:
-            obs, _ = env.reset(seed=0, options={"jaw_wedge": 0.1, "yaw": 0.1, "lateral_offset": 0.005, "cylinder_xy": (0.0, 0.0)})
-            policy, ever = ScriptedGraspPolicy(), False
-            for _ in range(100):
-                obs, _, term, trunc, info = env.step(policy(obs))
-                ever |= info["is_success"]
-                assert not info["diverged"]
-                if term or trunc:
-                    break
-            outcome[fingers] = "held" if info["is_success"] else ("slipped" if ever else "dropped")
-        finally:
-            env.close()
+        env = make_env("SoftGrasp-v1", fingers=fingers)  # the static hold of the map (v1: no carry test)
+        ep = run_episode(env, scripted, seed=0, options=options, on_step=_not_diverged)
+        outcome[fingers] = "held" if ep.success else ("slipped" if ep.successes else "dropped")
     assert outcome == {"rigid": "slipped", "segmented": "held"}
 
 
@@ -211,64 +196,23 @@ def test_soak_holds_60_s() -> None:
         sc.close()
 
 
-# --- env -------------------------------------------------------------------------------------------
-
-
-def _rollout(env, seed: int, steps: int) -> list[np.ndarray]:
-    obs, _ = env.reset(seed=seed)
-    out = [obs]
-    policy = ScriptedGraspPolicy()
-    for _ in range(steps):
-        obs, _, term, trunc, info = env.step(policy(obs))
-        assert not info["diverged"]
-        out.append(obs)
-        if term or trunc:
-            break
-    return out
-
-
-def test_env_resets_steps_deterministic_and_reset_restores() -> None:
-    """gym.make('SoftGraspEasy-v1', fingers='segmented'): two envs, same seed, bit-identical
-    observations; a reset after an episode brings back the first episode exactly."""
-    a = gym.make("SoftGraspEasy-v1", fingers="segmented")  # the gentle start: lifting within 30 steps
-    b = gym.make("SoftGraspEasy-v1", fingers="segmented")
-    try:
-        assert a.unwrapped.fingers == "segmented"
-        ra = _rollout(a, 7, 30)
-        assert a.unwrapped.scene.segments is not None
-        rb = _rollout(b, 7, 30)
-        assert len(ra) == len(rb) == 31
-        for x, y in zip(ra, rb, strict=True):
-            assert x.dtype == np.float32 and np.isfinite(x).all()
-            np.testing.assert_array_equal(x, y)
-        assert ra[-1][21] > 0.01  # it got somewhere: the cylinder is on its way up
-        again = _rollout(a, 7, 30)  # the same env after an episode
-        for x, y in zip(ra, again, strict=True):
-            np.testing.assert_array_equal(x, y)
-        other = _rollout(b, 8, 2)
-        assert not np.array_equal(other[0], ra[0])
-    finally:
-        a.close()
-        b.close()
-
-
 # --- bad input -------------------------------------------------------------------------------------
 
 
 @pytest.mark.parametrize(
     "kw,field",
     [
-        ({"finger_segments": 0}, "finger_segments"),
-        ({"finger_segments": 9}, "finger_segments"),
-        ({"finger_segments": 2.5}, "finger_segments"),
-        ({"segment_stiffness_pitch": -0.1}, "segment_stiffness_pitch"),
-        ({"segment_stiffness_yaw": -0.1}, "segment_stiffness_yaw"),
-        ({"segment_stiffness_yaw": 0.0}, "segment_stiffness_yaw"),
-        ({"segment_damping_pitch": -1e-3}, "segment_damping_pitch"),
-        ({"segment_damping_yaw": float("nan")}, "segment_damping_yaw"),
-        ({"segment_spring": "x"}, "segment_spring"),
+        ({"segments": 0}, "segments"),
+        ({"segments": 9}, "segments"),
+        ({"segments": 2.5}, "segments"),
+        ({"stiffness_pitch": -0.1}, "stiffness_pitch"),
+        ({"stiffness_yaw": -0.1}, "stiffness_yaw"),
+        ({"stiffness_yaw": 0.0}, "stiffness_yaw"),
+        ({"damping_pitch": -1e-3}, "damping_pitch"),
     ],
 )
-def test_bad_segment_config_raises_naming_the_field(kw: dict, field: str) -> None:
-    with pytest.raises(ValueError, match=field):
-        SceneConfig(fingers="segmented", **kw)
+def test_segment_settings_out_of_their_ranges_raise_naming_the_field(kw: dict, field: str) -> None:
+    """The ends of the ranges (the contract test gives every field a non-number): 1-8 whole
+    segments, a stiffness above 0 (open), a damping of at least 0."""
+    with pytest.raises(ValueError, match=rf"SegmentedConfig\.{field}\b"):
+        SegmentedConfig(**kw)

@@ -1,4 +1,5 @@
-"""Validation of TissueConfig, SimConfig and SceneConfig."""
+"""Validation of TissueConfig, SimConfig and SceneConfig (a finger kind's own settings are checked
+by tests/fingers/test_contract.py; the spellings before 0.3 by tests/test_deprecations.py)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,8 @@ import math
 
 import pytest
 
-from softgrasp_env.config import COUPLING_MODES, SceneConfig, SimConfig, TissueConfig, field_names, replace
+from softgrasp_env.config import COUPLING_MODES, SimConfig, TissueConfig, field_names, replace
+from softgrasp_env.scene import SceneConfig
 
 NAN = float("nan")
 INF = float("inf")
@@ -23,9 +25,9 @@ def test_defaults_construct():
 
 def test_spacing_follows_density():
     assert TissueConfig().spacing == pytest.approx(0.0158, rel=1e-3)  # 4,000 per m^2
-    assert TissueConfig(density=10_000.0).spacing == pytest.approx(0.01)
-    assert TissueConfig(density=40_000.0).spacing == pytest.approx(0.005)
-    assert TissueConfig(density=2_500.0).spacing == pytest.approx(0.02)
+    assert TissueConfig(particle_density=10_000.0).spacing == pytest.approx(0.01)
+    assert TissueConfig(particle_density=40_000.0).spacing == pytest.approx(0.005)
+    assert TissueConfig(particle_density=2_500.0).spacing == pytest.approx(0.02)
 
 
 @pytest.mark.parametrize(
@@ -36,7 +38,7 @@ def test_spacing_follows_density():
         (dict(stiffness=-0.1), "stiffness"),
         (dict(stiffness=NAN), "stiffness"),
         (dict(stiffness=0.03), "stiffness"),  # too slack: tore under random actions (issue 12)
-        (dict(tissue_density=3e4), "tissue_density"),  # too heavy: tore under random actions
+        (dict(mass_density=3e4), "mass_density"),  # too heavy: tore under random actions
         (dict(group_size=2), "group_size"),
         (dict(group_size=17), "group_size"),  # bigger groups sagged and tore (issue 12)
         (dict(group_size=8.0), "group_size"),
@@ -45,9 +47,9 @@ def test_spacing_follows_density():
         (dict(extrude=0.0), "extrude"),
         (dict(extrude=NAN), "extrude"),
         (dict(extrude=INF), "extrude"),
-        (dict(density=50.0), "density"),
-        (dict(density=NAN), "density"),
-        (dict(tissue_density=0.0), "tissue_density"),
+        (dict(particle_density=50.0), "particle_density"),
+        (dict(particle_density=NAN), "particle_density"),
+        (dict(mass_density=0.0), "mass_density"),
         (dict(radius_scale=0.0), "radius_scale"),
         (dict(radius_scale=2.5), "radius_scale"),
         (dict(normal_radius=0.0), "normal_radius"),
@@ -69,12 +71,12 @@ def test_tissue_config_rejects(kwargs, field):
     [
         dict(stiffness=1.0),  # closed upper end
         dict(stiffness=0.1),  # closed lower end
-        dict(tissue_density=1e4),
+        dict(mass_density=1e4),
         dict(stiffness=1),  # int for a float field is fine
         dict(group_size=4),
         dict(group_size=16),
-        dict(density=100.0),
-        dict(density=1e7),
+        dict(particle_density=100.0),
+        dict(particle_density=1e7),
         dict(extrude=0.1),
         dict(friction_static=0.5, friction_dynamic=0.5),  # equal coefficients allowed
         dict(friction_static=0.0, friction_dynamic=0.0),
@@ -155,7 +157,6 @@ def test_sim_config_accepts(kwargs):
         (dict(finger_half_extents=(0.008, 0.02, NAN)), r"finger_half_extents\[2\]"),
         (dict(fingers="soft"), "fingers"),
         (dict(fingers=True), "fingers"),
-        (dict(tissue_faces="inner"), "tissue_faces"),
         (dict(tissue=SimConfig()), "tissue"),
         (dict(sim=TissueConfig()), "sim"),
         (dict(sim=None), "sim"),
@@ -209,7 +210,7 @@ def test_default_factories_give_fresh_equal_configs():
 
 def test_field_names():
     names = field_names(TissueConfig)
-    assert names[:3] == ("density", "extrude", "group_size")
+    assert names[:3] == ("particle_density", "extrude", "group_size")
     assert set(names) == {f.name for f in dataclasses.fields(TissueConfig)}
     assert "tissue" in field_names(SceneConfig) and "sim" in field_names(SceneConfig)
     assert "coupling" in field_names(SimConfig)

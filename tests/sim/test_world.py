@@ -9,8 +9,9 @@ import pybullet as p
 import pytest
 
 from softgrasp_env.accuracy import GraspPlan, coulomb_hold_bound, run_grasp
-from softgrasp_env.config import SceneConfig, SimConfig, TissueConfig, replace
-from softgrasp_env.scene import GraspScene
+from softgrasp_env.config import SimConfig, TissueConfig, replace
+from softgrasp_env.fingers import TissueFingerConfig
+from softgrasp_env.scene import GraspScene, SceneConfig
 from softgrasp_env.sim.bullet import RigidRef, connect
 from softgrasp_env.sim.world import ShapeSpec, TissueSpec, World
 from softgrasp_env.tissue.builder import build_combined_body, core_shape_from_bullet
@@ -97,9 +98,9 @@ def test_world_is_deterministic():
     """Two worlds built alike and driven alike stay bit-identical (their own pybullet clients)."""
 
     def run(scene, steps):
-        scene.set_finger_target(scene.config.finger_max_opening)
+        close = replace(scene.control, finger_closing=scene.config.finger_max_opening)
         for _ in range(steps):
-            scene.world.step()
+            scene.step(close)
         return scene.world.state.particle_x.copy(), scene.cylinder_pose()[0]
 
     a = GraspScene(SceneConfig())
@@ -120,9 +121,9 @@ def test_restore_returns_bodies_and_tissue_to_the_snapshot():
         snap = scene.world.save()
         x0 = scene.world.state.particle_x.copy()
         c0 = scene.cylinder_pose()[0]
-        scene.set_finger_target(scene.config.finger_max_opening)
+        close = replace(scene.control, finger_closing=scene.config.finger_max_opening)
         for _ in range(60):
-            scene.world.step()
+            scene.step(close)
         assert np.abs(scene.world.state.particle_x - x0).max() > 1e-3
         scene.world.restore(snap)
         assert np.array_equal(scene.world.state.particle_x, x0)
@@ -153,11 +154,11 @@ def test_hold_bound_is_coulombs(kind):
 
 
 def test_tissue_on_every_face_still_grasps():
-    """SceneConfig(tissue_faces='all'): tissue on every face of each core (152 particles instead of
+    """SceneConfig(fingers=TissueFingerConfig(faces='all')): tissue on every face of each core (152 particles instead of
     the default's 60 on the inner face and tip); the scripted grasp holds. Measured: penetration
     0.098 mm, slip in a 5 s hold 0.006 mm."""
     plan = GraspPlan(hold=5.0)
-    scene = GraspScene(SceneConfig(tissue_faces="all"))
+    scene = GraspScene(SceneConfig(fingers=TissueFingerConfig(faces="all")))
     try:
         res = run_grasp(scene, plan)
         count = scene.world.model.particle_count

@@ -158,8 +158,8 @@ def test_sample_surface_count_scales_with_density(name):
     """Rounding to whole rows quantises coarse samplings, so this uses several points per edge."""
     shape = SHAPES[name]
     for density in (20_000.0, 40_000.0, 80_000.0):
-        n1 = sample_surface(shape, TissueConfig(density=density).spacing)[0].shape[0]
-        n2 = sample_surface(shape, TissueConfig(density=2.0 * density).spacing)[0].shape[0]
+        n1 = sample_surface(shape, TissueConfig(particle_density=density).spacing)[0].shape[0]
+        n2 = sample_surface(shape, TissueConfig(particle_density=2.0 * density).spacing)[0].shape[0]
         assert 1.6 <= n2 / n1 <= 2.4, (density, n1, n2)
 
 
@@ -283,7 +283,7 @@ def test_combined_body_normal_extrusion(name):
     assert np.abs(distances(shape, x[outer])[:, 0] - tissue.extrude).max() < 1e-12
 
     # mass: the layer (area x extrude) split evenly between the pair
-    assert model.particle_mass.sum() == pytest.approx(tissue.tissue_density * shape.area * tissue.extrude, rel=1e-9)
+    assert model.particle_mass.sum() == pytest.approx(tissue.mass_density * shape.area * tissue.extrude, rel=1e-9)
     assert np.abs(model.particle_mass[att] - model.particle_mass[outer]).max() == 0.0
     assert np.abs(model.particle_inv_mass * model.particle_mass - 1.0).max() < 1e-14
 
@@ -355,8 +355,8 @@ def test_combined_body_group_size(group_size):
 
 
 def test_combined_body_metadata_from_config():
-    tissue = TissueConfig(stiffness=0.3, friction_static=0.8, friction_dynamic=0.4, density=20_000.0,
-                          tissue_density=1200.0, extrude=0.004)  # fmt: skip
+    tissue = TissueConfig(stiffness=0.3, friction_static=0.8, friction_dynamic=0.4, particle_density=20_000.0,
+                          mass_density=1200.0, extrude=0.004)  # fmt: skip
     shape = SHAPES["box"]
     model = build_combined_body(shape, tissue)
     assert model.body_count == 1
@@ -382,7 +382,7 @@ def test_combined_body_rejects_bad_direction():
 
 
 def test_free_block_lattice():
-    tissue = TissueConfig(tissue_density=900.0, group_size=6)
+    tissue = TissueConfig(mass_density=900.0, group_size=6)
     h = (0.02, 0.01, 0.015)
     model = build_free_block(h, tissue, spacing=0.005)
     n = model.particle_count
@@ -402,7 +402,7 @@ def test_free_block_lattice():
 
 
 def test_free_block_default_spacing_from_density():
-    tissue = TissueConfig(density=40_000.0)  # spacing 5 mm
+    tissue = TissueConfig(particle_density=40_000.0)  # spacing 5 mm
     model = build_free_block((0.01, 0.01, 0.01), tissue)
     assert model.particle_count == 4**3
 
@@ -495,7 +495,7 @@ def test_build_groups_memory_is_linear_in_the_particle_count():
     arithmetic and a few kB per particle; the all-pairs table needed n^2 * 24 bytes (6 GB here)."""
     import tracemalloc
 
-    tissue = TissueConfig(density=1e6)  # 1 mm spacing
+    tissue = TissueConfig(particle_density=1e6)  # 1 mm spacing
     build_combined_body(CoreShape("box", half_extents=(0.008, 0.02, 0.03)), TissueConfig())  # compiled
     tracemalloc.start()
     m = build_combined_body(CoreShape("box", half_extents=(0.008, 0.02, 0.03)), tissue)
@@ -510,7 +510,7 @@ def test_a_tissue_that_cannot_fit_is_refused_before_building(monkeypatch):
 
     monkeypatch.setattr(builder, "_available_bytes", lambda: 100 * 2**20)  # 100 MiB free
     with pytest.raises(ValueError, match=r"combined body: 64,000 particles would need about 0\.2 GiB.*density"):
-        build_combined_body(CoreShape("box", half_extents=(0.008, 0.02, 0.03)), TissueConfig(density=4e6))
+        build_combined_body(CoreShape("box", half_extents=(0.008, 0.02, 0.03)), TissueConfig(particle_density=4e6))
     with pytest.raises(ValueError, match="free block"):
         build_free_block((0.1, 0.1, 0.1), TissueConfig(), spacing=0.001)
 
@@ -519,7 +519,7 @@ def test_combined_body_on_chosen_faces_only():
     """Tissue only where contact can happen: the chosen faces of a box core, the rest bare. Areas
     still sum to exactly the covered faces' area, and every attached particle lies on one of them."""
     box = CoreShape("box", half_extents=(0.008, 0.02, 0.03))
-    tissue = TissueConfig(density=10_000.0)  # 10 mm spacing: counts worked out by hand
+    tissue = TissueConfig(particle_density=10_000.0)  # 10 mm spacing: counts worked out by hand
     full = build_combined_body(box, tissue)
     part = build_combined_body(box, tissue, faces=("+x", "-z"))
     att = part.particle_attached

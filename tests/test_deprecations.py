@@ -1,0 +1,175 @@
+"""The spellings before 0.3 keep working: each gives the same configuration as its new spelling
+and says so with a DeprecationWarning (softgrasp_env/validation.py's ``deprecated``), and a
+setting of another finger kind than the one chosen is an error, not silently lost. The rest of the
+tests use the new spellings only."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import gymnasium as gym
+import pytest
+
+import softgrasp_env  # noqa: F401  (registers the ids)
+from softgrasp_env.config import TissueConfig
+from softgrasp_env.fingers import FINGERS, FemConfig, RigidConfig, SegmentedConfig, TissueFingerConfig
+from softgrasp_env.scene import SceneConfig
+
+# --- gym.make ---------------------------------------------------------------------------------------
+
+
+def _args(env_id: str, **kwargs):
+    """The validated arguments of an env (no scene is built before reset)."""
+    env = gym.make(env_id, **kwargs)
+    try:
+        return env.unwrapped.args
+    finally:
+        env.close()
+
+
+@pytest.mark.parametrize(
+    "env_id, old, new",
+    [
+        ("SoftGrasp-v2", dict(soft=False), dict(fingers="rigid")),
+        ("SoftGraspRigid-v2", dict(soft=True), dict(fingers="tissue")),
+        ("SoftGrasp-v2", dict(soft=True), dict(fingers="tissue")),
+        ("SoftGrasp-v2", dict(soft=False, fingers="segmented"), dict(fingers="segmented")),  # a kind soft never named
+        ("SoftGrasp-v2", dict(tissue_density=5000.0), dict(particle_density=5000.0)),
+        ("SoftGraspRigid-v2", dict(soft=True, tissue_density=5000.0), dict(fingers="tissue", particle_density=5000.0)),
+    ],
+)
+def test_gym_make_takes_the_old_arguments_with_a_warning(env_id, old, new):
+    with pytest.warns(DeprecationWarning, match=r"the (soft|tissue_density)= argument.* is deprecated, use "):
+        was = _args(env_id, **old)
+    now = _args(env_id, **new)
+    assert was == now and was.scene == now.scene and was.tissue == now.tissue
+    assert was.scene.fingers == new.get("fingers", "tissue")
+
+
+def test_old_gym_make_arguments_that_cannot_mean_one_thing_are_refused():
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="soft must be a bool"):
+        gym.make("SoftGrasp-v2", soft="no")
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="soft=True contradicts fingers="):
+        gym.make("SoftGrasp-v2", soft=True, fingers=RigidConfig())
+    with pytest.raises(TypeError, match="not both"):
+        gym.make("SoftGrasp-v2", tissue_density=5000.0, particle_density=5000.0)
+
+
+def test_gym_make_takes_a_kinds_own_argument_only_with_that_kind():
+    """``tissue_faces=`` and ``fem_resolution=`` are the kinds' settings as gym.make arguments: the
+    same as the kind's config, and an error with another kind (it would be lost)."""
+    assert _args("SoftGrasp-v2", tissue_faces="all").scene == _args(
+        "SoftGrasp-v2", fingers=TissueFingerConfig(faces="all")).scene  # fmt: skip
+    assert _args("SoftGrasp-v2", fingers="fem", fem_resolution="fine").scene == _args(
+        "SoftGrasp-v2", fingers=FemConfig(resolution="fine")).scene  # fmt: skip
+    with pytest.raises(ValueError, match="tissue_faces is a setting of fingers='tissue', but fingers='rigid'"):
+        gym.make("SoftGraspRigid-v2", tissue_faces="all")
+    with pytest.raises(ValueError, match="fem_resolution is a setting of fingers='fem', but fingers='tissue'"):
+        gym.make("SoftGrasp-v2", fem_resolution="fine")
+
+
+# --- TissueConfig -------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("old, new, value", [("density", "particle_density", 5000.0),
+                                             ("tissue_density", "mass_density", 1200.0)])  # fmt: skip
+def test_tissue_config_takes_and_reads_the_old_names_with_a_warning(old, new, value):
+    with pytest.warns(DeprecationWarning, match=rf"TissueConfig\({old}=\.\.\.\) is deprecated, use TissueConfig\({new}="):
+        cfg = TissueConfig(**{old: value})
+    assert cfg == TissueConfig(**{new: value})
+    with pytest.warns(DeprecationWarning, match=rf"TissueConfig\.{old} is deprecated, use TissueConfig\.{new}"):
+        assert getattr(cfg, old) == value == getattr(cfg, new)
+    with pytest.raises(TypeError, match="not both"):
+        TissueConfig(**{old: value, new: value})
+
+
+def test_a_bad_value_under_an_old_tissue_name_is_reported_under_the_new_one():
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match=r"TissueConfig\.particle_density\b"):
+        TissueConfig(density=50.0)
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match=r"TissueConfig\.mass_density\b"):
+        TissueConfig(tissue_density=3e4)
+
+
+# --- SceneConfig's flat finger settings ------------------------------------------------------------
+
+LEGACY = [
+    ("finger_segments", 4, SegmentedConfig(segments=4)),
+    ("segment_stiffness_pitch", 0.2, SegmentedConfig(stiffness_pitch=0.2)),
+    ("segment_stiffness_yaw", 0.02, SegmentedConfig(stiffness_yaw=0.02)),
+    ("segment_damping_pitch", 0.001, SegmentedConfig(damping_pitch=0.001)),
+    ("segment_damping_yaw", 1e-4, SegmentedConfig(damping_yaw=1e-4)),
+    ("segment_spring", "torque", SegmentedConfig(spring="torque")),
+    ("fem_resolution", "fine", FemConfig(resolution="fine")),
+    ("fem_substeps", 4, FemConfig(substeps=4)),
+    ("tissue_faces", "all", TissueFingerConfig(faces="all")),
+]
+"""(the flat SceneConfig field of 0.2, a value, the kind's config it means)."""
+
+
+@pytest.mark.parametrize("old, value, new", LEGACY, ids=[c[0] for c in LEGACY])
+def test_scene_config_takes_and_reads_a_flat_finger_setting_with_a_warning(old, value, new):
+    with pytest.warns(DeprecationWarning, match=rf"SceneConfig\({old}=\.\.\.\) is deprecated, use SceneConfig\(fingers="
+                                                rf"{type(new).__name__}\("):  # fmt: skip
+        cfg = SceneConfig(fingers=new.kind, **{old: value})
+    assert cfg == SceneConfig(fingers=new)
+    assert type(cfg.fingers) is type(new) and cfg.fingers == new
+    with pytest.warns(DeprecationWarning, match=rf"SceneConfig\.{old} is deprecated, use SceneConfig\.fingers\."):
+        assert getattr(cfg, old) == value
+    # dataclasses.replace passes it on as well (the old tests' way of varying one setting)
+    with pytest.warns(DeprecationWarning):
+        assert dataclasses.replace(SceneConfig(fingers=new.kind), **{old: value}) == cfg
+
+
+@pytest.mark.parametrize("old, value, new", LEGACY, ids=[c[0] for c in LEGACY])
+def test_a_flat_setting_of_another_kind_than_fingers_is_an_error(old, value, new):
+    other = "rigid" if new.kind != "rigid" else "tissue"
+    with pytest.warns(DeprecationWarning), pytest.raises(
+            ValueError, match=rf"SceneConfig\.{old} is a setting of fingers='{new.kind}', but fingers='{other}'"):  # fmt: skip
+        SceneConfig(fingers=other, **{old: value})
+
+
+def test_flat_settings_combine_and_the_default_kind_takes_only_its_own():
+    with pytest.warns(DeprecationWarning):
+        cfg = SceneConfig(fingers="segmented", finger_segments=4, segment_spring="torque")
+    assert cfg.fingers == SegmentedConfig(segments=4, spring="torque")
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="but fingers='tissue'"):
+        SceneConfig(finger_segments=4)  # fingers left at its default, the tissue
+    with pytest.warns(DeprecationWarning):
+        assert SceneConfig(tissue_faces="all").fingers == TissueFingerConfig(faces="all")
+    # reading another kind's flat setting gives that kind's default, as the flat field of 0.2 held it
+    with pytest.warns(DeprecationWarning):
+        assert SceneConfig(fingers="rigid").finger_segments == SegmentedConfig().segments
+
+
+# --- moved names ------------------------------------------------------------------------------------
+
+
+def test_names_moved_out_of_softgrasp_env_config_still_import_with_a_warning():
+    with pytest.warns(DeprecationWarning, match=r"softgrasp_env\.config\.SceneConfig moved to softgrasp_env\.scene"):
+        from softgrasp_env.config import SceneConfig as Old
+    assert Old is SceneConfig
+    with pytest.warns(DeprecationWarning, match=r"FINGER_KINDS moved to softgrasp_env\.fingers"):
+        from softgrasp_env.config import FINGER_KINDS
+    assert FINGER_KINDS == tuple(FINGERS)
+
+
+def test_the_demo_takes_its_old_density_flags(monkeypatch):
+    """``python -m softgrasp_env.demo --density N --tissue-density M`` (0.2's flags) builds the scene
+    ``--particle-density N --mass-density M`` does (the scene is captured, not simulated)."""
+    from softgrasp_env import demo
+
+    built = []
+
+    class Built(Exception):
+        pass
+
+    def capture(cfg, **kwargs):
+        built.append(cfg)
+        raise Built
+
+    monkeypatch.setattr(demo, "GraspScene", capture)
+    for argv in (["--density", "5000", "--tissue-density", "1200"], ["--particle-density", "5000", "--mass-density", "1200"]):
+        with pytest.raises(Built):
+            demo.main(argv)
+    old, new = built
+    assert old == new and old.tissue.particle_density == 5000.0 and old.tissue.mass_density == 1200.0
