@@ -4,7 +4,7 @@ over them: the carry test (carry.py) and the goal variant (goal.py)."""
 
 from __future__ import annotations
 
-from .base import Outcome, Task
+from .base import Outcome, Task, TaskWrapper
 from .carry import CarryTest
 from .easy import EasyTask
 from .goal import GoalTask
@@ -14,5 +14,5 @@ from .reach import ReachTask
 TASKS: dict[str, type[LiftTask]] = {task.name: task for task in (ReachTask, EasyTask)}
 """The starts ``gym.make(..., task=name)`` takes; each class's ``defaults`` are its ranges."""
 
-__all__ = ["RESET_OPTIONS", "TASKS", "CarryTest", "EasyTask", "GoalTask", "LiftTask", "Outcome", "ReachTask",
+__all__ = ["RESET_OPTIONS", "TASKS", "CarryTest", "EasyTask", "GoalTask", "LiftTask", "Outcome", "ReachTask", "TaskWrapper",
            "StartRanges", "Task", "check_option"]

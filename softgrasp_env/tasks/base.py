@@ -82,4 +82,38 @@ class Task:
         raise NotImplementedError
 
 
-__all__ = ["Outcome", "Task"]
+class TaskWrapper(Task):
+    """A task around another (the carry test, the goal variant): whatever it does not override
+    goes to the task it wraps, as a Gymnasium wrapper passes an env's calls on."""
+
+    def __init__(self, task: Task) -> None:
+        self.task = task
+        self.name = task.name
+        self.observation_extras = task.observation_extras
+        self.reward_terms = task.reward_terms
+        self.diverged_reward = task.diverged_reward
+        self.reset_options = task.reset_options
+
+    def start_height(self, cylinder_height: float, finger_half_height: float, pad: float) -> float:
+        return self.task.start_height(cylinder_height, finger_half_height, pad)
+
+    def tallest_cylinder(self, top: float, finger_half_height: float, pad: float) -> float:
+        return self.task.tallest_cylinder(top, finger_half_height, pad)
+
+    def draw(self, rng: np.random.Generator, options: Mapping[str, Any], base: SceneConfig) -> SceneConfig:
+        return self.task.draw(rng, options, base)
+
+    def begin(self, scene: GraspScene, rng: np.random.Generator) -> None:
+        self.task.begin(scene, rng)
+
+    def steer(self, scene: GraspScene, control: GripperControl) -> GripperControl:
+        return self.task.steer(scene, control)
+
+    def carrying(self, steps: int) -> bool:
+        return self.task.carrying(steps)
+
+    def evaluate(self, reading: Reading, scene: GraspScene) -> Outcome:
+        return self.task.evaluate(reading, scene)
+
+
+__all__ = ["Outcome", "Task", "TaskWrapper"]

@@ -20,18 +20,17 @@ at 1.25 and 1.5 Hz the scripted rigid grasp held 12 / 12 (tilting 21-28 degrees)
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..scene.gripper import GripperControl, Workspace
-from .base import Outcome, Task
+from .base import Outcome, Task, TaskWrapper
 
 if TYPE_CHECKING:
     from ..observation import Reading
-    from ..scene import GraspScene, SceneConfig
+    from ..scene import GraspScene
 
 CARRY_START = 3.5
 """The carry begins this long after reset [s]."""
@@ -45,22 +44,18 @@ _EPS = 1e-9
 """Slack on the carry's time window [s]: physics steps land on its ends up to rounding."""
 
 
-class CarryTest(Task):
+class CarryTest(TaskWrapper):
     """``task`` with the carry test after it (see the module docstring)."""
-
-    observation_extras = ("time",)
 
     def __init__(self, task: Task, *, workspace: Workspace, dt: float, start: float = CARRY_START,
                  duration: float = CARRY_DURATION, amplitude: float = CARRY_AMPLITUDE,
                  frequency: float = CARRY_FREQUENCY) -> None:  # fmt: skip
-        self.task = task
+        super().__init__(task)
+        self.observation_extras = task.observation_extras + ("time",)
         self.workspace = workspace
         self.dt = float(dt)
         self.start, self.duration = float(start), float(duration)
         self.amplitude, self.frequency = float(amplitude), float(frequency)
-        self.name = task.name
-        self.reward_terms = task.reward_terms
-        self.reset_options = task.reset_options
         self._anchor: np.ndarray | None = None
         # The physics steps whose end lies in the carry's window, exactly as phase() says (t grows
         # with the step, so the window is a range): found near the estimate, then checked step by
@@ -72,17 +67,6 @@ class CarryTest(Task):
         while last >= first and self.phase(last) is None:
             last -= 1
         self._first, self._last = first, last
-
-    # --- the wrapped task's part -----------------------------------------------------------------
-
-    def start_height(self, *args: float) -> float:
-        return self.task.start_height(*args)
-
-    def tallest_cylinder(self, *args: float) -> float:
-        return self.task.tallest_cylinder(*args)
-
-    def draw(self, rng: np.random.Generator, options: Mapping[str, Any], base: SceneConfig) -> SceneConfig:
-        return self.task.draw(rng, options, base)
 
     def begin(self, scene: GraspScene, rng: np.random.Generator) -> None:
         self.task.begin(scene, rng)

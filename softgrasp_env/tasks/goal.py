@@ -7,17 +7,16 @@ It has no carry test: HER relabels goals alone, and a time-bound test would brea
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import replace
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .base import Outcome, Task
+from .base import Outcome, Task, TaskWrapper
 
 if TYPE_CHECKING:
     from ..observation import Reading
-    from ..scene import GraspScene, SceneConfig
+    from ..scene import GraspScene
 
 DISTANCE_THRESHOLD = 0.02
 """Default goal tolerance [m]."""
@@ -25,31 +24,17 @@ GOAL_HEIGHT_RANGE = (0.05, 0.08)
 """Default range of the goal's height above the cylinder's resting height [m]."""
 
 
-class GoalTask(Task):
+class GoalTask(TaskWrapper):
     """``task`` with a goal drawn per episode (see the module docstring)."""
-
-    diverged_reward = -1.0
 
     def __init__(self, task: Task, *, distance_threshold: float = DISTANCE_THRESHOLD,
                  goal_height_range: tuple[float, float] = GOAL_HEIGHT_RANGE) -> None:  # fmt: skip
-        self.task = task
+        super().__init__(task)
+        self.diverged_reward = -1.0
         self.distance_threshold = float(distance_threshold)
         self.goal_height_range = (float(goal_height_range[0]), float(goal_height_range[1]))
-        self.name = task.name
-        self.reward_terms = task.reward_terms
-        self.reset_options = task.reset_options
-        self.observation_extras = task.observation_extras
         self.goal = np.zeros(3)
         """The desired goal of the running episode [m]."""
-
-    def start_height(self, *args: float) -> float:
-        return self.task.start_height(*args)
-
-    def tallest_cylinder(self, *args: float) -> float:
-        return self.task.tallest_cylinder(*args)
-
-    def draw(self, rng: np.random.Generator, options: Mapping[str, Any], base: SceneConfig) -> SceneConfig:
-        return self.task.draw(rng, options, base)
 
     def begin(self, scene: GraspScene, rng: np.random.Generator) -> None:
         """The goal: above the cylinder's start, its resting height plus U(goal_height_range)
@@ -58,12 +43,6 @@ class GoalTask(Task):
         h = float(rng.uniform(*self.goal_height_range))
         x, y = scene.config.cylinder_xy
         self.goal = np.array([x, y, scene.cylinder_rest_z + h])
-
-    def steer(self, scene, control):
-        return self.task.steer(scene, control)
-
-    def carrying(self, steps: int) -> bool:
-        return self.task.carrying(steps)
 
     @staticmethod
     def achieved_goal(reading: Reading) -> np.ndarray:
