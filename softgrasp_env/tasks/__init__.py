@@ -14,5 +14,5 @@ from .reach import ReachTask
 TASKS: dict[str, type[LiftTask]] = {task.name: task for task in (ReachTask, EasyTask)}
 """The starts ``gym.make(..., task=name)`` takes; each class's ``defaults`` are its ranges."""
 
-__all__ = ["RESET_OPTIONS", "TASKS", "CarryTest", "EasyTask", "GoalTask", "LiftTask", "Outcome", "ReachTask", "TaskWrapper",
-           "StartRanges", "Task", "check_option"]
+__all__ = ["RESET_OPTIONS", "TASKS", "CarryTest", "EasyTask", "GoalTask", "LiftTask", "Outcome", "ReachTask",
+           "StartRanges", "Task", "TaskWrapper", "check_option"]
