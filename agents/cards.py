@@ -1,12 +1,13 @@
-"""The trained baselines shipped in ``agents/trained/``: publishing a train.py run there with its
-model card, reading the cards back, and the results table.
+"""The trained baselines shipped in ``softgrasp_env/policies/trained/`` (package data, loaded by
+``softgrasp_env.policies.load_baseline``; ``agents/trained`` is a link to it): publishing a train.py
+run there with its model card, reading the cards back, and the results table.
 
     python -m agents.cards publish runs/SoftGrasp-v2_ppo_0 runs/SoftGraspRigid-v2_ppo_0 ...
     python -m agents.cards table                 # the results table (scripted measured live)
 
 ``publish`` evaluates each run over 100 seeded episodes (seeds 1000-1099, the seeds
 ``agents.evaluate`` uses, so scripted and learned policies meet the same starts), then copies into
-``agents/trained/<env>_<algo>_<seed>/`` what loading and the learning curves need: ``model.zip``,
+``softgrasp_env/policies/trained/<env>_<algo>_<seed>/`` what loading and the learning curves need: ``model.zip``,
 ``vecnormalize.pkl`` (not for HER), ``run.json``, ``progress.csv`` (train.py's periodic
 evaluations) and ``training.csv`` (the columns of SB3's log the curves use). The replay buffer
 stays behind: it is hundreds of MB and only needed to resume. The card is ``card.json`` (read by
@@ -25,7 +26,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-TRAINED = Path(__file__).resolve().parent / "trained"
+from softgrasp_env.policies.baselines import TRAINED  # the package data folder the baselines ship in
 EPISODES, SEED = 100, 1000
 HYPERPARAMS_FILE = {"ppo": "agents/hyperparams/ppo.yml", "sac": "agents/hyperparams/sac.yml",
                     "her-sac": "agents/hyperparams/sac.yml"}  # fmt: skip
@@ -192,7 +193,8 @@ def render_card(card: dict[str, Any]) -> str:
         f"| wall time | {minutes} of training on {card['machine']} |",
         f"| command | `{card['command']}` |",
         "",
-        "Evaluate: `python -m agents.evaluate --policy agents/trained/" + card["name"] + " --episodes 100`",
+        f"Load: `softgrasp_env.policies.load_baseline({card['name']!r})` (the `[train]` extra); evaluate: "
+        f"`python -m agents.evaluate --policy {card['name']} --episodes 100` (in the repository)",
         "",
     ]
     return "\n".join(lines)
@@ -206,7 +208,7 @@ def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True) 
 
     import softgrasp_env  # noqa: F401
     from agents.evaluate import evaluate
-    from agents.scripted import ScriptedGraspPolicy
+    from softgrasp_env.policies import ScriptedGraspPolicy
 
     rows = []
     if scripted:
@@ -240,7 +242,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m agents.cards", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     sub = parser.add_subparsers(dest="command", required=True)
-    pub = sub.add_parser("publish", help="evaluate runs and copy them, with their cards, to agents/trained/")
+    pub = sub.add_parser("publish", help="evaluate runs and copy them, with their cards, to softgrasp_env/policies/trained/")
     pub.add_argument("runs", nargs="+", type=Path)
     pub.add_argument("--episodes", type=int, default=EPISODES)
     pub.add_argument("--dest", type=Path, default=TRAINED)

@@ -2,6 +2,7 @@
 
     python -m agents.evaluate --env SoftGrasp-v2 --policy scripted --episodes 20
     python -m agents.evaluate --policy runs/SoftGrasp-v2_sac_0       # the run's env, kwargs and stats
+    python -m agents.evaluate --policy SoftGrasp-v2_sac_0            # a shipped baseline, by name
     .venv-rllib/bin/python -m agents.evaluate --policy runs-rllib/SoftGrasp-v2_rllib-ppo/seed_0   # an RLlib trial
 
 Episodes use seeds ``seed, seed + 1, ...`` so two policies meet the same starts.
@@ -18,6 +19,9 @@ import gymnasium as gym
 import numpy as np
 
 import softgrasp_env
+
+DEFAULT_ENV = "SoftGrasp-v2"
+"""The env of ``--policy scripted`` / ``random`` without ``--env``."""
 
 
 @dataclass
@@ -93,13 +97,28 @@ def evaluate(env: gym.Env, policy: Callable[[object], np.ndarray], *, episodes: 
     return Evaluation(episodes, float(np.mean(successes)), float(np.mean(returns)), float(np.mean(lifts)), diverged)
 
 
+def resolve(spec: str) -> str:
+    """``spec`` as :func:`load_policy` takes it: the name of a shipped baseline
+    (``softgrasp_env.policies.list_baselines()``) becomes its folder, unless a path of that name
+    exists here; anything else is left as it is."""
+    from pathlib import Path
+
+    from softgrasp_env.policies import baseline_path, list_baselines
+
+    if spec not in ("scripted", "random") and not Path(spec).exists() and spec in list_baselines():
+        return str(baseline_path(spec))
+    return spec
+
+
 def load_policy(spec: str, env: gym.Env, *, other_env: bool = False) -> Callable[[object], np.ndarray]:
     """``"scripted"``, ``"random"``, a run saved by train.py (its directory, model.zip or a
-    checkpoint zip), loaded by :func:`agents.runs.load_run` (observation statistics applied there),
-    or an RLlib trial of agents.rllib_train (its directory or a checkpoint in it,
+    checkpoint zip; a shipped baseline is one, by folder or by name), loaded by
+    :func:`agents.runs.load_run` (observation statistics applied there), or an RLlib trial of
+    agents.rllib_train (its directory or a checkpoint in it,
     :func:`agents.rllib_policy.load_rllib_policy`: its observation filter applied there)."""
+    spec = resolve(spec)
     if spec == "scripted":
-        from agents.scripted import ScriptedGraspPolicy
+        from softgrasp_env.policies import ScriptedGraspPolicy
 
         return ScriptedGraspPolicy()
     if spec == "random":
@@ -117,10 +136,11 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m agents.evaluate", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     parser.add_argument("--env", default=None, choices=softgrasp_env.ENV_IDS,
-                        help="default: the run's env (with its env kwargs) for a saved model, else SoftGrasp-v2")
+                        help=f"default: the run's env (with its env kwargs) for a saved model, else {DEFAULT_ENV}")
     parser.add_argument("--policy", default="scripted",
-                        help="'scripted', 'random', a run from train.py (its directory, model.zip or a checkpoint) "
-                             "or an RLlib trial from agents.rllib_train (its directory or a checkpoint_<N>)")  # fmt: skip
+                        help="'scripted', 'random', a run from train.py (its directory, model.zip or a checkpoint), "
+                             "a shipped baseline by name (e.g. SoftGrasp-v2_sac_0) or an RLlib trial from "
+                             "agents.rllib_train (its directory or a checkpoint_<N>)")  # fmt: skip
     parser.add_argument("--episodes", type=int, default=10)
     parser.add_argument("--seed", type=int, default=1000)
     parser.add_argument("--other-env", action="store_true",
@@ -130,17 +150,19 @@ def main(argv: list[str] | None = None) -> int:
     env = None
     try:
         if ns.policy in ("scripted", "random"):
-            env = gym.make(ns.env or "SoftGrasp-v2")
+            env = gym.make(ns.env or DEFAULT_ENV)
+            ns.env = env.spec.id if env.spec is not None else ns.env or DEFAULT_ENV  # printed below
             policy = load_policy(ns.policy, env)
         else:
             from agents.rllib_policy import is_rllib_run, locate
             from agents.runs import make_env, run_files
 
+            spec = resolve(ns.policy)
             # The env is re-created as the run made it: same id (unless --env says otherwise), same kwargs.
-            meta = locate(ns.policy)[0] if is_rllib_run(ns.policy) else run_files(ns.policy).meta
+            meta = locate(spec)[0] if is_rllib_run(spec) else run_files(spec).meta
             env = make_env(meta, env_id=ns.env)
             ns.env = env.spec.id if env.spec is not None else meta["env"]
-            policy = load_policy(ns.policy, env, other_env=ns.other_env)
+            policy = load_policy(spec, env, other_env=ns.other_env)
         env.action_space.seed(ns.seed)
         ev = evaluate(env, policy, episodes=ns.episodes, seed=ns.seed)
     except ValueError as exc:

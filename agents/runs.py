@@ -1,5 +1,7 @@
 """The files of a train.py run, and loading them back: the one place where a run's observation
-statistics (VecNormalize) are applied for evaluation, by train.py and by ``agents.evaluate`` alike.
+statistics (VecNormalize) are applied for evaluation, by train.py and by ``agents.evaluate`` alike
+(loading a model and its statistics is ``softgrasp_env.policies._sb3``'s, shared with the
+package's ``load_baseline``).
 
 A run directory holds ``run.json`` (env id, env kwargs, algo, seed, ...), ``model.zip``,
 ``vecnormalize.pkl`` (not for HER), ``replay_buffer.pkl`` (off-policy algos) and, with
@@ -9,11 +11,8 @@ and ``model_replay_buffer_<N>_steps.pkl`` beside it (SB3's CheckpointCallback na
 
 from __future__ import annotations
 
-import copy
 import json
-import pickle
 import re
-import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,6 +24,7 @@ from stable_baselines3.common.base_class import BaseAlgorithm
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecNormalize
 
 import softgrasp_env  # noqa: F401  (registers the ids)
+from softgrasp_env.policies._sb3 import frozen, load_model, load_stats, saved_algo
 
 CHECKPOINT_PREFIX = "model"
 _CHECKPOINT = re.compile(rf"^{CHECKPOINT_PREFIX}_(\d+)_steps\.zip$")
@@ -62,22 +62,6 @@ def read_meta(path: Path) -> dict[str, Any]:
         if not isinstance(meta.get(key, {} if kind is dict else None), kind):
             raise ValueError(f"{str(path)!r}: {key!r} must be a {kind.__name__}, got {meta.get(key)!r}")
     return meta
-
-
-def saved_algo(model: Path) -> str | None:
-    """The SB3 algorithm a model zip was saved by ("ppo" or "sac"), told by the attributes each
-    saves in the zip's ``data`` entry (PPO's clip range, SAC's entropy target); ``None`` when the
-    zip says neither."""
-    try:
-        with zipfile.ZipFile(model) as archive:
-            data = json.loads(archive.read("data"))
-    except (OSError, KeyError, zipfile.BadZipFile, json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{str(model)!r} is not a model saved by stable-baselines3: {type(exc).__name__}: {exc}") from None
-    if "clip_range" in data and "n_epochs" in data:
-        return "ppo"
-    if "target_entropy" in data:
-        return "sac"
-    return None
 
 
 def run_files(path: str | Path) -> RunFiles:
@@ -128,39 +112,6 @@ def check_env_matches(meta: dict[str, Any], env: gym.Env | VecEnv, run_json: Pat
                                  f"that {str(run_json)!r} ({meta['env']!r}) trained on")  # fmt: skip
     finally:
         reference.close()
-
-
-def frozen(stats: VecNormalize) -> VecNormalize:
-    """A copy of ``stats`` that normalises observations and never updates: ``training=False``,
-    ``norm_reward=False`` (evaluation reports the env's own reward)."""
-    # Only the statistics are copied: not the envs under them, nor what depends on them (what
-    # VecNormalize.__getstate__ leaves out; an unpickled one lacks them, so deepcopy would recurse).
-    state = {k: copy.deepcopy(v) for k, v in vars(stats).items() if k not in ("venv", "class_attributes", "returns")}
-    out = VecNormalize.__new__(VecNormalize)
-    out.__setstate__(state)
-    out.training, out.norm_reward = False, False
-    return out
-
-
-def load_stats(path: str | Path, *, required: bool = False) -> VecNormalize | None:
-    """The observation statistics saved by ``VecNormalize.save`` (frozen), or ``None`` when the file
-    does not exist and is not ``required``. A missing required file, or one that does not unpickle
-    to a VecNormalize, is a ValueError naming it: a policy fed raw observations it was trained on
-    normalised ones for fails silently (100 % vs 0 % success, issue 12)."""
-    path = Path(path)
-    if not path.exists():
-        if required:
-            raise ValueError(f"observation statistics {str(path)!r} are missing: the run was trained on normalised "
-                             "observations and cannot be evaluated without them")  # fmt: skip
-        return None
-    try:
-        with open(path, "rb") as f:
-            stats = pickle.load(f)
-    except Exception as exc:  # pickle raises many kinds on a damaged file
-        raise ValueError(f"observation statistics {str(path)!r} cannot be read: {type(exc).__name__}: {exc}") from None
-    if not isinstance(stats, VecNormalize):
-        raise ValueError(f"observation statistics {str(path)!r} hold a {type(stats).__name__}, not a VecNormalize")
-    return frozen(stats)
 
 
 def normalizer(stats: VecNormalize | None) -> Callable[[Any], Any]:
@@ -216,8 +167,6 @@ def load_run(path: str | Path, *, env: gym.Env | VecEnv | None = None, other_env
     ``env`` is given. A given ``env`` must be the run's (:func:`check_env_matches`; another id
     with the same spaces only with ``other_env``). ValueErrors name the file and what is wrong: a
     damaged ``run.json``, a model saved by another algo than it says, missing statistics."""
-    from agents.baselines import model_class
-
     files = run_files(path)
     meta = files.meta
     from agents.baselines import ALGOS
@@ -234,7 +183,7 @@ def load_run(path: str | Path, *, env: gym.Env | VecEnv | None = None, other_env
     kwargs: dict[str, Any] = {}
     if meta["algo"] == "her-sac":
         kwargs["env"] = env if env is not None else DummyVecEnv([lambda: make_env(meta)])
-    model = model_class(meta["algo"]).load(str(files.model), device="cpu", **kwargs)
+    model = load_model(meta["algo"], files.model, env=kwargs.get("env"))
     # runs from before run.json said so: every algo but HER trained on normalised observations
     required = bool(meta.get("normalized_observations", meta["algo"] != "her-sac"))
     return LoadedRun(files, meta, model, load_stats(files.vecnormalize, required=required))

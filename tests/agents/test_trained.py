@@ -1,4 +1,4 @@
-"""The trained baselines shipped in agents/trained/: each loads and runs, its card agrees with its
+"""The trained baselines shipped in softgrasp_env/policies/trained/: each loads and runs, its card agrees with its
 files, the set covers the headline (soft vs rigid, PPO and SAC, 3 seeds each, HER+SAC on the goal
 id; for v2, the carry test, and v1 without it), and (slow) each reaches the success rate on its card again."""
 
@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,6 +16,7 @@ from agents.evaluate import evaluate
 from agents.runs import load_run, make_env, saved_algo
 from tests.helpers import run_episode
 
+ROOT = Path(__file__).resolve().parents[2]
 MODELS = cards.shipped()
 CARD_KEYS = {"name", "env", "env_version", "env_kwargs", "algo", "hyperparameters_file", "hyperparameters",
              "timesteps", "seed", "train_seconds", "command", "evaluation", "versions", "machine"}  # fmt: skip
@@ -46,7 +48,7 @@ def test_card_agrees_with_the_files(model_dir):
         meta["env"], meta["algo"], meta["seed"], meta.get("env_kwargs", {}))  # fmt: skip
     assert card["env"].endswith(f"-v{card['env_version']}")
     assert saved_algo(model_dir / "model.zip") == ("sac" if card["algo"] == "her-sac" else card["algo"])
-    assert (cards.TRAINED.parents[1] / card["hyperparameters_file"]).is_file()
+    assert (ROOT / card["hyperparameters_file"]).is_file()
     ev = card["evaluation"]
     assert ev["episodes"] == cards.EPISODES and ev["seeds"] == f"{cards.SEED}-{cards.SEED + cards.EPISODES - 1}"
     assert 0.0 <= ev["success_rate"] <= 1.0
