@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# One-command setup: a venv in .venv with softgrasp_env (editable) and its test tools.
-# torch is pinned to the CPU build first, so no CUDA build is downloaded.
+# One-command setup: a venv in .venv with softgrasp_env (editable), every extra but Ray and the
+# test tools. torch is pinned to the CPU build first, so no CUDA build is downloaded (the [train]
+# extra's torch range admits 2.13.0, so pip keeps it).
 #   ./scripts/setup.sh            the main venv (.venv): everything but Ray
 #   ./scripts/setup.sh --rllib    also .venv-rllib: the same package with Ray RLlib (the [rllib] extra).
 #                                 RLlib pins its own gymnasium (1.2.2 for Ray 2.60.0), older than the
@@ -20,14 +21,13 @@ make_venv() {  # make_venv DIR EXTRAS
     "$1/bin/python" -m pip install -q "torch==2.13.0"
     "$1/bin/python" -m pip install -q -e ".[$2]"
 }
-make_venv .venv test
+make_venv .venv "train,plots,video,offline,test"
 # numba compiles the solver's kernels on first use (about half a minute) and caches them on disk:
 # do it now, so that the first demo, test or training run starts at once.
-echo "compiling the solver's kernels (first time only, about half a minute)..."
-.venv/bin/python -c "from softgrasp_env.scene import GraspScene; s = GraspScene(); s.world.step(); s.world.penetration(); s.close()"
+.venv/bin/python -m softgrasp_env.compile
 if [ "$rllib" = 1 ]; then
-    make_venv .venv-rllib "test,rllib"
-    .venv-rllib/bin/python -c "from softgrasp_env.scene import GraspScene; s = GraspScene(); s.world.step(); s.close()"
+    make_venv .venv-rllib "train,test,rllib"
+    .venv-rllib/bin/python -m softgrasp_env.compile
     echo "RLlib venv done: .venv-rllib/bin/python -m agents.rllib_train --help"
 fi
 echo "setup done: activate with 'source .venv/bin/activate'"

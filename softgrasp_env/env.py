@@ -15,6 +15,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from ._jit_cache import ensure_compiled
 from .arguments import EnvArguments, argument_table
 from .observation import CARRY_OBS_NAMES, OBS_NAMES, Reading, read
 from .scene import GraspScene
@@ -180,6 +181,9 @@ class SoftGraspEnv(gym.Env):
         self._reset_record: tuple[dict, dict] | None = None
         self._actions: list[np.ndarray] = []
         self._episode_over, self._divergence = False, None
+        # A cold numba cache compiles here, with a line before and after, not silently in the
+        # first reset and step (half a minute); a warm one costs a scene build, once per process.
+        ensure_compiled(args.scene)
 
     def _make_task(self, args: EnvArguments):
         return args.make_task()

@@ -1,0 +1,78 @@
+"""Compile the solver's kernels ahead of time (numba caches them on disk), so that the first
+``gym.make`` after an install starts at once:
+
+    python -m softgrasp_env.compile            # or: softgrasp-compile
+    python -m softgrasp_env.compile --report   # every kernel compiled, its time and signature
+
+Run it once after ``pip install`` (``scripts/setup.sh`` does). A cold cache takes about half a
+minute on 2 cores; a warm one a fraction of a second. ``NUMBA_CACHE_DIR`` moves numba's cache (by
+default it sits beside the package's sources, in ``__pycache__``). ``--report`` lists what was
+compiled in this run only: with a warm cache, nothing (clear the cache or point ``NUMBA_CACHE_DIR``
+at an empty folder to measure a cold one).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections import defaultdict
+
+from ._jit_cache import Compiled, install_reporter, reporting
+
+KINDS = ("tissue", "rigid")
+"""The finger kinds of the registered ids; every other kind uses a subset of their kernels (the
+segmented and FEM fingers need only the rigid kind's scatter kernel)."""
+
+
+def warm(kinds: tuple[str, ...] = KINDS) -> list[Compiled]:
+    """Build a scene of each finger kind and step it once, and measure the tissue's penetration:
+    every kernel the envs and the accuracy checks run is compiled or loaded. Returns what was
+    compiled (cache misses)."""
+    from .scene import GraspScene, SceneConfig
+
+    install_reporter()
+    with reporting() as done:
+        for kind in kinds:
+            scene = GraspScene(SceneConfig(fingers=kind))
+            try:
+                scene.world.step()
+                scene.world.penetration()
+            finally:
+                scene.close()
+    return done
+
+
+def report(done: list[Compiled]) -> str:
+    """A table of the compiled kernels: calls from Python (depth 0) and the callees compiled inside
+    them, with their signatures counted (more than one: a specialisation that could be shared)."""
+    by_name: dict[str, list[Compiled]] = defaultdict(list)
+    for c in done:
+        by_name[c.name].append(c)
+    rows = sorted(by_name.items(), key=lambda kv: -sum(c.seconds for c in kv[1]))
+    lines = [f"{'seconds':>8}  {'signatures':>10}  {'depth':>5}  kernel"]
+    for name, cs in rows:
+        depths = ",".join(str(d) for d in sorted({c.depth for c in cs}))
+        lines.append(f"{sum(c.seconds for c in cs):8.2f}  {len(cs):10d}  {depths:>5}  {name}")
+    top = sum(c.seconds for c in done if c.depth == 0)
+    lines.append(f"{top:8.2f}  in all (depth 0: each nested compile is inside its caller's time)")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m softgrasp_env.compile", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+    parser.add_argument("--report", action="store_true", help="list every kernel compiled, with its time")
+    ns = parser.parse_args(argv)
+    tic = time.perf_counter()
+    done = warm()
+    seconds = time.perf_counter() - tic
+    if not any(c.depth == 0 for c in done):
+        print(f"the solver's kernels are compiled (loaded from numba's cache in {seconds:.1f} s)")
+    if ns.report:
+        print(report(done) if done else "nothing was compiled in this run (the cache was warm)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
