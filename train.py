@@ -5,6 +5,7 @@
     python train.py --env SoftGraspRigid-v2 --algo ppo --n-envs 2
     python train.py --env SoftGrasp-v2 --env-kwargs cylinder_mass=0.2 fingers="'segmented'"
     python train.py --resume runs/SoftGrasp-v2_sac_0 --timesteps 50000   # 50k more steps
+    python train.py --env SoftGrasp-v2 --force       # start runs/SoftGrasp-v2_sac_0 anew (deletes the old run)
 
 Writes ``<out>/<env>_<algo>_<seed>/``: ``model.zip``, ``vecnormalize.pkl`` (observation statistics,
 except for HER), ``replay_buffer.pkl`` (off-policy algos, for --resume), ``run.json`` (the
@@ -14,14 +15,20 @@ wall time), ``logs/`` (SB3's logger: ``progress.csv`` and tensorboard events wit
 ``rollout/success_rate`` of the training episodes and ``eval/*``; a resumed session writes
 ``progress_from_<N>.csv`` and adds events) and, with ``--checkpoint-every``, ``checkpoints/``.
 Evaluate a saved model with ``python -m agents.evaluate --policy <dir>`` (same env, same kwargs).
+An existing run directory is never overwritten: ``--resume`` continues it, ``--force`` deletes it
+and starts again. ``--algo-kwargs`` are checked against the algorithm's keywords before anything is
+written.
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import difflib
+import inspect
 import json
 import os
+import shutil
 import sys
 import time
 from pathlib import Path
@@ -41,7 +48,7 @@ from agents.cards import hyperparameters, quote_arg
 from agents.cli import kwargs_dict as _kwargs_dict
 from agents.cli import parse_kwarg
 from agents.evaluate import evaluate
-from agents.runs import CHECKPOINT_PREFIX, deterministic_policy, make_env, run_files
+from agents.runs import CHECKPOINT_PREFIX, deterministic_policy, load_model, make_env, run_files
 
 
 def _log(message: str) -> None:
@@ -146,9 +153,12 @@ def make_logger(folder: Path, csv_name: str) -> sb3_logger.Logger:
     return sb3_logger.Logger(folder=str(folder), output_formats=formats)
 
 
-def _unwritable(run: Path) -> str | None:
+def _unwritable(run: Path, *, replacing: bool = False) -> str | None:
     """Why the run directory ``run`` cannot be made and written to, or ``None``: checked before
-    anything is built, so a bad ``--out`` costs no training."""
+    anything is built, so a bad ``--out`` costs no training. ``replacing``: ``run`` is deleted
+    first (``--force``), so only its parent must be writable."""
+    if replacing:
+        run = run.parent / (run.name + ".replaced")  # what matters is the folder it is made in
     for name in ("model.zip", "vecnormalize.pkl", "run.json"):
         if (run / name).is_dir():
             return f"{str(run / name)!r} is a directory: the run's {name} cannot be saved there"
@@ -159,6 +169,31 @@ def _unwritable(run: Path) -> str | None:
         return f"--out: {str(parent)!r} is a file, so {str(run)!r} cannot be made"
     if not os.access(parent, os.W_OK | os.X_OK):
         return f"--out: {str(parent)!r} is not writable, so {str(run)!r} cannot be made"
+    return None
+
+
+SET_BY_TRAIN = {"env": "the env is --env's", "seed": "use --seed", "device": "train.py trains on the CPU",
+                "verbose": "train.py logs through SB3's logger"}  # fmt: skip
+"""Keywords of the SB3 classes that train.py sets itself, and what to use instead."""
+
+
+def algo_kwargs_error(algo: str, algo_kwargs: dict) -> str | None:
+    """Why ``--algo-kwargs`` cannot build a model of ``algo``, or None: every key must be a keyword
+    of the SB3 class (PPO for ppo, SAC for sac and her-sac) that train.py does not set itself.
+    Checked before anything is built or written, so a typo costs nothing (it used to surface as
+    SB3's traceback after run.json and the monitor files were written)."""
+    cls = model_class(algo)
+    params = [n for n, prm in inspect.signature(cls.__init__).parameters.items()
+              if n != "self" and prm.kind in (prm.POSITIONAL_OR_KEYWORD, prm.KEYWORD_ONLY)]  # fmt: skip
+    valid = sorted(n for n in params if n not in SET_BY_TRAIN)
+    for key in algo_kwargs:
+        if key in SET_BY_TRAIN:
+            return f"--algo-kwargs: {key!r} is set by train.py ({SET_BY_TRAIN[key]})"
+        if key not in params:
+            near = difflib.get_close_matches(key, valid, n=1)
+            hint = f" (did you mean {near[0]!r}?)" if near else ""
+            return (f"--algo-kwargs: {key!r} is not a keyword of {cls.__name__} ({algo}){hint}; "
+                    f"valid: {', '.join(valid)}")  # fmt: skip
     return None
 
 
@@ -192,6 +227,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="continue the run at PATH (its directory, model.zip or a checkpoint zip): model, "
                              "replay buffer and observation statistics, with its settings, writing back into that run "
                              "directory (--out is not used); the timestep count goes on")  # fmt: skip
+    parser.add_argument("--force", action="store_true",
+                        help="start a new run even if its directory exists: the old run there is deleted first "
+                             "(without --force an existing run directory is an error)")  # fmt: skip
     parser.add_argument("--no-progress", action="store_true", help="no progress bar (CI, log files)")
     parser.add_argument("--out", type=Path, default=Path("runs"))
     ns = parser.parse_args(argv)
@@ -235,6 +273,19 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--algo her-sac needs the goal-conditioned env (SoftGraspGoal-v1)")
     if algo == "her-sac" and n_envs != 1:
         parser.error("--algo her-sac runs with --n-envs 1")
+    if files is None:
+        problem = algo_kwargs_error(algo, algo_kwargs)
+        if problem:
+            parser.error(problem)
+        if ns.force and ns.resume is not None:
+            parser.error("--force starts a run anew; --resume continues one: give one of them")
+        if run.exists() and not run.is_dir():
+            parser.error(f"{str(run)!r} is a file, not a run directory")
+        if run.exists() and any(run.iterdir()) and not ns.force:
+            parser.error(f"{str(run)!r} exists already: continue it with --resume {run}, start it anew with --force "
+                         "(deletes it), or give another --seed or --out")  # fmt: skip
+    elif ns.force:
+        parser.error("--force starts a run anew; --resume continues one: give one of them")
 
     # The evaluation env is made first, in this process: a bad --env-kwargs fails here with the
     # env's own message (naming the key) rather than inside a subprocess, and before any file is written.
@@ -244,10 +295,14 @@ def main(argv: list[str] | None = None) -> int:
         if not env_kwargs:
             raise
         parser.error(f"--env-kwargs {env_kwargs}: {exc}")
-    problem = _unwritable(run)
+    replacing = files is None and ns.force and run.is_dir()
+    problem = _unwritable(run, replacing=replacing)
     if problem:
         eval_env.close()
         parser.error(problem)
+    if replacing:
+        shutil.rmtree(run)  # the old run, replaced as --force asked
+    fresh = not run.exists()  # made by this call: removed again if the model cannot be built
     run.mkdir(parents=True, exist_ok=True)
     if files is None:
         (run / "run.json").write_text(json.dumps(meta, indent=2))
@@ -273,7 +328,14 @@ def main(argv: list[str] | None = None) -> int:
         overrides = dict(algo_kwargs)
         if ns.learning_starts is not None and algo != "ppo":
             overrides["learning_starts"] = ns.learning_starts
-        model = make_model(algo, venv, seed=seed, **overrides)
+        try:
+            model = make_model(algo, venv, seed=seed, **overrides)
+        except (TypeError, ValueError, AssertionError) as exc:  # a value SB3 refuses (the keys are checked)
+            venv.close()
+            eval_env.close()
+            if fresh:
+                shutil.rmtree(run, ignore_errors=True)
+            parser.error(f"--algo-kwargs {algo_kwargs}: {algo} cannot be built with them: {type(exc).__name__}: {exc}")
         meta["hyperparameters"] = hyperparameters(meta)  # the preset as it stands, with the overrides
         start = 0
     else:
@@ -284,7 +346,7 @@ def main(argv: list[str] | None = None) -> int:
                 )
             venv = norm = VecNormalize.load(str(files.vecnormalize), venv)
             norm.training, norm.norm_reward = True, False
-        model = model_class(algo).load(str(files.model), env=venv, device="cpu")
+        model = load_model(algo, files.model, env=venv)
         start = model.num_timesteps
         if isinstance(model, OffPolicyAlgorithm):
             if files.replay_buffer.exists():

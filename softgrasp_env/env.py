@@ -17,12 +17,33 @@ from gymnasium import spaces
 
 from ._jit_cache import ensure_compiled
 from .arguments import EnvArguments, argument_table
-from .observation import CARRY_OBS_NAMES, OBS_NAMES, Reading, read
+from .observation import CARRY_OBS_NAMES, OBS_GROUPS, OBS_NAMES, Reading, read
 from .scene import GraspScene
 from .sim.world import SimulationDiverged
 from .tasks import GoalTask, Outcome, check_option
 from .tasks.goal import DISTANCE_THRESHOLD, GOAL_HEIGHT_RANGE
 from .validation import check_range
+
+
+OBS_BOUNDS: dict[str, tuple[float, float]] = {
+    "cyl_axis": (-1.0, 1.0),  # a unit vector's components, from a unit quaternion
+    "force": (0.0, np.inf),  # normal forces only push (pybullet's normalForce, the tissue's lambda >= 0)
+    "gripper_yaw": (-np.pi, np.pi),  # atan2
+    "time": (0.0, np.inf),
+}
+"""The observation groups whose bounds hold whatever happens; every other entry is unbounded.
+Not bounded though they look it: ``finger_gap`` (pybullet's joint limits are soft: 1.2e-8 m past
+fully open was measured, so ``[0, 2 * finger_max_opening]`` would not contain every observation),
+``lift`` (a cylinder pushed into the ground goes below its resting height), the grip point and the
+cylinder (the arm's target is kept in the workspace, the palm and a thrown cylinder are not)."""
+
+
+def observation_box(names: tuple[str, ...]) -> spaces.Box:
+    """The Box of an observation of ``names``: the bounds of :data:`OBS_BOUNDS`, else infinite."""
+    group_of = {n: g for g, members in OBS_GROUPS.items() for n in members}
+    low = np.array([OBS_BOUNDS.get(group_of[n], (-np.inf, np.inf))[0] for n in names])
+    high = np.array([OBS_BOUNDS.get(group_of[n], (-np.inf, np.inf))[1] for n in names])
+    return spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
 
 
 def _display_available() -> bool:
@@ -65,9 +86,11 @@ class SoftGraspEnv(gym.Env):
     ``TypeError``.
 
     ## Observation space
-    ``Box(-inf, inf, (24,), float32)`` (23 without the carry test: the v1 ids), SI units, world
+    ``Box(low, high, (24,), float32)`` (23 without the carry test: the v1 ids), SI units, world
     frame (z up); ``env.obs_names`` names the entries, ``softgrasp_env.observation.obs_slice``
-    finds a group:
+    finds a group. The bounds are finite where they hold whatever happens - the cylinder axis in
+    [-1, 1], the forces and the time at least 0, the yaw in [-π, π] - and infinite elsewhere
+    (``softgrasp_env.env.OBS_BOUNDS`` says why the others are not bounded):
 
     | index | name | meaning |
     |---|---|---|
@@ -173,7 +196,7 @@ class SoftGraspEnv(gym.Env):
         modes = [m for m in type(self).metadata["render_modes"] if m != "human" or _display_available()]
         self.metadata = {**type(self).metadata, "render_modes": modes, "render_fps": self.control_frequency}
         self.action_space = spaces.Box(-1.0, 1.0, shape=(4,), dtype=np.float32)
-        self.observation_space = spaces.Box(-np.inf, np.inf, shape=(len(self.obs_names),), dtype=np.float32)
+        self.observation_space = observation_box(self.obs_names)
         self.scene: GraspScene | None = None
         self._renderer = None
         self._forces = np.zeros(2)
@@ -379,7 +402,7 @@ class SoftGraspGoalEnv(SoftGraspEnv):
         self._init_kwargs = {"render_mode": render_mode, **self._goal_kwargs, **kwargs}
         box = spaces.Box(-np.inf, np.inf, shape=(3,), dtype=np.float32)
         self.observation_space = spaces.Dict({
-            "observation": spaces.Box(-np.inf, np.inf, shape=(len(OBS_NAMES),), dtype=np.float32),
+            "observation": observation_box(OBS_NAMES),
             "achieved_goal": box,
             "desired_goal": box,
         })  # fmt: skip
@@ -408,4 +431,4 @@ class SoftGraspGoalEnv(SoftGraspEnv):
 
 SoftGraspEnv.__doc__ = SoftGraspEnv.__doc__.replace("<arguments>", argument_table().replace("\n", "\n    "))
 
-__all__ = ["CARRY_OBS_NAMES", "OBS_NAMES", "SoftGraspEnv", "SoftGraspGoalEnv"]
+__all__ = ["CARRY_OBS_NAMES", "OBS_BOUNDS", "OBS_NAMES", "SoftGraspEnv", "SoftGraspGoalEnv", "observation_box"]

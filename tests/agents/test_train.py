@@ -9,6 +9,7 @@ import contextlib
 import csv
 import functools
 import json
+import re
 import shutil
 
 import numpy as np
@@ -277,7 +278,7 @@ def test_train_checks_its_output_before_training(tmp_path, capsys):
     (tmp_path / "runs" / f"{ENV}_ppo_0" / "model.zip").mkdir(parents=True)
     with pytest.raises(SystemExit):
         train.main([*TINY_PPO, "--out", str(tmp_path / "runs")])
-    assert "model.zip' is a directory" in capsys.readouterr().err
+    assert "exists already" in capsys.readouterr().err  # a run directory with anything in it is kept
     assert not (tmp_path / "runs" / f"{ENV}_ppo_0" / "run.json").exists()  # nothing written
 
 
@@ -288,3 +289,45 @@ def test_two_subprocess_envs_train_and_report_the_steps_really_taken(tmp_path, c
     meta = json.loads((tmp_path / f"{ENV}_ppo_0" / "run.json").read_text())
     assert meta["n_envs"] == 2 and meta["num_timesteps"] == meta["timesteps_trained"] == 128
     assert "trained 128 steps" in capsys.readouterr().out
+
+
+def test_train_refuses_to_overwrite_a_run_unless_forced(tmp_path, capsys):
+    """The same arguments twice used to overwrite runs/<env>_<algo>_<seed> without a word."""
+    args = [*TINY_PPO, "--no-progress", "--out", str(tmp_path)]
+    assert train.main(args) == 0
+    run = tmp_path / f"{ENV}_ppo_0"
+    first = (run / "model.zip").read_bytes()
+    (run / "notes.txt").write_text("mine")
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as exc:
+        train.main(args)
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "exists already" in err and "--resume" in err and "--force" in err
+    assert (run / "model.zip").read_bytes() == first and (run / "notes.txt").exists()  # untouched
+    with pytest.raises(SystemExit):
+        train.main(["--resume", str(run), "--force", "--timesteps", "64"])
+    assert "give one of them" in capsys.readouterr().err
+    assert train.main([*args, "--force"]) == 0  # anew: the old run's files are gone
+    assert not (run / "notes.txt").exists() and json.loads((run / "run.json").read_text())["num_timesteps"] == 64
+
+
+def test_bad_algo_kwargs_are_named_before_anything_is_written(tmp_path, capsys):
+    """``learning_rat=1e-3`` used to end in SB3's traceback, with run.json and the monitor files
+    already written."""
+    base = ["--env", ENV, "--timesteps", "64", "--eval-every", "64", "--eval-episodes", "1", "--no-progress",
+            "--out", str(tmp_path)]  # fmt: skip
+    for extra, expect in ((["--algo", "sac", "--algo-kwargs", "learning_rat=1e-3"],
+                           r"'learning_rat' is not a keyword of SAC \(sac\) \(did you mean 'learning_rate'\?\); valid: "),
+                          (["--algo", "ppo", "--algo-kwargs", "learning_starts=10"], "not a keyword of PPO"),
+                          (["--algo", "ppo", "--algo-kwargs", "seed=3"], r"'seed' is set by train.py \(use --seed\)"),
+                          (["--algo", "ppo", "--algo-kwargs", "n_steps=64", "batch_size=-5"], "ppo cannot be built"),
+                          ):  # fmt: skip
+        with pytest.raises(SystemExit) as exc:
+            train.main([*base, *extra])
+        assert exc.value.code == 2
+        err = capsys.readouterr().err
+        assert re.search(expect, err), err
+        if "valid: " in expect:
+            assert "batch_size" in err and "learning_rate" in err  # the valid keys are listed
+        assert not any(tmp_path.iterdir()), list(tmp_path.iterdir())  # nothing written
