@@ -95,6 +95,14 @@ class EnvArguments:
     cylinder_mass_range: float = _arg(0.0, "Cylinder mass × U(1 ± range)", type_="float")
     render_width: int = _arg(480, "Width of an rgb_array frame [px]", type_="int")
     render_height: int = _arg(360, "Height of an rgb_array frame [px]", type_="int")
+    render_camera: str = _arg("follow", "'follow' (frame the gripper and the cylinder wherever they are) or "
+        "'fixed' (look at the cylinder's start, so a video shows the lift as motion)", type_="str")
+    camera_distance: float | None = _arg(None, "Camera distance from its target [m] (None: follow fits the "
+        "bodies in the frame, fixed 0.55)", type_="float")
+    camera_yaw: float = _arg(35.0, "Camera yaw about the vertical [deg]", type_="float")
+    camera_pitch: float = _arg(-25.0, "Camera pitch [deg], negative looking down", type_="float")
+    camera_target: tuple[float, float, float] | None = _arg(None, "The point the camera looks at [m] (None: "
+        "follow aims at the bodies, fixed at the cylinder's start 12 cm up)", type_="(float, float, float)")
 
     # --- derived in __post_init__ ------------------------------------------------------------------
     start: type = field(init=False, repr=False, compare=False)
@@ -155,9 +163,26 @@ class EnvArguments:
         check_range("cylinder_mass_range", self.cylinder_mass_range, 0.0, 0.9)
         check_int("render_width", self.render_width, 16, 4096)
         check_int("render_height", self.render_height, 16, 4096)
+        self._check_camera()
         self._derive_physics()
         self._derive_scene()
         self._check_range_corners()
+
+    def _check_camera(self) -> None:
+        check_choice("render_camera", self.render_camera, ("follow", "fixed"))
+        if self.camera_distance is not None:
+            check_range("camera_distance", self.camera_distance, 0.05, 3.0)
+        check_range("camera_yaw", self.camera_yaw, -360.0, 360.0)
+        check_range("camera_pitch", self.camera_pitch, -89.0, 89.0)
+        if self.camera_target is not None:
+            try:
+                target = tuple(float(v) for v in self.camera_target)
+            except (TypeError, ValueError):
+                raise ValueError(f"camera_target must be (x, y, z) in m or None, got {self.camera_target!r}") from None
+            if len(target) != 3 or not all(math.isfinite(v) and abs(v) <= 1.0 for v in target):
+                raise ValueError(f"camera_target must be (x, y, z) with each within 1 m of the origin, "
+                                 f"got {self.camera_target!r}")  # fmt: skip
+            object.__setattr__(self, "camera_target", target)
 
     def _set(self, name: str, value: Any) -> None:
         object.__setattr__(self, name, value)

@@ -152,9 +152,14 @@ class SoftGraspEnv(gym.Env):
 
     ## Rendering
     ``render_mode="rgb_array"`` draws the scene with pybullet's CPU renderer in a viewer server of
-    its own (every finger kind's bodies: cores, tissue particles, segments, FEM pad nodes),
-    headless; ``render_mode="human"`` runs the simulation in the pybullet GUI (needs a display;
-    without one it is a ``ValueError`` and ``metadata["render_modes"]`` lists only ``rgb_array``).
+    its own (every finger kind's bodies: cores, tissue particles, segments, FEM pad nodes), with
+    shadows, on a checkerboard ground of 5 cm squares, headless; ``render_mode="human"`` runs the
+    simulation in the pybullet GUI (needs a display; without one it is a ``ValueError`` and
+    ``metadata["render_modes"]`` lists only ``rgb_array``). The camera follows the gripper and the
+    cylinder (``render_camera="follow"``) or looks at the cylinder's start (``"fixed"``);
+    ``camera_distance``, ``camera_yaw``, ``camera_pitch`` and ``camera_target`` set it.
+    ``gymnasium.wrappers.RecordVideo`` writes videos of ``rgb_array`` frames with moviepy (the
+    ``[video]`` extra).
 
     ## Determinism and copies
     Reset rebuilds the simulation (pybullet's restoreState is not bit-exact), so two envs with the
@@ -257,11 +262,13 @@ class SoftGraspEnv(gym.Env):
             return None
         if self.scene is None:
             raise RuntimeError("call reset() before render()")
-        from .render import SceneRenderer
+        from .render import Camera, SceneRenderer
 
         if self._renderer is None:
-            self._renderer = SceneRenderer(self.args.render_width, self.args.render_height,
-                                           human=self.render_mode == "human")  # fmt: skip
+            a = self.args
+            camera = Camera(a.render_camera, a.camera_distance, a.camera_yaw, a.camera_pitch, a.camera_target)
+            self._renderer = SceneRenderer(a.render_width, a.render_height, human=self.render_mode == "human",
+                                           camera=camera)  # fmt: skip
         return self._renderer.render(self.scene)
 
     def close(self) -> None:
