@@ -1,0 +1,77 @@
+"""The Minari datasets (offline RL): the shipped sample in datasets/minari loads with
+minari.load_dataset and holds what it says (observations of the env's space, actions in [-1, 1],
+the kept infos, an env that can be recovered), and scripts/make_dataset.py writes one that does."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+minari = pytest.importorskip("minari")  # the [offline] extra
+
+ROOT = Path(__file__).resolve().parents[1]
+SAMPLE = ROOT / "datasets" / "minari"
+IDS = [f"softgrasp/{env}/{policy}-v0" for env in ("SoftGrasp-v2", "SoftGraspRigid-v2") for policy in ("scripted", "learned")]
+
+
+@pytest.fixture
+def datasets_path(tmp_path, monkeypatch):
+    """An empty MINARI_DATASETS_PATH of the test's own (minari reads it at every call)."""
+    path = tmp_path / "datasets"
+    path.mkdir()
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(path))
+    return path
+
+
+def _check(dataset, env_id: str, episodes: int) -> list:
+    assert dataset.total_episodes == episodes
+    space = dataset.observation_space
+    assert space.shape == (24,)
+    eps = list(dataset.iterate_episodes())
+    for ep in eps:
+        n = len(ep.actions)
+        assert 1 <= n <= 100 and ep.observations.shape == (n + 1, 24) and ep.rewards.shape == (n,)
+        assert np.all(np.abs(ep.actions) <= 1.0)
+        assert all(space.contains(o) for o in ep.observations.astype(np.float32))
+        assert set(ep.infos) == {"is_success", "held", "carrying", "lift_height", "diverged"}
+        assert ep.terminations[-1] or ep.truncations[-1]
+    env = dataset.recover_environment()
+    try:
+        assert env.spec.id == env_id
+    finally:
+        env.close()
+    return eps
+
+
+@pytest.mark.parametrize("dataset_id", IDS)
+def test_the_shipped_sample_loads(dataset_id, datasets_path):
+    shutil.copytree(SAMPLE, datasets_path, dirs_exist_ok=True)
+    dataset = minari.load_dataset(dataset_id)
+    env_id = dataset_id.split("/")[1]
+    eps = _check(dataset, env_id, 3)
+    if dataset_id.endswith("SoftGrasp-v2/scripted-v0"):  # the scripted soft grasp succeeds every time
+        assert all(ep.infos["is_success"][-1] for ep in eps)
+    if "Rigid" in dataset_id:  # and no rigid grasp survives the carry
+        assert not any(ep.infos["is_success"][-1] for ep in eps)
+
+
+def test_the_script_writes_a_dataset_minari_loads(datasets_path, capsys):
+    from scripts import make_dataset
+
+    assert make_dataset.main(["--envs", "SoftGraspRigid-v2", "--policies", "scripted", "--episodes", "2"]) == 0
+    assert "softgrasp/SoftGraspRigid-v2/scripted-v0: 2 episodes" in capsys.readouterr().out
+    _check(minari.load_dataset("softgrasp/SoftGraspRigid-v2/scripted-v0"), "SoftGraspRigid-v2", 2)
+    with pytest.raises(SystemExit, match="exists; --force replaces it"):
+        make_dataset.main(["--envs", "SoftGraspRigid-v2", "--policies", "scripted", "--episodes", "1"])
+    assert make_dataset.main(["--envs", "SoftGraspRigid-v2", "--policies", "scripted", "--episodes", "1", "--force"]) == 0
+    assert minari.load_dataset("softgrasp/SoftGraspRigid-v2/scripted-v0").total_episodes == 1
+
+
+def test_the_learned_policy_is_the_best_shipped_baseline():
+    from scripts.make_dataset import best_baseline
+
+    assert best_baseline("SoftGrasp-v2") == "SoftGrasp-v2_sac_0"  # 85 % on its card
+    assert best_baseline("SoftGraspRigid-v2") == "SoftGraspRigid-v2_sac_2"  # 34 %
