@@ -1,11 +1,11 @@
 """Train a stable-baselines3 agent on a SoftGrasp environment.
 
-    python train.py --env SoftGrasp-v2 --algo sac --timesteps 100000
-    python train.py --env SoftGraspGoal-v1               # HER + SAC by default for the goal env
-    python train.py --env SoftGraspRigid-v2 --algo ppo --n-envs 2
-    python train.py --env SoftGrasp-v2 --env-kwargs cylinder_mass=0.2 fingers="'segmented'"
-    python train.py --resume runs/SoftGrasp-v2_sac_0 --timesteps 50000   # 50k more steps
-    python train.py --env SoftGrasp-v2 --force       # start runs/SoftGrasp-v2_sac_0 anew (deletes the old run)
+    python train.py --env SoftGrasp-v3 --algo sac --timesteps 100000
+    python train.py --env SoftGraspGoal-v3               # HER + SAC by default for the goal env
+    python train.py --env SoftGraspRigid-v3 --algo ppo --n-envs 2
+    python train.py --env SoftGrasp-v3 --env-kwargs cylinder_mass=0.2 fingers="'segmented'"
+    python train.py --resume runs/SoftGrasp-v3_sac_0 --timesteps 50000   # 50k more steps
+    python train.py --env SoftGrasp-v3 --force       # start runs/SoftGrasp-v3_sac_0 anew (deletes the old run)
 
 Writes ``<out>/<env>_<algo>_<seed>/``: ``model.zip``, ``vecnormalize.pkl`` (observation statistics,
 except for HER), ``replay_buffer.pkl`` (off-policy algos, for --resume), ``run.json`` (the
@@ -200,7 +200,7 @@ def algo_kwargs_error(algo: str, algo_kwargs: dict) -> str | None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python train.py", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
-    parser.add_argument("--env", default=None, choices=softgrasp_env.ENV_IDS, help="default: SoftGrasp-v2")
+    parser.add_argument("--env", default=None, choices=softgrasp_env.ENV_IDS, help="default: SoftGrasp-v3")
     parser.add_argument("--env-kwargs", nargs="+", type=parse_kwarg, default=None, metavar="KEY=VALUE",
                         help="keyword arguments of gym.make (values as Python literals, else strings), "
                              "recorded in run.json; e.g. cylinder_mass=0.2 fingers=rigid")  # fmt: skip
@@ -257,7 +257,7 @@ def main(argv: list[str] | None = None) -> int:
         env_kwargs, algo_kwargs = meta.get("env_kwargs", {}), meta.get("algo_kwargs", {})
         run = files.run_dir
     else:
-        env_id = ns.env or "SoftGrasp-v2"
+        env_id = ns.env or "SoftGrasp-v3"
         algo = ns.algo or default_algo(env_id)
         n_envs = ns.n_envs or 1
         seed = 0 if ns.seed is None else ns.seed
@@ -265,12 +265,12 @@ def main(argv: list[str] | None = None) -> int:
                 "n_envs": n_envs, "timesteps": ns.timesteps, "eval_every": ns.eval_every,
                 "eval_episodes": ns.eval_episodes, "learning_starts": ns.learning_starts,
                 "checkpoint_every": ns.checkpoint_every, "out": str(ns.out),
-                "normalized_observations": env_id != "SoftGraspGoal-v1",  # the goal env runs raw (HER)
+                "normalized_observations": default_algo(env_id) != "her-sac",  # the goal env runs raw (HER)
                 "softgrasp_env": softgrasp_env.__version__}  # fmt: skip
         run = ns.out / f"{env_id}_{algo}_{seed}"
-    goal = env_id == "SoftGraspGoal-v1"
+    goal = default_algo(env_id) == "her-sac"  # the goal-conditioned ids
     if algo == "her-sac" and not goal:
-        parser.error("--algo her-sac needs the goal-conditioned env (SoftGraspGoal-v1)")
+        parser.error("--algo her-sac needs a goal-conditioned env (SoftGraspGoal-v3 or -v1)")
     if algo == "her-sac" and n_envs != 1:
         parser.error("--algo her-sac runs with --n-envs 1")
     if files is None:

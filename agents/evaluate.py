@@ -1,9 +1,9 @@
 """Evaluate a policy on a SoftGrasp environment: success rate, return, lift.
 
-    python -m agents.evaluate --env SoftGrasp-v2 --policy scripted --episodes 20
-    python -m agents.evaluate --policy runs/SoftGrasp-v2_sac_0       # the run's env, kwargs and stats
-    python -m agents.evaluate --policy SoftGrasp-v2_sac_0            # a shipped baseline, by name
-    .venv-rllib/bin/python -m agents.evaluate --policy runs-rllib/SoftGrasp-v2_rllib-ppo/seed_0   # an RLlib trial
+    python -m agents.evaluate --env SoftGrasp-v3 --policy scripted --episodes 20
+    python -m agents.evaluate --policy runs/SoftGrasp-v3_sac_0       # the run's env, kwargs and stats
+    python -m agents.evaluate --policy SoftGrasp-v2_sac_0            # a shipped baseline, by name (the v2 baselines)
+    .venv-rllib/bin/python -m agents.evaluate --policy runs-rllib/SoftGrasp-v3_rllib-ppo/seed_0   # an RLlib trial
 
 Episodes use seeds ``seed, seed + 1, ...`` so two policies meet the same starts.
 """
@@ -20,7 +20,7 @@ import numpy as np
 
 import softgrasp_env
 
-DEFAULT_ENV = "SoftGrasp-v2"
+DEFAULT_ENV = "SoftGrasp-v3"
 """The env of ``--policy scripted`` / ``random`` without ``--env``."""
 
 
@@ -120,7 +120,7 @@ def load_policy(spec: str, env: gym.Env, *, other_env: bool = False) -> Callable
     if spec == "scripted":
         from softgrasp_env.policies import ScriptedGraspPolicy
 
-        return ScriptedGraspPolicy()
+        return ScriptedGraspPolicy.for_env(env)
     if spec == "random":
         return lambda obs: env.action_space.sample()
     from agents.rllib_policy import is_rllib_run, load_rllib_policy
@@ -145,7 +145,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=1000)
     parser.add_argument("--other-env", action="store_true",
                         help="allow --env to differ from the run's env (same spaces), e.g. a soft-trained policy "
-                             "on SoftGraspRigid-v2")  # fmt: skip
+                             "on SoftGraspRigid-v3")  # fmt: skip
     ns = parser.parse_args(argv)
     env = None
     try:

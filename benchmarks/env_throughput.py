@@ -22,9 +22,9 @@ from agents.scripted import ScriptedGraspPolicy
 
 def env_steps_per_second(env_id: str, steps: int, *, scripted: bool, repeats: int = 3) -> float:
     best = 0.0
-    policy = ScriptedGraspPolicy()
     for r in range(repeats):
         env = gym.make(env_id)
+        policy = ScriptedGraspPolicy.for_env(env)
         env.action_space.seed(r)
         obs, _ = env.reset(seed=r)
         env.step(env.action_space.sample())  # anything left to compile or load

@@ -93,10 +93,10 @@ def grid(make: dict, rows: tuple[str, list[float]], cols: tuple[str, list[float]
                     env.close()
                 key = repr(kwargs)
                 try:  # the physics map: fingers start around the cylinder
-                    env = gym.make("SoftGraspEasy-v1", **kwargs)
+                    env = gym.make("SoftGraspEasy-v3", **kwargs)
                 except ValueError:  # outside what this method accepts
                     env = None
-            out[i, j] = -2 if env is None else episode(env, cell, ScriptedGraspPolicy())
+            out[i, j] = -2 if env is None else episode(env, cell, ScriptedGraspPolicy.for_env(env))
     if env is not None:
         env.close()
     return out

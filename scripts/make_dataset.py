@@ -79,8 +79,9 @@ def record(env_id: str, policy_name: str, *, episodes: int, seed: int, force: bo
         if not force:
             raise SystemExit(f"make_dataset.py: error: {dataset_id!r} exists; --force replaces it")
         minari.delete_dataset(dataset_id)
+    env = gym.make(env_id)
     if policy_name == "scripted":
-        act, algorithm = ScriptedGraspPolicy(), "ScriptedGraspPolicy (softgrasp_env.policies)"
+        act, algorithm = ScriptedGraspPolicy.for_env(env), "ScriptedGraspPolicy (softgrasp_env.policies)"
         about = "the scripted grasp, which reads only the observation"
     else:
         from softgrasp_env.policies import load_baseline
@@ -89,7 +90,6 @@ def record(env_id: str, policy_name: str, *, episodes: int, seed: int, force: bo
         act, algorithm = load_baseline(name).policy, f"{name} (softgrasp_env.policies.load_baseline, deterministic)"
         rate = baseline_card(name)["evaluation"]["success_rate"]
         about = f"the shipped baseline {name} ({rate:.0%} success on its card), deterministic"
-    env = gym.make(env_id)
     buffers, successes = [], 0
     try:
         for k in range(episodes):

@@ -29,7 +29,7 @@ def episode_frames(env_id: str, seed: int, every: int, size: tuple[int, int], ca
     """Frames of one scripted episode as (image, info, terminated, time [s]): the reset's and
     every ``every``-th step's, the last one always; and the last info."""
     env = gym.make(env_id, render_mode="rgb_array", render_width=size[0], render_height=size[1], **camera)
-    policy = ScriptedGraspPolicy()
+    policy = ScriptedGraspPolicy.for_env(env)
     try:
         obs, info = env.reset(seed=seed)
         rate = env.unwrapped.control_frequency

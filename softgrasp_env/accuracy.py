@@ -120,6 +120,12 @@ def _min_jerk(u: float) -> float:
     return u * u * u * (10.0 + u * (-15.0 + 6.0 * u))
 
 
+def _min_jerk_rate(u: float) -> float:
+    """d/du of the minimum-jerk profile: 30 u^2 (1 - u)^2."""
+    u = min(max(u, 0.0), 1.0)
+    return 30.0 * u * u * (1.0 - u) * (1.0 - u)
+
+
 def _relative_pose(scene: GraspScene) -> tuple[np.ndarray, np.ndarray]:
     """Cylinder pose in the palm's frame (position [m], quaternion [x, y, z, w])."""
     c = scene.client
@@ -171,14 +177,20 @@ def run_grasp(
             lift_slip = float(np.linalg.norm(hold0[0] - rel0[0]))
         for k in range(n):
             if phase == "approach":
-                # reach the grasp height at 80 % of the phase, then settle
-                control = replace(control, palm_target=start + (grasp - start) * min(1.0, (k / n) * 1.25))
+                # reach the grasp height at 80 % of the phase, then settle (the path's own velocity
+                # goes with it, so the arm follows without lag)
+                u = (k / n) * 1.25
+                velocity = (grasp - start) * (1.25 / (n * dt)) if u < 1.0 else np.zeros(3)
+                control = replace(control, palm_target=start + (grasp - start) * min(1.0, u), palm_velocity=velocity)
             elif phase == "squeeze":
-                control = replace(control, finger_closing=close_to)
+                control = replace(control, finger_closing=close_to, palm_velocity=None)
             elif phase == "lift":
                 target = grasp.copy()
                 target[2] += plan.lift_distance * _min_jerk((k + 1) / n)
-                control = replace(control, palm_target=target)
+                velocity = np.array([0.0, 0.0, plan.lift_distance * _min_jerk_rate((k + 1) / n) / (n * dt)])
+                control = replace(control, palm_target=target, palm_velocity=velocity)
+            elif phase == "hold" and control.palm_velocity is not None:
+                control = replace(control, palm_velocity=None)
             tic = time.perf_counter()
             scene.step(control)
             seconds += time.perf_counter() - tic

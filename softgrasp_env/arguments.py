@@ -21,7 +21,14 @@ from .fingers import FINGERS, FemConfig, FingerConfig, TissueFingerConfig, finge
 from .observation import CARRY_OBS_NAMES, OBS_NAMES
 from .scene import GRIP_TOP, GripperActions, SceneConfig, Workspace, fit_error, geometry_error
 from .tasks import TASKS, CarryTest, StartRanges, Task
-from .tasks.carry import CARRY_AMPLITUDE, CARRY_DURATION, CARRY_FREQUENCY, CARRY_START
+from .tasks.carry import (
+    CARRY_ACCELERATION_RANGE,
+    CARRY_DURATION,
+    CARRY_FREQUENCY_BAND,
+    CARRY_SLIDE_LIMIT,
+    CARRY_START,
+    sway_limits_error,
+)
 from .tasks.reach import APPROACH
 from .validation import check_bool, check_choice, check_int, check_range, check_type, deprecated
 
@@ -57,8 +64,14 @@ class EnvArguments:
     reward_type: str = _arg("dense", "'dense' (lift + reach) or 'sparse' (1 while held)", type_="str")
     control_frequency: float = _arg(20.0, "Env steps per second [Hz]; must divide the physics rate 1 / sim.dt",
                                     type_="float")
-    gripper_speed: float = _arg(0.15, "Arm speed at full action [m/s], at most 2 and at most 1/120 m per physics "
+    arm: str = _arg("smooth", "'smooth' (v3: the action's x, y, z are the palm's velocity, followed along a speed- "
+        "and acceleration-limited path) or 'jump' (v1/v2: they move the arm's target, which the palm's constraint "
+        "chases, with kicks of 86 m/s² at each control step)", type_="str")
+    gripper_speed: float = _arg(0.15, "Arm speed at full action [m/s] (the smooth arm's speed limit; the jump arm "
+        "moves its target gripper_speed / control_frequency per step), at most 2 and at most 1/120 m per physics "
         "step (gripper_speed * sim.dt)", type_="float")
+    arm_acceleration: float = _arg(1.5, "arm='smooth': largest acceleration of the arm's path [m/s²]; the palm "
+        "starts and stops smoothly, the same at every dt", type_="float")
     particle_density: float | None = _arg(None, "Tissue particles per m² of core surface (None: the preset's, "
         "4,000); `tissue_density` before 0.3", type_="float")
     friction_static: float | None = _arg(None, "μ_s of the finger surface (None: the preset's, 0.9; the rigid "
@@ -79,9 +92,19 @@ class EnvArguments:
     carry: bool | None = _arg(None, "The carry test (None: on for task 'reach', off for 'easy')", type_="bool")
     carry_start: float = _arg(CARRY_START, "When the carry begins after reset [s]", type_="float")
     carry_duration: float = _arg(CARRY_DURATION, "How long the arm carries [s]", type_="float")
-    carry_amplitude: float = _arg(CARRY_AMPLITUDE, "Amplitude of the sideways sway [m]", type_="float")
-    carry_frequency: float = _arg(CARRY_FREQUENCY, "Frequency of the sway [Hz]; the sway may move the arm's "
-        "target at most 1/120 m per physics step", type_="float")
+    carry_frequency: float | tuple[float, float] = _arg(CARRY_FREQUENCY_BAND, "The sway's frequency [Hz], or a "
+        "(low, high) band drawn per episode (v3: 1.2-3.0, around the two-point grasp's ~1.9 Hz pendulum; v1/v2: 2.0)",
+        type_="float or (float, float)")
+    carry_acceleration: float | tuple[float, float] | None = _arg(CARRY_ACCELERATION_RANGE, "The sway's peak "
+        "acceleration [m/s²], or a (low, high) range drawn per episode; the amplitude is a / (2 pi f)² (v3: "
+        "0.5-1.0). None: carry_amplitude instead", type_="float or (float, float)")
+    carry_amplitude: float | None = _arg(None, "A fixed amplitude of the sway [m] instead of carry_acceleration "
+        "(v1/v2: 0.01)", type_="float")
+    carry_direction: str = _arg("any", "'any' horizontal direction, drawn per episode (v3), or 'across' the jaw "
+        "(v1/v2)", type_="str")
+    carry_slide_limit: float | None = _arg(CARRY_SLIDE_LIMIT, "Success needs the cylinder held at every step of "
+        "the carry and its in-hand slide at most this [m] (v3: 0.005); None: held once the carry is over (v1/v2)",
+        type_="float")
     cylinder_position_range: float | None = _arg(None, "Cylinder at U(±range) in x and y [m] (None: the task's, "
         "0.07 reach / 0.01 easy)", type_="float")
     lateral_offset_range: float = _arg(0.005, "Palm offset along the faces, U(±range) [m]", type_="float")
@@ -146,14 +169,15 @@ class EnvArguments:
         object.__setattr__(self, "fingers", fingers)
         check_choice("reward_type", self.reward_type, ("dense", "sparse"))
         check_range("control_frequency", self.control_frequency, 0.5, 240.0)
+        check_choice("arm", self.arm, ("smooth", "jump"))
         check_range("gripper_speed", self.gripper_speed, 0.0, 2.0, lo_open=True)
+        check_range("arm_acceleration", self.arm_acceleration, 0.0, 50.0, lo_open=True)
         check_range("success_height", self.success_height, 0.0, 0.15, lo_open=True)
         check_range("reach_weight", self.reach_weight, 0.0, 10.0)
         check_range("max_tilt", self.max_tilt, 0.0, math.pi, lo_open=True)
         check_range("carry_start", self.carry_start, 0.0, 600.0)
         check_range("carry_duration", self.carry_duration, 0.0, 600.0, lo_open=True)
-        check_range("carry_amplitude", self.carry_amplitude, 0.0, 0.05)
-        check_range("carry_frequency", self.carry_frequency, 0.0, 10.0, lo_open=True)
+        self._check_carry()
         check_range("cylinder_position_range", self.cylinder_position_range, 0.0, 0.08)
         check_range("lateral_offset_range", self.lateral_offset_range, 0.0, 0.05)
         check_range("yaw_range", self.yaw_range, 0.0, math.pi / 4)
@@ -210,12 +234,59 @@ class EnvArguments:
                              f"{self.gripper_speed * sim.dt * 100:.2f} cm per physics step, more than "
                              f"{MAX_ARM_STEP * 100:.2f} cm; at this dt gripper_speed must be at most "
                              f"{MAX_ARM_STEP / sim.dt:.3g} m/s")  # fmt: skip
-        # The carry moves the arm's target by at most 2 pi f A dt per physics step (MAX_ARM_STEP).
-        carry_step = 2.0 * math.pi * self.carry_frequency * self.carry_amplitude * sim.dt
-        if self.carry and carry_step > MAX_ARM_STEP + 1e-12:
-            raise ValueError(f"the carry (carry_amplitude={self.carry_amplitude:g} m at carry_frequency="
-                             f"{self.carry_frequency:g} Hz) moves the arm up to {carry_step * 100:.2f} cm per physics "
-                             f"step at sim.dt={sim.dt:g} s, more than {MAX_ARM_STEP * 100:.2f} cm")  # fmt: skip
+        # The carry moves the arm's target by at most its peak speed times dt per physics step (MAX_ARM_STEP).
+        for f, amplitude in self._carry_corners():
+            carry_step = 2.0 * math.pi * f * amplitude * sim.dt
+            if self.carry and carry_step > MAX_ARM_STEP + 1e-12:
+                raise ValueError(f"the carry ({amplitude * 100:.3g} cm at {f:g} Hz) moves the arm up to "
+                                 f"{carry_step * 100:.2f} cm per physics step at sim.dt={sim.dt:g} s, more than "
+                                 f"{MAX_ARM_STEP * 100:.2f} cm")  # fmt: skip
+
+    def _check_carry(self) -> None:
+        """The carry's settings, each on its own, then the sway's corners against the smooth arm's
+        limits (the jump arm chases any target, as v1/v2 did)."""
+        for name in ("carry_frequency", "carry_acceleration"):
+            value = getattr(self, name)
+            if isinstance(value, list):
+                value = tuple(value)
+                object.__setattr__(self, name, value)
+            if isinstance(value, tuple):
+                if len(value) != 2:
+                    raise ValueError(f"{name} must be a number or (low, high), got {value!r}")
+                for k, v in enumerate(value):
+                    check_range(f"{name}[{k}]", v, 0.0, 10.0 if name == "carry_frequency" else 50.0,
+                                lo_open=name == "carry_frequency")  # fmt: skip
+                if value[0] > value[1]:
+                    raise ValueError(f"{name} must be (low, high) with low <= high, got {value!r}")
+                object.__setattr__(self, name, tuple(float(v) for v in value))
+            elif value is not None or name == "carry_frequency":
+                check_range(name, value, 0.0, 10.0 if name == "carry_frequency" else 50.0,
+                            lo_open=name == "carry_frequency")  # fmt: skip
+        if (self.carry_amplitude is None) == (self.carry_acceleration is None):
+            raise ValueError("give exactly one of carry_acceleration and carry_amplitude (the other None), got "
+                             f"carry_acceleration={self.carry_acceleration!r}, "
+                             f"carry_amplitude={self.carry_amplitude!r}")  # fmt: skip
+        if self.carry_amplitude is not None:
+            check_range("carry_amplitude", self.carry_amplitude, 0.0, 0.05)
+        check_choice("carry_direction", self.carry_direction, ("any", "across"))
+        if self.carry_slide_limit is not None:
+            check_range("carry_slide_limit", self.carry_slide_limit, 0.0, 0.1, lo_open=True)
+        if self.carry and self.arm == "smooth":
+            for f, amplitude in self._carry_corners():
+                problem = sway_limits_error(f, amplitude=amplitude, speed=self.gripper_speed,
+                                            arm_acceleration=self.arm_acceleration)  # fmt: skip
+                if problem:
+                    raise ValueError(f"the carry's sway at {f:g} Hz ({amplitude * 100:.3g} cm) {problem}: lower "
+                                     "carry_acceleration / carry_amplitude or carry_frequency")  # fmt: skip
+
+    def _carry_corners(self) -> list[tuple[float, float]]:
+        """(frequency, amplitude) at the corners of the sway's ranges: its peak speed and
+        acceleration are largest at one of them."""
+        fs = self.carry_frequency if isinstance(self.carry_frequency, tuple) else (self.carry_frequency,)
+        if self.carry_amplitude is not None:
+            return [(f, self.carry_amplitude) for f in fs]
+        accels = self.carry_acceleration if isinstance(self.carry_acceleration, tuple) else (self.carry_acceleration,)
+        return [(f, a / (2.0 * math.pi * f) ** 2) for f in fs for a in accels]
 
     def _derive_scene(self) -> None:
         """The base scene: the start height is the task's, decided once; the pad must fit the
@@ -241,7 +312,8 @@ class EnvArguments:
         base = SceneConfig(fingers=self.fingers, cylinder_radius=self.cylinder_radius,
                            cylinder_height=self.cylinder_height, cylinder_mass=self.cylinder_mass,
                            finger_force=self.finger_force, tissue=self.tissue, sim=self.sim,
-                           start_height=start_height)  # fmt: skip
+                           start_height=start_height, arm=self.arm, arm_speed=self.gripper_speed,
+                           arm_acceleration=self.arm_acceleration)  # fmt: skip
         self._set("scene", base)
         if self.cylinder_radius - self.cylinder_radius_range < MIN_CYLINDER_RADIUS:
             raise ValueError(f"cylinder_radius - cylinder_radius_range must be >= {MIN_CYLINDER_RADIUS} m, got "
@@ -292,13 +364,15 @@ class EnvArguments:
                            **({"approach": self.approach_range} if self.task == "reach" else {}))  # fmt: skip
         if not self.carry:
             return start
-        return CarryTest(start, workspace=self.workspace, dt=self.sim.dt, start=self.carry_start,
+        return CarryTest(start, dt=self.sim.dt, workspace=self.workspace, start=self.carry_start,
                          duration=self.carry_duration, amplitude=self.carry_amplitude,
-                         frequency=self.carry_frequency)  # fmt: skip
+                         frequency=self.carry_frequency, acceleration=self.carry_acceleration,
+                         direction=self.carry_direction, slide_limit=self.carry_slide_limit,
+                         arm_speed=self.gripper_speed, arm_acceleration=self.arm_acceleration)  # fmt: skip
 
     def make_actions(self) -> GripperActions:
-        return GripperActions(self.gripper_speed / self.control_frequency, self.workspace,
-                              self.scene.finger_max_opening)  # fmt: skip
+        return GripperActions.of(self.arm, self.gripper_speed, self.control_frequency, self.workspace,
+                                 self.scene.finger_max_opening)  # fmt: skip
 
     # --- construction from gym.make's kwargs -----------------------------------------------------
 

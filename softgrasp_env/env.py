@@ -312,8 +312,7 @@ class SoftGraspEnv(gym.Env):
             # Stepping on after a divergence: the bodies are poisoned; nothing more is simulated.
             return True
         sc = self.scene
-        control = self.actions.control(act, palm_target=sc.palm_target, palm=sc.palm_state()[0],
-                                       grip_to_palm=sc.grip_to_palm())  # fmt: skip
+        control = self.actions.control(act, sc)
         forces = np.zeros(2)
         try:
             for _ in range(self.args.substeps):

@@ -10,28 +10,43 @@ from gymnasium.envs.registration import WrapperSpec
 MAX_EPISODE_STEPS = 100
 """5 s at the default 20 Hz control frequency."""
 
+_OLD = {"arm": "jump", "carry_frequency": 2.0, "carry_acceleration": None, "carry_amplitude": 0.01,
+        "carry_direction": "across", "carry_slide_limit": None}
+"""The v1/v2 ids keep the arm and the carry test their results were made with (issue 19); the v3
+ids take EnvArguments' defaults."""
+_ENV, _GOAL = "softgrasp_env.env:SoftGraspEnv", "softgrasp_env.env:SoftGraspGoalEnv"
+
+
+def _kw(fingers: str, version: str, **kwargs) -> dict:
+    return {"fingers": fingers, **kwargs, **({} if version == "v3" else _OLD)}
+
+
 _SPECS: dict[str, tuple[str, dict]] = {
-    "SoftGrasp-v2": ("softgrasp_env.env:SoftGraspEnv", {"fingers": "tissue", "reward_type": "dense", "carry": True}),
-    "SoftGraspRigid-v2": ("softgrasp_env.env:SoftGraspEnv", {"fingers": "rigid", "reward_type": "dense", "carry": True}),
-    "SoftGraspSparse-v2": ("softgrasp_env.env:SoftGraspEnv", {"fingers": "tissue", "reward_type": "sparse", "carry": True}),
-    "SoftGrasp-v1": ("softgrasp_env.env:SoftGraspEnv", {"fingers": "tissue", "reward_type": "dense", "carry": False}),
-    "SoftGraspRigid-v1": ("softgrasp_env.env:SoftGraspEnv", {"fingers": "rigid", "reward_type": "dense", "carry": False}),
-    "SoftGraspSparse-v1": ("softgrasp_env.env:SoftGraspEnv", {"fingers": "tissue", "reward_type": "sparse", "carry": False}),
-    "SoftGraspGoal-v1": ("softgrasp_env.env:SoftGraspGoalEnv", {"fingers": "tissue"}),
-    "SoftGraspEasy-v1": ("softgrasp_env.env:SoftGraspEnv", {"fingers": "tissue", "reward_type": "dense", "task": "easy"}),
-    "SoftGraspEasyRigid-v1": ("softgrasp_env.env:SoftGraspEnv", {"fingers": "rigid", "reward_type": "dense", "task": "easy"}),
+    **{f"SoftGrasp-{v}": (_ENV, _kw("tissue", v, reward_type="dense", carry=True)) for v in ("v3", "v2")},
+    **{f"SoftGraspRigid-{v}": (_ENV, _kw("rigid", v, reward_type="dense", carry=True)) for v in ("v3", "v2")},
+    **{f"SoftGraspSparse-{v}": (_ENV, _kw("tissue", v, reward_type="sparse", carry=True)) for v in ("v3", "v2")},
+    **{f"SoftGraspGoal-{v}": (_GOAL, _kw("tissue", v)) for v in ("v3", "v1")},
+    **{f"SoftGraspEasy-{v}": (_ENV, _kw("tissue", v, reward_type="dense", task="easy")) for v in ("v3", "v1")},
+    **{f"SoftGraspEasyRigid-{v}": (_ENV, _kw("rigid", v, reward_type="dense", task="easy")) for v in ("v3", "v1")},
+    "SoftGrasp-v1": (_ENV, _kw("tissue", "v1", reward_type="dense", carry=False)),
+    "SoftGraspRigid-v1": (_ENV, _kw("rigid", "v1", reward_type="dense", carry=False)),
+    "SoftGraspSparse-v1": (_ENV, _kw("tissue", "v1", reward_type="sparse", carry=False)),
 }
 
 ENV_IDS: tuple[str, ...] = tuple(_SPECS)
-"""The reach task with the carry test (v2: approach from above and away, misaligned fingers, lift,
-then the arm sways the cylinder sideways for the last 1.5 s) with soft fingers and the dense lift
-reward; its rigid-only twin; the sparse-reward variant; the same three without the carry test
-(v1, kept because their published baselines reproduce on them: a v1 success is a static hold,
-which a rigid grasp near the cylinder's top rim achieves as well as a soft one); the
-goal-conditioned variant (dict observations, ``compute_reward`` for HER); and the gentle start of
-v0 (``task="easy"``: the open fingers around the cylinder's top, aligned), soft and rigid, for
-debugging a policy or the physics. v0 (the gentle start as the only task, on the physics before
-the accuracy work) is gone: its results cannot be reproduced by this code."""
+"""v3 (the current physics, issue 19): the reach task with the carry test (approach from above and
+away, misaligned fingers, lift, then the arm sways the cylinder for the last 1.5 s, a sway drawn
+per episode; success means held through all of it) with soft fingers and the dense lift reward,
+its rigid-only twin, the sparse-reward variant, the goal-conditioned variant (dict observations,
+``compute_reward`` for HER) and the gentle start (``task="easy"``: the open fingers around the
+cylinder's top, aligned), soft and rigid, for debugging a policy or the physics. The arm moves
+the palm at the action's velocity along a smooth path (at most 0.15 m/s and 1.5 m/s^2).
+
+v2 and v1 (the carry test of 1 cm at 2 Hz, success at its end; v1 without it) reproduce their
+published results bit for bit, with the arm they were made with (the action moves a target the
+palm's constraint chases); their baselines ship in softgrasp_env.policies. v0 (the gentle start
+as the only task, on the physics before the accuracy work) is gone: its results cannot be
+reproduced by this code."""
 
 
 def steps_to_succeed(env: gym.Env) -> int | None:

@@ -23,7 +23,7 @@ def test_the_card_lists_every_argument():
 
 def test_an_unknown_argument_is_a_type_error_naming_the_known_ones():
     with pytest.raises(TypeError, match=r"unknown argument\(s\) \['cylinder_mas'\].*'cylinder_mass'"):
-        gym.make("SoftGrasp-v2", cylinder_mas=0.2)
+        gym.make("SoftGrasp-v3", cylinder_mas=0.2)
 
 
 def test_the_arguments_make_the_scene_the_task_and_the_steps():

@@ -30,12 +30,12 @@ def _args(env_id: str, **kwargs):
 @pytest.mark.parametrize(
     "env_id, old, new",
     [
-        ("SoftGrasp-v2", dict(soft=False), dict(fingers="rigid")),
-        ("SoftGraspRigid-v2", dict(soft=True), dict(fingers="tissue")),
-        ("SoftGrasp-v2", dict(soft=True), dict(fingers="tissue")),
-        ("SoftGrasp-v2", dict(soft=False, fingers="segmented"), dict(fingers="segmented")),  # a kind soft never named
-        ("SoftGrasp-v2", dict(tissue_density=5000.0), dict(particle_density=5000.0)),
-        ("SoftGraspRigid-v2", dict(soft=True, tissue_density=5000.0), dict(fingers="tissue", particle_density=5000.0)),
+        ("SoftGrasp-v3", dict(soft=False), dict(fingers="rigid")),
+        ("SoftGraspRigid-v3", dict(soft=True), dict(fingers="tissue")),
+        ("SoftGrasp-v3", dict(soft=True), dict(fingers="tissue")),
+        ("SoftGrasp-v3", dict(soft=False, fingers="segmented"), dict(fingers="segmented")),  # a kind soft never named
+        ("SoftGrasp-v3", dict(tissue_density=5000.0), dict(particle_density=5000.0)),
+        ("SoftGraspRigid-v3", dict(soft=True, tissue_density=5000.0), dict(fingers="tissue", particle_density=5000.0)),
     ],
 )
 def test_gym_make_takes_the_old_arguments_with_a_warning(env_id, old, new):
@@ -48,24 +48,24 @@ def test_gym_make_takes_the_old_arguments_with_a_warning(env_id, old, new):
 
 def test_old_gym_make_arguments_that_cannot_mean_one_thing_are_refused():
     with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="soft must be a bool"):
-        gym.make("SoftGrasp-v2", soft="no")
+        gym.make("SoftGrasp-v3", soft="no")
     with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="soft=True contradicts fingers="):
-        gym.make("SoftGrasp-v2", soft=True, fingers=RigidConfig())
+        gym.make("SoftGrasp-v3", soft=True, fingers=RigidConfig())
     with pytest.raises(TypeError, match="not both"):
-        gym.make("SoftGrasp-v2", tissue_density=5000.0, particle_density=5000.0)
+        gym.make("SoftGrasp-v3", tissue_density=5000.0, particle_density=5000.0)
 
 
 def test_gym_make_takes_a_kinds_own_argument_only_with_that_kind():
     """``tissue_faces=`` and ``fem_resolution=`` are the kinds' settings as gym.make arguments: the
     same as the kind's config, and an error with another kind (it would be lost)."""
-    assert _args("SoftGrasp-v2", tissue_faces="all").scene == _args(
-        "SoftGrasp-v2", fingers=TissueFingerConfig(faces="all")).scene  # fmt: skip
-    assert _args("SoftGrasp-v2", fingers="fem", fem_resolution="fine").scene == _args(
-        "SoftGrasp-v2", fingers=FemConfig(resolution="fine")).scene  # fmt: skip
+    assert _args("SoftGrasp-v3", tissue_faces="all").scene == _args(
+        "SoftGrasp-v3", fingers=TissueFingerConfig(faces="all")).scene  # fmt: skip
+    assert _args("SoftGrasp-v3", fingers="fem", fem_resolution="fine").scene == _args(
+        "SoftGrasp-v3", fingers=FemConfig(resolution="fine")).scene  # fmt: skip
     with pytest.raises(ValueError, match="tissue_faces is a setting of fingers='tissue', but fingers='rigid'"):
-        gym.make("SoftGraspRigid-v2", tissue_faces="all")
+        gym.make("SoftGraspRigid-v3", tissue_faces="all")
     with pytest.raises(ValueError, match="fem_resolution is a setting of fingers='fem', but fingers='tissue'"):
-        gym.make("SoftGrasp-v2", fem_resolution="fine")
+        gym.make("SoftGrasp-v3", fem_resolution="fine")
 
 
 # --- TissueConfig -------------------------------------------------------------------------------------

@@ -29,12 +29,13 @@ _INF_BOUND = "observation space m"
 
 
 def test_ids_are_registered_with_time_limits():
-    assert len(ENV_IDS) == 9
+    assert len(ENV_IDS) == 15
     gym.register_envs(softgrasp_env)  # the documented idiom is accepted
     for env_id in ENV_IDS:
         spec = gym.spec(env_id)
         assert spec.max_episode_steps == 100
-    for version, carry in (("v2", True), ("v1", False)):
+        assert spec.kwargs.get("arm", "smooth") == ("smooth" if env_id.endswith("-v3") else "jump")
+    for version, carry in (("v3", True), ("v2", True), ("v1", False)):
         assert gym.spec(f"SoftGrasp-{version}").kwargs["fingers"] == "tissue"
         assert gym.spec(f"SoftGraspRigid-{version}").kwargs["fingers"] == "rigid"
         for name in ("SoftGrasp", "SoftGraspRigid", "SoftGraspSparse"):
@@ -86,7 +87,7 @@ def test_same_seed_bit_identical_and_reset_restores_everything(env_id, make_env)
 
 
 def test_different_seeds_give_different_starts(make_env):
-    env = make_env("SoftGraspRigid-v2")
+    env = make_env("SoftGraspRigid-v3")
     o1, _ = env.reset(seed=1)
     o2, _ = env.reset(seed=2)
     assert not np.array_equal(o1, o2)
@@ -123,7 +124,7 @@ def test_thousand_random_steps_stay_finite(env_id):
 
 
 def test_action_validation():
-    env = gym.make("SoftGraspRigid-v2").unwrapped
+    env = gym.make("SoftGraspRigid-v3").unwrapped
     with pytest.raises(RuntimeError, match="reset"):
         env.step(np.zeros(4, dtype=np.float32))
     env.reset(seed=0)
@@ -140,8 +141,8 @@ def test_action_validation():
 
 def test_out_of_range_actions_are_clipped_and_reported():
     big = np.array([5.0, -3.0, 2.0, 9.0])
-    a = gym.make("SoftGrasp-v2")
-    b = gym.make("SoftGrasp-v2")
+    a = gym.make("SoftGrasp-v3")
+    b = gym.make("SoftGrasp-v3")
     a.reset(seed=4)
     b.reset(seed=4)
     for _ in range(5):
@@ -176,7 +177,7 @@ def test_bad_arguments_raise_naming_the_argument():
 
 
 def test_reset_options_fix_the_randomised_quantities():
-    env = gym.make("SoftGraspRigid-v2").unwrapped
+    env = gym.make("SoftGraspRigid-v3").unwrapped
     env.reset(seed=0, options={"cylinder_xy": (0.004, -0.003), "yaw": 0.05, "lateral_offset": 0.002,
                                "jaw_wedge": 0.02, "cylinder_mass": 0.2, "cylinder_radius": 0.025})  # fmt: skip
     cfg = env.scene.config
@@ -189,7 +190,7 @@ def test_reset_options_fix_the_randomised_quantities():
 
 
 def test_nan_in_the_tissue_ends_the_episode_with_a_finite_observation():
-    env = gym.make("SoftGrasp-v2")
+    env = gym.make("SoftGrasp-v3")
     obs0, _ = env.reset(seed=0)
     obs1, *_ = env.step(np.zeros(4, dtype=np.float32))
     env.unwrapped.scene.world.state.particle_x[7, 0] = np.nan
@@ -207,7 +208,7 @@ def test_nan_in_the_tissue_ends_the_episode_with_a_finite_observation():
 
 
 def test_runaway_velocity_is_divergence():
-    env = gym.make("SoftGraspRigid-v2")
+    env = gym.make("SoftGraspRigid-v3")
     env.reset(seed=0)
     sc = env.unwrapped.scene
     sc.client.resetBaseVelocity(sc.cylinder, [0.0, 0.0, 300.0], [0.0, 0.0, 0.0])
@@ -217,7 +218,7 @@ def test_runaway_velocity_is_divergence():
 
 
 def test_knocked_over_cylinder_terminates():
-    env = gym.make("SoftGraspRigid-v2")
+    env = gym.make("SoftGraspRigid-v3")
     env.reset(seed=0)
     sc = env.unwrapped.scene
     sc.client.resetBasePositionAndOrientation(sc.cylinder, [0.03, 0.0, 0.03], p.getQuaternionFromEuler([1.5, 0, 0]))
@@ -229,7 +230,7 @@ def test_knocked_over_cylinder_terminates():
 # --- physics seen through the env -----------------------------------------------------------------
 
 
-@pytest.mark.parametrize("env_id", ["SoftGraspEasy-v1", "SoftGraspEasyRigid-v1"])
+@pytest.mark.parametrize("env_id", ["SoftGraspEasy-v3", "SoftGraspEasyRigid-v3"])
 def test_scripted_policy_lifts_and_fingers_press_with_the_motor_force(env_id, make_env, scripted):
     """From the gentle start (aligned fingers: the rigid twin holds too) the scripted grasp lifts the cylinder 5 cm in every seed, and
     in the held state each finger's normal force equals its motor's force limit (3 N): the motor
@@ -251,12 +252,12 @@ def test_dense_and_sparse_rewards_follow_their_definitions(make_env, scripted):
     """The reach task (over to the cylinder, down, grip, lift), the same seed under both reward
     types: the same episode step for step, each reward as defined."""
     steps = {}
-    for env_id in ("SoftGrasp-v2", "SoftGraspSparse-v2"):
+    for env_id in ("SoftGrasp-v3", "SoftGraspSparse-v3"):
         seen = steps[env_id] = []
         ep = run_episode(make_env(env_id), scripted, seed=2,
                          on_step=lambda obs, r, term, trunc, info, seen=seen: seen.append((obs, r, info)))  # fmt: skip
         assert ep.steps == 100
-    for (od, rd, infd), (os_, rs, infs) in zip(steps["SoftGrasp-v2"], steps["SoftGraspSparse-v2"], strict=True):
+    for (od, rd, infd), (os_, rs, infs) in zip(steps["SoftGrasp-v3"], steps["SoftGraspSparse-v3"], strict=True):
         assert_same(od, os_)  # the reward type changes nothing else
         terms = infd["reward_terms"]
         assert rd == pytest.approx(terms["lift"] + terms["reach"])
@@ -264,7 +265,7 @@ def test_dense_and_sparse_rewards_follow_their_definitions(make_env, scripted):
         assert terms["lift"] == pytest.approx(min(max(infd["lift_height"] / 0.05, 0.0), 1.0))
         assert rs == float(infs["held"])  # held: before, during and after the carry
         assert not infs["is_success"] or infs["held"]
-    assert any(info["is_success"] for _, _, info in steps["SoftGraspSparse-v2"])
+    assert any(info["is_success"] for _, _, info in steps["SoftGraspSparse-v3"])
     assert infs["is_success"]  # success only once the carry is over: the last step
 
 
@@ -277,8 +278,8 @@ def _tissue_pixels(img: np.ndarray) -> int:
 
 
 def test_rgb_array_shows_the_tissue(make_env):
-    soft = make_env("SoftGraspEasy-v1", render_mode="rgb_array", render_width=160, render_height=120)
-    rigid = make_env("SoftGraspEasyRigid-v1", render_mode="rgb_array", render_width=160, render_height=120)
+    soft = make_env("SoftGraspEasy-v3", render_mode="rgb_array", render_width=160, render_height=120)
+    rigid = make_env("SoftGraspEasyRigid-v3", render_mode="rgb_array", render_width=160, render_height=120)
     soft.reset(seed=0)
     rigid.reset(seed=0)
     img_s = soft.render()
@@ -294,8 +295,8 @@ def test_rgb_array_shows_the_tissue(make_env):
 
 
 def test_rendering_does_not_change_the_trajectory():
-    a = gym.make("SoftGrasp-v2", render_mode="rgb_array", render_width=64, render_height=48)
-    b = gym.make("SoftGrasp-v2")
+    a = gym.make("SoftGrasp-v3", render_mode="rgb_array", render_width=64, render_height=48)
+    b = gym.make("SoftGrasp-v3")
     ra = [a.reset(seed=1)]
     rb = [b.reset(seed=1)]
     rng = np.random.default_rng(0)
@@ -318,7 +319,7 @@ def test_human_mode_without_display_is_a_clear_error(monkeypatch):
 
 
 def test_render_without_mode_warns_and_returns_none():
-    env = gym.make("SoftGraspRigid-v2")
+    env = gym.make("SoftGraspRigid-v3")
     env.reset(seed=0)
     with pytest.warns(UserWarning, match="render_mode"):
         assert env.unwrapped.render() is None
@@ -327,7 +328,7 @@ def test_render_without_mode_warns_and_returns_none():
 
 def test_record_video_writes_an_episode(tmp_path):
     pytest.importorskip("moviepy")
-    env = gym.make("SoftGrasp-v2", render_mode="rgb_array", render_width=96, render_height=64, max_episode_steps=8)
+    env = gym.make("SoftGrasp-v3", render_mode="rgb_array", render_width=96, render_height=64, max_episode_steps=8)
     env = gym.wrappers.RecordVideo(env, str(tmp_path / "videos"), episode_trigger=lambda e: True, disable_logger=True)
     run_episode(env, lambda obs: env.action_space.sample(), seed=0)
     env.close()
@@ -339,7 +340,7 @@ def test_record_video_writes_an_episode(tmp_path):
 
 
 def test_pickled_fresh_env_behaves_like_the_original():
-    env = gym.make("SoftGrasp-v2")
+    env = gym.make("SoftGrasp-v3")
     twin = pickle.loads(pickle.dumps(env))
     assert_same(env.reset(seed=0), twin.reset(seed=0))
     act = np.array([0.3, -0.2, -0.5, 0.1], dtype=np.float32)
@@ -348,7 +349,7 @@ def test_pickled_fresh_env_behaves_like_the_original():
     twin.close()
 
 
-@pytest.mark.parametrize("env_id", ["SoftGrasp-v2", "SoftGraspGoal-v1"])
+@pytest.mark.parametrize("env_id", ["SoftGrasp-v3", "SoftGraspGoal-v3"])
 def test_deepcopy_mid_episode_is_exact(env_id):
     env = gym.make(env_id)
     env.reset(seed=5)
@@ -369,7 +370,7 @@ def test_deepcopy_mid_episode_is_exact(env_id):
 def test_a_copy_replays_only_the_steps_since_the_last_reset():
     """Issue 12: a copy's cost is bounded by the episode (at most the 100-step time limit), never
     by the env's history: earlier episodes are not replayed."""
-    env = gym.make("SoftGraspRigid-v2")
+    env = gym.make("SoftGraspRigid-v3")
     rng = np.random.default_rng(2)
     for episode in range(3):
         env.reset(seed=episode)
@@ -403,7 +404,7 @@ def test_create_and_close_100_envs_leaves_no_client_connected():
     before = _connected_clients()
     ids = []
     for k in range(100):
-        env = gym.make("SoftGrasp-v2", render_mode="rgb_array", render_width=32, render_height=24)
+        env = gym.make("SoftGrasp-v3", render_mode="rgb_array", render_width=32, render_height=24)
         env.reset(seed=k)
         if k % 10 == 0:
             env.render()
@@ -413,7 +414,7 @@ def test_create_and_close_100_envs_leaves_no_client_connected():
     assert _connected_clients() == before
     assert not set(ids) & before
     # an env closed before any reset, and closed twice
-    env = gym.make("SoftGrasp-v2")
+    env = gym.make("SoftGrasp-v3")
     env.close()
     env.close()
 
@@ -424,19 +425,19 @@ def test_jaw_wedge_defeats_rigid_fingers_but_not_soft_ones(make_env, scripted):
     it swings out of the grasp and topples; the tissue conforms and holds it upright."""
     options = {"jaw_wedge": 0.1, "yaw": 0.1, "lateral_offset": 0.005, "cylinder_xy": (0.0, 0.0)}
     outcome = {}
-    for env_id in ("SoftGraspRigid-v2", "SoftGrasp-v2"):
+    for env_id in ("SoftGraspRigid-v3", "SoftGrasp-v3"):
         ep = run_episode(make_env(env_id), scripted, seed=0, options=options)
         outcome[env_id] = (ep.terminated, ep.success, float(ep.observation[OBS_NAMES.index("cyl_axis_z")]))
-    rigid_term, rigid_success, rigid_axis_z = outcome["SoftGraspRigid-v2"]
+    rigid_term, rigid_success, rigid_axis_z = outcome["SoftGraspRigid-v3"]
     assert rigid_term and not rigid_success and rigid_axis_z < math.cos(math.pi / 4)
-    soft_term, soft_success, soft_axis_z = outcome["SoftGrasp-v2"]
+    soft_term, soft_success, soft_axis_z = outcome["SoftGrasp-v3"]
     assert not soft_term and soft_success and soft_axis_z > math.cos(0.1)
 
 
 @pytest.mark.skipif(not softgrasp_env.env._display_available(), reason="needs a display (CI runs under xvfb-run)")
 def test_human_mode_runs_the_gui_with_the_particles_shown(make_env, scripted):
-    env = make_env("SoftGrasp-v2", render_mode="human")
-    ref = make_env("SoftGrasp-v2")
+    env = make_env("SoftGrasp-v3", render_mode="human")
+    ref = make_env("SoftGrasp-v3")
     ep = run_episode(env, scripted, seed=0, max_steps=10)
     ref_ep = run_episode(ref, scripted, seed=0, max_steps=10)
     assert_same(ep.observation, ref_ep.observation)  # the visual-only particle bodies take no part in the dynamics
@@ -456,7 +457,7 @@ def test_human_mode_runs_the_gui_with_the_particles_shown(make_env, scripted):
                                     [0.1, 0.2, 0.3, None]])  # fmt: skip
 def test_an_action_that_is_not_real_numbers_is_a_type_error(action):
     """Issue 12: a complex action used to lose its imaginary part with only numpy's warning."""
-    env = gym.make("SoftGraspRigid-v2")
+    env = gym.make("SoftGraspRigid-v3")
     env.reset(seed=0)
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no ComplexWarning on the way

@@ -24,7 +24,7 @@ def _finite(obs, reward, term, trunc, info) -> None:
     assert np.isfinite(obs).all() and math.isfinite(reward)
 
 
-def _episodes(kwargs: dict, *, seeds=(0,), scripted=(0,), env_id: str = "SoftGrasp-v2") -> list[str]:
+def _episodes(kwargs: dict, *, seeds=(0,), scripted=(0,), env_id: str = "SoftGrasp-v3") -> list[str]:
     """Random-action episodes on ``seeds`` and scripted ones on ``scripted``; the divergences,
     each with its reason (empty when none). A divergence ends its episode: it is the last step."""
     env = gym.make(env_id, **kwargs)
@@ -171,7 +171,7 @@ def test_slow_ends_run(kwargs):
 ])  # fmt: skip
 def test_settings_that_did_not_run_are_refused_naming_the_rule(kwargs, match):
     with pytest.raises(ValueError, match=match):
-        gym.make("SoftGrasp-v2", **kwargs)
+        gym.make("SoftGrasp-v3", **kwargs)
 
 
 def _draw(rng: np.random.Generator) -> dict:
@@ -209,7 +209,7 @@ def test_fuzz_over_the_documented_ranges():
     for k in range(30):
         kwargs = _draw(rng)
         try:
-            env = gym.make("SoftGrasp-v2", **kwargs)
+            env = gym.make("SoftGrasp-v3", **kwargs)
         except ValueError:
             refused += 1
             continue

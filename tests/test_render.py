@@ -27,7 +27,7 @@ def _touches_border(mask: np.ndarray) -> bool:
     return bool(mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any())
 
 
-@pytest.mark.parametrize("env_id", ["SoftGrasp-v2", "SoftGraspRigid-v2"])
+@pytest.mark.parametrize("env_id", ["SoftGrasp-v3", "SoftGraspRigid-v3"])
 def test_the_follow_camera_frames_gripper_and_cylinder_at_every_start(env_id, make_env, scripted):
     env = make_env(env_id, render_mode="rgb_array", render_width=W, render_height=H)
     for seed in range(4):
@@ -46,7 +46,7 @@ def test_the_follow_camera_frames_gripper_and_cylinder_at_every_start(env_id, ma
 
 
 def test_the_fixed_camera_sees_the_whole_start(make_env):
-    env = make_env("SoftGrasp-v2", render_mode="rgb_array", render_camera="fixed", render_width=W, render_height=H)
+    env = make_env("SoftGrasp-v3", render_mode="rgb_array", render_camera="fixed", render_width=W, render_height=H)
     for seed in range(4):
         env.reset(seed=seed)
         _, masks = _frame_bodies(env)
@@ -56,7 +56,7 @@ def test_the_fixed_camera_sees_the_whole_start(make_env):
 
 def test_camera_keywords_move_the_camera(make_env):
     def cylinder_pixels(**kwargs) -> int:
-        env = make_env("SoftGraspRigid-v2", render_mode="rgb_array", render_width=W, render_height=H, **kwargs)
+        env = make_env("SoftGraspRigid-v3", render_mode="rgb_array", render_width=W, render_height=H, **kwargs)
         env.reset(seed=0)
         _, masks = _frame_bodies(env)
         return int(masks["cylinder0"].sum())
@@ -78,13 +78,13 @@ def test_bad_camera_keywords_are_named(kwargs, name):
     import gymnasium as gym
 
     with pytest.raises(ValueError, match=name):
-        gym.make("SoftGraspRigid-v2", **kwargs)
+        gym.make("SoftGraspRigid-v3", **kwargs)
 
 
 def test_the_ground_is_a_checkerboard(make_env):
     """Two tones of grey alternate on the ground, so a camera that follows the bodies still shows
     them move."""
-    env = make_env("SoftGraspRigid-v2", render_mode="rgb_array", render_width=W, render_height=H)
+    env = make_env("SoftGraspRigid-v3", render_mode="rgb_array", render_width=W, render_height=H)
     env.reset(seed=0)
     img = env.render().astype(int)
     seg = env.unwrapped._renderer.last_segmentation

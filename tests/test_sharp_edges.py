@@ -24,27 +24,27 @@ def _make_warnings(env_id: str, **kwargs) -> list[str]:
 
 
 def test_a_time_limit_that_ends_before_the_carry_warns_at_make():
-    (msg,) = _make_warnings("SoftGrasp-v2", max_episode_steps=60)
+    (msg,) = _make_warnings("SoftGrasp-v3", max_episode_steps=60)
     assert "max_episode_steps=60" in msg and "5 s" in msg and ">= 100" in msg
-    assert _make_warnings("SoftGrasp-v2") == []  # the registered 100 steps: the carry ends on the last
-    assert _make_warnings("SoftGrasp-v2", max_episode_steps=100) == []
-    assert _make_warnings("SoftGrasp-v2", max_episode_steps=-1) == []  # no time limit at all
+    assert _make_warnings("SoftGrasp-v3") == []  # the registered 100 steps: the carry ends on the last
+    assert _make_warnings("SoftGrasp-v3", max_episode_steps=100) == []
+    assert _make_warnings("SoftGrasp-v3", max_episode_steps=-1) == []  # no time limit at all
     assert _make_warnings("SoftGrasp-v1", max_episode_steps=20) == []  # no carry: a lift may succeed any time
     # the rule follows the carry's settings and the control rate
-    (msg,) = _make_warnings("SoftGraspRigid-v2", carry_start=5.0, control_frequency=40.0)
+    (msg,) = _make_warnings("SoftGraspRigid-v3", carry_start=5.0, control_frequency=40.0)
     assert ">= 260" in msg
-    assert _make_warnings("SoftGraspRigid-v2", carry_start=2.0) == []
+    assert _make_warnings("SoftGraspRigid-v3", carry_start=2.0) == []
 
 
 def test_steps_to_succeed_is_the_first_step_the_carry_is_over():
-    env = gym.make("SoftGraspRigid-v2", carry_start=1.0, carry_duration=0.5)
+    env = gym.make("SoftGraspRigid-v3", carry_start=1.0, carry_duration=0.5)
     try:
         assert steps_to_succeed(env) == 30
         base = env.unwrapped
         assert base.task.over(30 * base.args.substeps) and not base.task.over(29 * base.args.substeps)
     finally:
         env.close()
-    env = gym.make("SoftGraspGoal-v1")
+    env = gym.make("SoftGraspGoal-v3")
     assert steps_to_succeed(env) is None
     env.close()
 
@@ -56,8 +56,8 @@ def test_the_observation_box_is_bounded_where_bounds_hold():
             k = CARRY_OBS_NAMES.index(name)
             assert (box.low[k], box.high[k]) == (np.float32(lo), np.float32(hi)), name
     assert np.isinf(box.low[CARRY_OBS_NAMES.index("finger_gap")])  # soft joint limits: no bound
-    env = gym.make("SoftGrasp-v2")
-    goal = gym.make("SoftGraspGoal-v1")
+    env = gym.make("SoftGrasp-v3")
+    goal = gym.make("SoftGraspGoal-v3")
     try:
         assert env.observation_space == box
         assert goal.observation_space["observation"] == observation_box(OBS_NAMES)
@@ -67,7 +67,7 @@ def test_the_observation_box_is_bounded_where_bounds_hold():
         goal.close()
 
 
-@pytest.mark.parametrize("env_id", ["SoftGraspRigid-v2", "SoftGrasp-v2", "SoftGraspGoal-v1"])
+@pytest.mark.parametrize("env_id", ["SoftGraspRigid-v3", "SoftGrasp-v3", "SoftGraspGoal-v3"])
 def test_every_observation_lies_in_the_box(env_id, make_env, scripted):
     """Scripted grasps (the forces, the lift, the carry) and random flailing (tilts, fast spins)."""
     env = make_env(env_id)
@@ -87,6 +87,6 @@ def test_evaluate_names_the_env_it_ran(capsys):
     from agents.evaluate import main
 
     assert main(["--policy", "scripted", "--episodes", "1"]) == 0
-    assert capsys.readouterr().out.startswith("SoftGrasp-v2 / scripted: success")
+    assert capsys.readouterr().out.startswith("SoftGrasp-v3 / scripted: success")
     assert main(["--policy", "random", "--env", "SoftGraspRigid-v1", "--episodes", "1"]) == 0
     assert capsys.readouterr().out.startswith("SoftGraspRigid-v1 / random: success")

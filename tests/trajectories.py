@@ -65,7 +65,7 @@ def record(env_id: str, kwargs: dict, policy: str, steps: int, *, seed: int = 7)
 
     env = gym.make(env_id, **_kwargs(kwargs))
     rng = np.random.default_rng(seed + 1)
-    scripted = ScriptedGraspPolicy()
+    scripted = ScriptedGraspPolicy.for_env(env)
     obs, info = env.reset(seed=seed)
     rows: dict[str, list] = {k: [] for k in ("obs", "reward", "terminated", "truncated", "lift", "terms", "reset",
                                              *INFO_FLAGS)}  # fmt: skip

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..observation import CARRY_OBS_NAMES, OBS_NAMES
+from ..validation import check_choice
 
 _I = {name: k for k, name in enumerate(OBS_NAMES)}
 _SIZES = (len(OBS_NAMES), len(CARRY_OBS_NAMES))
@@ -27,19 +28,39 @@ class ScriptedGraspPolicy:
     also has SB3's ``predict`` (batched observations too), so tools that evaluate an SB3 model
     (``stable_baselines3.common.evaluation.evaluate_policy``, agents.evaluate) evaluate it alike.
 
-    ``step_length`` is the arm's displacement at full action [m] (``gripper_speed /
-    control_frequency`` of the env, 7.5 mm by default); ``grip_force`` the per-finger normal force
-    [N] above which the cylinder counts as gripped; ``lift_to`` the lift height it holds [m];
-    ``descend_tolerance`` how near the cylinder's axis the grip must be horizontally before it
-    comes down from above [m]."""
+    ``arm`` is the env's (``EnvArguments.arm``; :meth:`for_env` reads it and the rest from an
+    env). The smooth arm's actions are velocities (``speed`` at full action, the env's
+    ``gripper_speed``): the policy asks for the speed that, held for a control step
+    (``control_period``) and then braked at the arm's acceleration ``arm_acceleration``, stops
+    within the distance left, so it does not overshoot. The jump arm's actions move the target by
+    ``speed * control_period`` at full action (7.5 mm by default); the policy asks for the whole
+    way, clipped. ``grip_force`` is the per-finger normal force [N] above which the cylinder counts
+    as gripped; ``lift_to`` the lift height it holds [m]; ``descend_tolerance`` how near the
+    cylinder's axis the grip must be horizontally before it comes down from above [m]."""
 
-    def __init__(self, *, step_length: float = 0.0075, grip_force: float = 0.5, lift_to: float = 0.065,
+    def __init__(self, *, arm: str = "smooth", speed: float = 0.15, arm_acceleration: float = 1.5,
+                 control_period: float = 0.05, grip_force: float = 0.5, lift_to: float = 0.065,
                  align_tolerance: float = 0.004, descend_tolerance: float = 0.01) -> None:  # fmt: skip
+        self.arm = check_choice("arm", arm, ("smooth", "jump"), owner="ScriptedGraspPolicy")
         self.descend_tolerance = float(descend_tolerance)
-        self.step_length = float(step_length)
+        self.speed = float(speed)
+        self.arm_acceleration = float(arm_acceleration)
+        self.control_period = float(control_period)
         self.grip_force = float(grip_force)
         self.lift_to = float(lift_to)
         self.align_tolerance = float(align_tolerance)
+        self.step_length = self.speed * self.control_period
+        """The jump arm's target displacement at full action [m]."""
+
+    @classmethod
+    def for_env(cls, env, **kwargs) -> ScriptedGraspPolicy:
+        """The policy for ``env`` (a SoftGrasp env, wrapped or not): its arm, arm speed and
+        acceleration and control period; ``kwargs`` set the other parameters."""
+        args = getattr(env.unwrapped, "args", None)
+        if args is None:
+            raise TypeError(f"ScriptedGraspPolicy.for_env needs a SoftGrasp env, got {env!r}")
+        return cls(arm=args.arm, speed=args.gripper_speed, arm_acceleration=args.arm_acceleration,
+                   control_period=1.0 / args.control_frequency, **kwargs)  # fmt: skip
 
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
         """SB3's policy interface: ``(action, state)``. ``observation`` is one observation or a
@@ -65,6 +86,22 @@ class ScriptedGraspPolicy:
         lift = obs[_I["lift"]]
         action = np.zeros(4, dtype=np.float32)
         gripped = bool((forces >= self.grip_force).all())
+        if self.arm == "jump":
+            return self._jump(rel, forces, lift, gripped, action)
+        if gripped:
+            action[:3] = self._velocity(np.array([0.0, 0.0, self.lift_to - lift]))
+            action[3] = 1.0
+            return action
+        move = rel.copy()
+        if np.hypot(rel[0], rel[1]) > self.descend_tolerance and rel[2] < 0.0:
+            move[2] = 0.0  # above it and not yet over it: no lower until over it
+        action[:3] = self._velocity(move)
+        aligned = bool(np.abs(rel).max() <= self.align_tolerance)
+        action[3] = 1.0 if aligned or (forces > 0.0).any() else -1.0
+        return action
+
+    def _jump(self, rel, forces, lift, gripped, action) -> np.ndarray:
+        """The jump arm's action (as the v1/v2 policy computed it, to the bit)."""
         if gripped:
             action[2] = np.clip((self.lift_to - lift) / self.step_length, -1.0, 1.0)
             action[3] = 1.0
@@ -75,6 +112,17 @@ class ScriptedGraspPolicy:
         aligned = bool(np.abs(rel).max() <= self.align_tolerance)
         action[3] = 1.0 if aligned or (forces > 0.0).any() else -1.0
         return action
+
+    def _velocity(self, move: np.ndarray) -> np.ndarray:
+        """The action that heads along ``move`` [m] at the speed that stops there: a command holds
+        for one control step T before the next can brake, so the speed s must cover s T plus the
+        braking distance s^2 / 2a within the distance d: s = a (sqrt(T^2 + 2 d / a) - T)."""
+        d = float(np.linalg.norm(move))
+        if d == 0.0:
+            return np.zeros(3)
+        a, T = self.arm_acceleration, self.control_period
+        s = min(self.speed, a * (np.sqrt(T * T + 2.0 * d / a) - T))
+        return np.clip(move / d * (s / self.speed), -1.0, 1.0)
 
 
 __all__ = ["ScriptedGraspPolicy"]

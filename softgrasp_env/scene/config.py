@@ -15,7 +15,7 @@ from typing import Any
 
 from ..config import SimConfig, TissueConfig
 from ..fingers import FINGERS, FemConfig, FingerConfig, SegmentedConfig, TissueFingerConfig, finger_config
-from ..validation import accept_old_names, check_range, check_type, deprecated
+from ..validation import accept_old_names, check_choice, check_range, check_type, deprecated
 PALM_HALF_EXTENTS = (0.09, 0.03, 0.01)
 """Half extents of the gripper's palm box [m]."""
 FINGER_DROP = 0.04
@@ -65,6 +65,18 @@ class SceneConfig:
     """Mass of the gripper palm [kg]."""
     palm_force: float = 200.0
     """Force limit of the constraint that drives the palm [N]."""
+    arm: str = "smooth"
+    """How the arm moves the palm's constraint pivot: ``"smooth"`` along a speed- and
+    acceleration-limited path, one physics step at a time (softgrasp_env/scene/gripper.py,
+    PalmPath; the v3 ids); ``"jump"`` straight to each new target, which the constraint then
+    chases (the v1/v2 ids, kept so they reproduce: 86 m/s^2 kicks at 1/240 s, issue 19)."""
+    arm_speed: float = 0.15
+    """Fastest the smooth arm moves the palm [m/s]: its setpoint follows the commanded target or
+    velocity at no more than this speed."""
+    arm_acceleration: float = 1.5
+    """Largest acceleration of the smooth arm's setpoint [m/s^2]: the palm starts, stops and turns
+    smoothly, the same at every dt (a target that jumped once per control step, closed ~20 % per
+    physics step by the constraint, kicked the palm at 86 m/s^2 at 1/240 s and 500 at 1/1000)."""
     ground_friction: float = 0.5
     """Friction coefficient of the ground [-]."""
     lateral_offset: float = 0.0
@@ -107,6 +119,9 @@ class SceneConfig:
         check_range("finger_max_opening", self.finger_max_opening, 0.005, 0.3, owner=o)
         check_range("palm_mass", self.palm_mass, 0.01, 100.0, owner=o)
         check_range("palm_force", self.palm_force, 0.0, 1e4, lo_open=True, owner=o)
+        check_choice("arm", self.arm, ("smooth", "jump"), owner=o)
+        check_range("arm_speed", self.arm_speed, 0.0, 2.0, lo_open=True, owner=o)
+        check_range("arm_acceleration", self.arm_acceleration, 0.0, 50.0, lo_open=True, owner=o)
         check_range("ground_friction", self.ground_friction, 0.0, 10.0, owner=o)
         check_range("lateral_offset", self.lateral_offset, -0.1, 0.1, owner=o)
         check_range("yaw", self.yaw, -math.pi / 4, math.pi / 4, owner=o)

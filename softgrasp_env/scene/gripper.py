@@ -27,6 +27,7 @@ from .config import FINGER_DROP, PALM_HALF_EXTENTS, SceneConfig
 
 if TYPE_CHECKING:
     from ..fingers import FingerKind
+    from .scene import GraspScene
 FINGER_GEAR_FORCE = 100.0
 """Force limit of the gear that keeps both fingers' travel equal [N]: far above what the motors
 (``finger_force``) or the tissue can make, so it never gives way."""
@@ -43,17 +44,101 @@ WORKSPACE_HALF_WIDTH = 0.15
 GROUND_CLEARANCE = 0.003
 """The fingertips come down to this far above the ground at most, pads included [m]."""
 MAX_LEAD = 0.02
-"""Farthest the arm's target may lead the palm [m], as a real arm's tracking limit would."""
+"""Farthest the arm's setpoint may lead the palm [m], as a real arm's tracking limit would."""
 
 
 @dataclass(frozen=True, eq=False)
 class GripperControl:
-    """What the gripper is told for the coming physics steps."""
+    """What the gripper is told for the coming physics steps. The arm moves its setpoint (the
+    palm's constraint pivot) along a smooth path (:class:`PalmPath`): toward ``palm_target`` when
+    one is given (position mode: a planned move, the carry's sway), else at ``palm_velocity``
+    (velocity mode: a policy's command)."""
 
-    palm_target: np.ndarray
-    """(3,) where the arm pulls the palm's centre [m, world frame]."""
+    palm_target: np.ndarray | None
+    """(3,) where the arm takes the palm's centre [m, world frame]; None: velocity mode."""
     finger_closing: float
     """Target travel of each finger from fully open [m] (the motors' force limit sets the squeeze)."""
+    palm_velocity: np.ndarray | None = None
+    """(3,) [m/s]: in position mode the target's own velocity when it moves along a smooth path (so
+    the arm follows it without lag; None: a target at rest); in velocity mode the commanded
+    velocity (None: stop)."""
+    palm_box: tuple[np.ndarray, np.ndarray] | None = None
+    """(low, high) the palm's centre must stay within [m] (the workspace, in palm coordinates): the
+    path brakes before it reaches a wall."""
+
+
+class PalmPath:
+    """The arm's setpoint, one physics step at a time, with speed at most ``v_max`` and
+    acceleration at most ``a_max`` exactly: each step changes its velocity by at most a_max dt.
+    Position mode heads for the target and brakes on the discrete curve that stops it exactly there
+    (:meth:`_brake`), plus the target's own velocity; velocity mode takes the commanded velocity.
+    Either way it brakes before the walls of ``palm_box`` and before it leads the palm by more
+    than ``max_lead`` (a blocked palm, pressing on something, must not find its setpoint far away
+    when it comes free). The palm's constraint then tracks a path that is smooth and the same at
+    every dt. Python floats: it runs every physics step."""
+
+    def __init__(self, x0: np.ndarray, *, v_max: float, a_max: float, dt: float, max_lead: float = MAX_LEAD) -> None:
+        self.x = [float(v) for v in x0]
+        self.v = [0.0, 0.0, 0.0]
+        self.v_max, self.a_max, self.dt, self.max_lead = float(v_max), float(a_max), float(dt), float(max_lead)
+
+    def _brake(self, d: float) -> float:
+        """The fastest speed for this step from which the path stops exactly at distance ``d`` >= 0,
+        braking by at most a_max dt per step: the speeds s, s - a dt, s - 2 a dt, ... then 0, their
+        steps summing to d. With u = d / (a dt^2) and m = floor((sqrt(8u + 1) - 1) / 2) whole
+        braking steps, s = a dt (u + m (m + 1) / 2) / (m + 1); for d < a dt^2 that is d / dt, the
+        last step landing on the target. (The continuous curve s^2 / 2a = d overshoots by up to
+        a dt^2 / 8 on the last step.)"""
+        adt = self.a_max * self.dt
+        u = d / (adt * self.dt)
+        m = math.floor(0.5 * (math.sqrt(8.0 * u + 1.0) - 1.0))
+        return adt * (u + 0.5 * m * (m + 1)) / (m + 1)
+
+    def step(self, control: GripperControl, palm) -> bool:
+        """Advance the setpoint by one step for ``control``, the palm being at ``palm``; False if
+        it stayed where it was (at rest)."""
+        dt, vm, x = self.dt, self.v_max, self.x
+        u = control.palm_velocity
+        wx, wy, wz = (0.0, 0.0, 0.0) if u is None else (float(u[0]), float(u[1]), float(u[2]))
+        if control.palm_target is not None:
+            t = control.palm_target
+            ex, ey, ez = float(t[0]) - x[0], float(t[1]) - x[1], float(t[2]) - x[2]
+            d = math.sqrt(ex * ex + ey * ey + ez * ez)
+            if d > 0.0:
+                s = self._brake(d) / d
+                wx, wy, wz = wx + ex * s, wy + ey * s, wz + ez * s
+        vx, vy, vz = self.v
+        if wx == wy == wz == 0.0 and vx == vy == vz == 0.0:
+            return False  # at rest, and nothing asks it to move
+        w = math.sqrt(wx * wx + wy * wy + wz * wz)
+        if w > vm:
+            wx, wy, wz = wx * vm / w, wy * vm / w, wz * vm / w
+        # a palm that lags (blocked, pressing on something): the setpoint brakes to wait for it at
+        # max_lead, as before a wall, so that it is not far away when the palm comes free
+        lx, ly, lz = x[0] - float(palm[0]), x[1] - float(palm[1]), x[2] - float(palm[2])
+        lead = math.sqrt(lx * lx + ly * ly + lz * lz)
+        if lead > 0.0:
+            out = (wx * lx + wy * ly + wz * lz) / lead
+            cap = self._brake(max(0.0, self.max_lead - lead))
+            if out > cap:
+                wx, wy, wz = wx - (out - cap) * lx / lead, wy - (out - cap) * ly / lead, wz - (out - cap) * lz / lead
+        w3 = [wx, wy, wz]
+        if control.palm_box is not None:  # brake before the walls, axis by axis
+            low, high = control.palm_box
+            for k in range(3):
+                if w3[k] > 0.0:
+                    w3[k] = min(w3[k], self._brake(max(0.0, float(high[k]) - x[k])))
+                elif w3[k] < 0.0:
+                    w3[k] = max(w3[k], -self._brake(max(0.0, x[k] - float(low[k]))))
+        dx, dy, dz = w3[0] - vx, w3[1] - vy, w3[2] - vz
+        dv = math.sqrt(dx * dx + dy * dy + dz * dz)
+        lim = self.a_max * dt
+        if dv > lim:
+            dx, dy, dz = dx * lim / dv, dy * lim / dv, dz * lim / dv
+        vx, vy, vz = vx + dx, vy + dy, vz + dz
+        self.v = [vx, vy, vz]
+        self.x = [x[0] + vx * dt, x[1] + vy * dt, x[2] + vz * dt]
+        return True
 
 
 class Gripper:
@@ -125,9 +210,11 @@ class Gripper:
         self.palm_constraint = c.createConstraint(g, -1, -1, -1, p.JOINT_FIXED, [0, 0, 0], [0, 0, 0],
                                                   np.asarray(start_palm).tolist())  # fmt: skip
         self._orientation = c.getQuaternionFromEuler([0.0, 0.0, self.yaw])
-        self.control: GripperControl | None = None
-        """The control applied last."""
         self.control = GripperControl(np.array(start_palm, dtype=np.float64), 0.0)
+        """The control applied last."""
+        self.path = None if cfg.arm == "jump" else PalmPath(self.control.palm_target, v_max=cfg.arm_speed,
+                                                             a_max=cfg.arm_acceleration, dt=cfg.sim.dt)  # fmt: skip
+        """The smooth arm's path to the target (None: the jump arm)."""
         self._set_palm_target(self.control.palm_target)
         self._set_finger_closing(0.0)
 
@@ -136,20 +223,31 @@ class Gripper:
         """Height of the palm's centre above the finger cores' centres in ``cfg``'s gripper [m]."""
         return PALM_HALF_EXTENTS[2] + FINGER_DROP + cfg.finger_half_extents[2]
 
-    def apply(self, control: GripperControl) -> None:
-        """Hand ``control`` to pybullet for the coming steps: the arm's target (the palm keeps the
-        start yaw) and the finger motors' target, each only if it is new. A control is a value:
-        it is kept as given, so its arrays must not be changed afterwards."""
+    def apply(self, control: GripperControl, palm) -> None:
+        """Follow ``control`` for the coming physics step; ``palm`` is where the palm's centre is
+        now. The smooth arm moves its setpoint one step along its path toward the target (the palm
+        keeps the start yaw); the jump arm sets the target itself when it is new. The finger motors
+        get a new target when it changed. Runs every physics step. A control is a value: it is kept
+        as given, so its arrays must not be changed afterwards."""
         last = self.control
-        if control is last:  # the same control for every physics step of an env step
+        if self.path is not None:
+            if self.path.step(control, palm):
+                self._set_palm_target(self.path.x)
+        elif control is last:  # the jump arm: the same control for every physics step of an env step
             return
-        if control.palm_target is not last.palm_target:  # a new target (setting an equal one again changes nothing)
-            self._set_palm_target(control.palm_target)
+        elif control.palm_target is not None and control.palm_target is not last.palm_target:
+            self._set_palm_target(control.palm_target)  # (setting an equal target again changes nothing)
         if control.finger_closing != last.finger_closing:
             self._set_finger_closing(control.finger_closing)
         self.control = control
 
-    def _set_palm_target(self, pos: np.ndarray) -> None:
+    @property
+    def setpoint(self) -> np.ndarray:
+        """Where the arm has the palm's centre now (the constraint's pivot) [m]."""
+        return np.array(self.path.x if self.path is not None else self._pivot, dtype=np.float64)
+
+    def _set_palm_target(self, pos) -> None:
+        self._pivot = pos
         self.client.changeConstraint(self.palm_constraint, jointChildPivot=[float(v) for v in pos],
                                      jointChildFrameOrientation=self._orientation,
                                      maxForce=self.config.palm_force)  # fmt: skip
@@ -167,14 +265,13 @@ class Gripper:
 
 @dataclass(frozen=True, eq=False)
 class Workspace:
-    """Where the arm may take the grip point (the midpoint of the finger cores): a box, and how far
-    its target may lead the palm, as a real arm's reach and tracking limit would."""
+    """Where the arm may take the grip point (the midpoint of the finger cores): a box, as a real
+    arm's reach would be."""
 
     low: np.ndarray
     """(3,) lowest x, y, z [m]."""
     high: np.ndarray
     """(3,) highest x, y, z [m]."""
-    max_lead: float = MAX_LEAD
 
     @classmethod
     def of(cls, cfg: SceneConfig) -> Workspace:
@@ -191,25 +288,58 @@ class Workspace:
 
 
 class GripperActions:
-    """The env's action, ``Box(-1, 1, (4,))``, as a gripper control: a displacement of the grip
-    point's target (x, y, z, ``step_length`` at full action) kept in the workspace and within
-    ``max_lead`` of the palm, and the finger closing (-1 fully open, +1 the faces meeting)."""
+    """The env's action, ``Box(-1, 1, (4,))``, as a gripper control: x, y, z move the grip point,
+    kept in the workspace; the last entry is the finger closing (-1 fully open, +1 the faces
+    meeting). What x, y, z mean depends on the arm (``SceneConfig.arm``), see :meth:`of`."""
 
     space = spaces.Box(-1.0, 1.0, shape=(4,), dtype=np.float32)
 
-    def __init__(self, step_length: float, workspace: Workspace, finger_max_opening: float) -> None:
-        self.step_length = float(step_length)
+    def __init__(self, speed: float, control_frequency: float, workspace: Workspace, finger_max_opening: float) -> None:
+        self.speed = float(speed)
+        self.control_frequency = float(control_frequency)
         self.workspace = workspace
         self.finger_max_opening = float(finger_max_opening)
 
-    def control(self, action: np.ndarray, *, palm_target: np.ndarray, palm: np.ndarray,
-                grip_to_palm: np.ndarray) -> GripperControl:  # fmt: skip
-        """The control for ``action`` (clipped to [-1, 1] already), given the arm's current target,
-        where the palm is and the palm's offset from the grip point."""
-        ws = self.workspace
-        target_grip = ws.clip((palm_target - grip_to_palm) + action[:3] * self.step_length)
-        target = np.clip(target_grip + grip_to_palm, palm - ws.max_lead, palm + ws.max_lead)
-        return GripperControl(target, 0.5 * (float(action[3]) + 1.0) * self.finger_max_opening)
+    @staticmethod
+    def of(arm: str, speed: float, control_frequency: float, workspace: Workspace,
+           finger_max_opening: float) -> GripperActions:  # fmt: skip
+        """The actions for ``arm``: :class:`VelocityActions` for the smooth arm, :class:`TargetActions`
+        for the jump arm."""
+        kind = {"smooth": VelocityActions, "jump": TargetActions}[arm]
+        return kind(speed, control_frequency, workspace, finger_max_opening)
+
+    def closing(self, action: np.ndarray) -> float:
+        """The finger closing for ``action``'s last entry [m]."""
+        return 0.5 * (float(action[3]) + 1.0) * self.finger_max_opening
+
+    def control(self, action: np.ndarray, scene: GraspScene) -> GripperControl:
+        """The control for ``action`` (clipped to [-1, 1] already) in ``scene``'s state now."""
+        raise NotImplementedError
 
 
-__all__ = ["GRIP_TOP", "Gripper", "GripperActions", "GripperControl", "Workspace"]
+class VelocityActions(GripperActions):
+    """The smooth arm's actions (v3): x, y, z are the palm's velocity, ``speed`` at full action
+    (the vector capped at ``speed`` by the arm); the arm reaches it with its acceleration limit and
+    brakes before the workspace's walls."""
+
+    def control(self, action: np.ndarray, scene: GraspScene) -> GripperControl:
+        ws, g2p = self.workspace, scene.grip_to_palm()
+        return GripperControl(None, self.closing(action), palm_velocity=action[:3] * self.speed,
+                              palm_box=(ws.low + g2p, ws.high + g2p))  # fmt: skip
+
+
+class TargetActions(GripperActions):
+    """The jump arm's actions (v1/v2): x, y, z displace the arm's target by up to
+    ``speed / control_frequency`` per env step, the target kept in the workspace and within
+    ``MAX_LEAD`` of the palm; the palm's constraint chases the target."""
+
+    def control(self, action: np.ndarray, scene: GraspScene) -> GripperControl:
+        ws, g2p, palm = self.workspace, scene.grip_to_palm(), scene.palm_state()[0]
+        step = self.speed / self.control_frequency  # as v1/v2 computed it, to the bit
+        target_grip = ws.clip((scene.palm_target - g2p) + action[:3] * step)
+        target = np.clip(target_grip + g2p, palm - MAX_LEAD, palm + MAX_LEAD)
+        return GripperControl(target, self.closing(action))
+
+
+__all__ = ["GRIP_TOP", "Gripper", "GripperActions", "GripperControl", "PalmPath", "TargetActions", "VelocityActions",
+           "Workspace"]

@@ -121,11 +121,10 @@ class GraspScene:
     # --- stepping --------------------------------------------------------------------------------
 
     def step(self, control: GripperControl | None = None) -> None:
-        """One physics step of the whole scene: ``control`` (if given) to the gripper, the finger
-        kind's hook, the kind's extra pybullet substeps (no tissue there), then ``world.step()``
+        """One physics step of the whole scene: ``control`` (or the last one) to the gripper, the
+        finger kind's hook, the kind's extra pybullet substeps (no tissue there), then ``world.step()``
         (tissue, then pybullet)."""
-        if control is not None:
-            self.gripper.apply(control)
+        self.gripper.apply(self.gripper.control if control is None else control, self.world.colliders.rigid_x[PALM])
         self.fingers.before_step()
         for _ in range(self.bullet_steps - 1):
             self.client.stepSimulation()
@@ -144,9 +143,14 @@ class GraspScene:
     # --- the state, by name ----------------------------------------------------------------------
 
     @property
-    def palm_target(self) -> np.ndarray:
-        """Where the arm pulls the palm's centre now [m]."""
+    def palm_target(self) -> np.ndarray | None:
+        """Where the arm takes the palm's centre (None while it follows a commanded velocity) [m]."""
         return self.gripper.control.palm_target
+
+    @property
+    def palm_setpoint(self) -> np.ndarray:
+        """Where the arm has the palm's centre on its way (the constraint's pivot) [m]."""
+        return self.gripper.setpoint
 
     def grip_point(self) -> np.ndarray:
         """Midpoint of the two finger cores [m] (the cores' centres of mass)."""

@@ -25,7 +25,7 @@ def _observations(env, steps: int = 40) -> list:
     return seen + [ep.observation]
 
 
-@pytest.mark.parametrize("env_id", ["SoftGraspRigid-v2", "SoftGraspRigid-v1", "SoftGraspGoal-v1"])
+@pytest.mark.parametrize("env_id", ["SoftGraspRigid-v3", "SoftGraspRigid-v1", "SoftGraspGoal-v3"])
 def test_predict_matches_the_callable_single_and_batched(env_id, make_env):
     policy = ScriptedGraspPolicy()
     seen = _observations(make_env(env_id))
@@ -54,7 +54,7 @@ def test_sb3_evaluate_policy_runs_the_scripted_policy_on_a_vec_env():
     """SB3's evaluator, two envs side by side: the scripted grasp holds the cylinder, so every
     episode returns about 82 (the dense reward: lift 1 per step once at 5 cm, from step ~18 on);
     zero actions return about -5."""
-    venv = make_vec_env("SoftGraspEasyRigid-v1", n_envs=2, seed=0)  # rigid and gentle: quick, and it holds
+    venv = make_vec_env("SoftGraspEasyRigid-v3", n_envs=2, seed=0)  # rigid and gentle: quick, and it holds
     try:
         returns, lengths = evaluate_policy(ScriptedGraspPolicy(), venv, n_eval_episodes=2, return_episode_rewards=True)
     finally:

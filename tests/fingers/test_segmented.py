@@ -129,7 +129,7 @@ def test_torque_springs_diverge_and_the_env_says_so(make_env, scripted) -> None:
         assert s.is_finite() and s.diverged()
     finally:
         sc.close()
-    env = make_env("SoftGrasp-v2", fingers=SegmentedConfig(spring="torque"))
+    env = make_env("SoftGrasp-v3", fingers=SegmentedConfig(spring="torque"))
     rewards = []
     ep = run_episode(env, scripted, seed=0, max_steps=10, on_step=lambda obs, r, *_: rewards.append(r))
     assert ep.diverged and ep.terminated and rewards[-1] == 0.0 and np.isfinite(ep.observation).all()

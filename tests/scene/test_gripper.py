@@ -1,56 +1,130 @@
-"""The gripper's control: the env's action as a GripperControl (the arm's target moved by the
-action, kept in the workspace and within reach of the palm; the finger target), and a control
-applied to the scene moves the palm and fingers as it says."""
+"""The gripper's control: the env's action as a GripperControl (the smooth arm's velocity, the
+jump arm's displaced target, kept in the workspace; the finger target), the smooth arm's path
+(speed and acceleration limits exactly, no overshoot, the same at every dt), and a control
+applied to the scene moves the palm and fingers as it says, smoothly under any action sequence."""
 
 from __future__ import annotations
+
+import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from softgrasp_env.config import SimConfig
 from softgrasp_env.scene import GraspScene, GripperActions, GripperControl, SceneConfig, Workspace
-from softgrasp_env.scene.gripper import GRIP_TOP, MAX_LEAD, WORKSPACE_HALF_WIDTH
+from softgrasp_env.scene.gripper import (
+    GRIP_TOP,
+    MAX_LEAD,
+    WORKSPACE_HALF_WIDTH,
+    PalmPath,
+    TargetActions,
+    VelocityActions,
+)
 
 CFG = SceneConfig(fingers="rigid")
 WS = Workspace.of(CFG)
-ACTIONS = GripperActions(0.0075, WS, CFG.finger_max_opening)
 G2P = np.array([0.0, 0.0, 0.08])  # palm above the grip point
+A_MAX, V_MAX = CFG.arm_acceleration, CFG.arm_speed
 
 
-def _control(action, palm_target, palm=None):
-    palm = palm_target if palm is None else palm
-    return ACTIONS.control(np.asarray(action, dtype=np.float64), palm_target=np.asarray(palm_target),
-                           palm=np.asarray(palm), grip_to_palm=G2P)  # fmt: skip
+def _scene(palm_target, palm=None):
+    """What an action reads of the scene: the arm's target, the palm, the palm's offset."""
+    palm = np.asarray(palm_target if palm is None else palm, dtype=np.float64)
+    return SimpleNamespace(palm_target=np.asarray(palm_target, dtype=np.float64), palm_state=lambda: (palm,),
+                           grip_to_palm=lambda: G2P)  # fmt: skip
 
 
 def test_the_workspace_is_the_documented_box():
     np.testing.assert_allclose(WS.low, [-WORKSPACE_HALF_WIDTH, -WORKSPACE_HALF_WIDTH,
                                         CFG.finger_half_extents[2] + CFG.tissue.extrude + 0.003])  # fmt: skip
     np.testing.assert_allclose(WS.high, [WORKSPACE_HALF_WIDTH, WORKSPACE_HALF_WIDTH, GRIP_TOP])
-    assert WS.max_lead == MAX_LEAD == 0.02
 
 
-def test_an_action_moves_the_target_by_the_step_length_and_sets_the_fingers():
-    start = np.array([0.01, -0.02, 0.18])
-    c = _control([0.0, 0.0, 0.0, -1.0], start)
-    np.testing.assert_allclose(c.palm_target, start, atol=1e-15)
-    assert c.finger_closing == 0.0
-    c = _control([1.0, -0.5, 0.0, 1.0], start)
-    np.testing.assert_allclose(c.palm_target - start, [0.0075, -0.00375, 0.0], atol=1e-15)
+def test_each_arm_gets_its_actions():
+    assert type(GripperActions.of("smooth", 0.15, 20.0, WS, 0.06)) is VelocityActions
+    assert type(GripperActions.of("jump", 0.15, 20.0, WS, 0.06)) is TargetActions
+    with pytest.raises(ValueError, match="arm must be one of"):
+        SceneConfig(arm="teleport")
+
+
+def test_a_smooth_arm_action_is_a_velocity_with_the_workspace_as_its_box():
+    actions = VelocityActions(0.15, 20.0, WS, CFG.finger_max_opening)
+    c = actions.control(np.array([1.0, -0.5, 0.0, 1.0]), _scene([0.0, 0.0, 0.2]))
+    assert c.palm_target is None
+    np.testing.assert_allclose(c.palm_velocity, [0.15, -0.075, 0.0], atol=1e-15)
+    np.testing.assert_allclose(c.palm_box[0], WS.low + G2P)
+    np.testing.assert_allclose(c.palm_box[1], WS.high + G2P)
     assert c.finger_closing == pytest.approx(CFG.finger_max_opening)
-    assert _control([0, 0, 0, 0.0], start).finger_closing == pytest.approx(0.5 * CFG.finger_max_opening)
+    assert actions.control(np.zeros(4), _scene([0.0, 0.0, 0.2])).finger_closing == pytest.approx(0.03)
 
 
-def test_the_target_stays_in_the_workspace_and_within_reach_of_the_palm():
-    edge = np.array([WORKSPACE_HALF_WIDTH, 0.0, 0.1]) + G2P  # grip at the +x edge
-    c = _control([1.0, 0.0, 0.0, 0.0], edge)
-    assert c.palm_target[0] - G2P[0] == pytest.approx(WORKSPACE_HALF_WIDTH)  # no further out
-    low = np.array([0.0, 0.0, WS.low[2]]) + G2P
-    assert _control([0.0, 0.0, -1.0, 0.0], low).palm_target[2] - G2P[2] == pytest.approx(WS.low[2])
-    # the palm lags 3 cm behind its target: the target may lead it by 2 cm at most
-    target = np.array([0.05, 0.0, 0.15])
-    palm = target - np.array([0.03, 0.0, 0.0])
-    c = _control([1.0, 0.0, 0.0, 0.0], target, palm)
-    assert c.palm_target[0] == pytest.approx(palm[0] + MAX_LEAD)
+def test_a_jump_arm_action_moves_the_target_in_the_workspace_and_within_reach_of_the_palm():
+    actions = TargetActions(0.15, 20.0, WS, CFG.finger_max_opening)
+    start = np.array([0.01, -0.02, 0.18])
+    c = actions.control(np.array([1.0, -0.5, 0.0, -1.0]), _scene(start))
+    np.testing.assert_allclose(c.palm_target - start, [0.0075, -0.00375, 0.0], atol=1e-15)
+    assert c.finger_closing == 0.0
+    edge = np.array([WORKSPACE_HALF_WIDTH, 0.0, 0.1]) + G2P  # grip at the +x edge: no further out
+    assert actions.control(np.array([1.0, 0, 0, 0]), _scene(edge)).palm_target[0] - G2P[0] == pytest.approx(
+        WORKSPACE_HALF_WIDTH)  # fmt: skip
+    target = np.array([0.05, 0.0, 0.15])  # the palm lags 3 cm: the target leads it by 2 cm at most
+    c = actions.control(np.array([1.0, 0, 0, 0]), _scene(target, target - [0.03, 0.0, 0.0]))
+    assert c.palm_target[0] == pytest.approx(target[0] - 0.03 + MAX_LEAD)
+
+
+def _run(path: PalmPath, control: GripperControl, steps: int, palm=None) -> np.ndarray:
+    """The setpoint at each step (the palm following it exactly unless ``palm`` is given)."""
+    xs = [list(path.x)]
+    for _ in range(steps):
+        path.step(control, path.x if palm is None else palm)
+        xs.append(list(path.x))
+    return np.array(xs)
+
+
+def _rates(xs: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    v = np.diff(xs, axis=0) / dt
+    return np.linalg.norm(v, axis=1), np.linalg.norm(np.diff(v, axis=0), axis=1) / dt
+
+
+@pytest.mark.parametrize("dt", [1 / 1000, 1 / 240, 1 / 120])
+def test_the_path_to_a_target_keeps_both_limits_stops_on_it_and_takes_the_same_time_at_every_dt(dt):
+    """5 cm: a trapezoid (accelerate at a to v_max, cruise, brake), arriving after d / v + v / a =
+    0.433 s in continuous time; the discrete path may take a step or two more, never overshoots."""
+    path = PalmPath(np.zeros(3), v_max=V_MAX, a_max=A_MAX, dt=dt)
+    target = np.array([0.03, 0.0, 0.04])
+    xs = _run(path, GripperControl(target, 0.0), int(round(0.8 / dt)))
+    speed, accel = _rates(xs, dt)
+    assert speed.max() <= V_MAX * (1 + 1e-12)
+    assert accel.max() <= A_MAX * (1 + 1e-9)
+    np.testing.assert_allclose(xs[-1], target, atol=1e-12)
+    along = xs @ (target / np.linalg.norm(target))
+    assert along.max() <= np.linalg.norm(target) + 1e-12  # no overshoot
+    arrived = np.argmax(np.linalg.norm(xs - target, axis=1) < 1e-9) * dt
+    assert arrived == pytest.approx(0.05 / V_MAX + V_MAX / A_MAX, abs=3 * dt)
+    assert path.v == [0.0, 0.0, 0.0] and not path.step(GripperControl(target, 0.0), path.x)  # at rest there
+
+
+def test_a_velocity_command_ramps_up_at_the_acceleration_limit_and_brakes_before_the_workspace_wall():
+    dt = 1 / 240
+    box = (np.array([-0.1, -0.1, 0.0]), np.array([0.1, 0.1, 0.3]))
+    path = PalmPath(np.zeros(3), v_max=V_MAX, a_max=A_MAX, dt=dt)
+    xs = _run(path, GripperControl(None, 0.0, palm_velocity=np.array([0.3, 0.0, 0.0]), palm_box=box), 480)
+    speed, accel = _rates(xs, dt)
+    assert speed[0] == pytest.approx(A_MAX * dt)  # from rest: one step of a dt
+    k = int(math.ceil(V_MAX / (A_MAX * dt)))
+    assert speed[k:k + 10].max() == pytest.approx(V_MAX)  # the command, capped at v_max
+    assert accel.max() <= A_MAX * (1 + 1e-9)
+    assert xs[:, 0].max() <= 0.1 + 1e-12 and xs[-1, 0] == pytest.approx(0.1, abs=1e-9)  # stopped at the wall
+    assert speed[-1] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_the_setpoint_waits_for_a_blocked_palm():
+    dt = 1 / 240
+    path = PalmPath(np.zeros(3), v_max=V_MAX, a_max=A_MAX, dt=dt)
+    stuck = np.zeros(3)  # the palm pressing on something, not moving
+    xs = _run(path, GripperControl(None, 0.0, palm_velocity=np.array([0.0, 0.0, -0.15])), 480, palm=stuck)
+    assert np.linalg.norm(xs, axis=1).max() <= MAX_LEAD + V_MAX * dt
 
 
 def test_a_control_moves_the_palm_and_fingers_where_it_says():
@@ -61,7 +135,34 @@ def test_a_control_moves_the_palm_and_fingers_where_it_says():
         for _ in range(240):
             sc.step(control)
         assert sc.control is control and sc.palm_target is target
+        np.testing.assert_allclose(sc.palm_setpoint, target, atol=1e-12)
         np.testing.assert_allclose(sc.palm_position(), target, atol=2e-4)
         np.testing.assert_allclose(sc.finger_closing(), [0.02, 0.02], atol=2e-4)
+    finally:
+        sc.close()
+
+
+@pytest.mark.parametrize("dt", [1 / 1000, 1 / 240, 1 / 120])
+def test_the_palm_itself_stays_under_the_acceleration_limit_under_bang_bang_actions(dt):
+    """The env's actions flipping between full speed one way and the other every control step
+    (the hardest on the arm), with a cylinder in the way: the palm's own acceleration, from
+    pybullet's velocities at every physics step, stays under 2 m/s^2 (the arm's 1.5 plus what its
+    constraint and the contacts add) at every dt; the jump arm kicked it at 86 m/s^2 (1/240 s)."""
+    cfg = SceneConfig(fingers="rigid", sim=SimConfig(dt=dt))
+    sc = GraspScene(cfg)
+    actions = VelocityActions(cfg.arm_speed, 20.0, Workspace.of(cfg), cfg.finger_max_opening)
+    rng = np.random.default_rng(0)
+    per_control = int(round(1 / (20.0 * dt)))
+    try:
+        v_prev, peak = sc.palm_state()[2].copy(), 0.0
+        for k in range(40):
+            a = np.concatenate([np.sign(rng.uniform(-1, 1, 3)) * (1 if k % 2 else -1), rng.uniform(-1, 1, 1)])
+            control = actions.control(a, sc)
+            for _ in range(per_control):
+                sc.step(control)
+                v = sc.palm_state()[2].copy()
+                peak = max(peak, float(np.linalg.norm(v - v_prev)) / dt)
+                v_prev = v
+        assert peak <= 2.0, f"peak palm acceleration {peak:.2f} m/s^2 at dt {dt:g}"
     finally:
         sc.close()

@@ -1,4 +1,4 @@
-"""The goal task (SoftGraspGoal-v1, softgrasp_env/tasks/goal.py): its reward is compute_reward on
+"""The goal task (SoftGraspGoal-v3, softgrasp_env/tasks/goal.py): its reward is compute_reward on
 (achieved, desired) goals, vectorised over batches, the same online and for HER's relabelled
 samples."""
 
@@ -12,7 +12,7 @@ from tests.helpers import run_episode
 
 
 def test_goal_env_compute_reward_is_vectorised_and_matches_step(make_env):
-    env = make_env("SoftGraspGoal-v1")
+    env = make_env("SoftGraspGoal-v3")
     u = env.unwrapped
     obs, _ = env.reset(seed=0)
     policy = ScriptedGraspPolicy(lift_to=obs["desired_goal"][2] - 0.05)
@@ -34,7 +34,7 @@ def test_goal_env_compute_reward_is_vectorised_and_matches_step(make_env):
 def test_her_trains_on_the_goal_env():
     from stable_baselines3 import SAC, HerReplayBuffer
 
-    env = gym.make("SoftGraspGoal-v1", max_episode_steps=20)
+    env = gym.make("SoftGraspGoal-v3", max_episode_steps=20)
     try:
         model = SAC("MultiInputPolicy", env, replay_buffer_class=HerReplayBuffer,
                     replay_buffer_kwargs={"n_sampled_goal": 2, "goal_selection_strategy": "future"},

@@ -50,7 +50,7 @@ def test_open_loop_actions_rarely_succeed(name, make_env):
     """The task needs feedback: measured over seeds 0-39 on the soft env, 'close 15, then up'
     succeeds in 0 of 40, 'down, close, up' in 1 of 40. Asserted on 20 other seeds: at most 10 %."""
     seq = ISSUE_SEQUENCE if name == "close 15, then up" else _open_loop((0.0, 0.0), 0)
-    rate = _success_rate(make_env("SoftGrasp-v2"), seq, range(1000, 1020))
+    rate = _success_rate(make_env("SoftGrasp-v3"), seq, range(1000, 1020))
     assert rate <= 0.10, f"open-loop {name!r} succeeded in {rate:.0%}"
 
 
@@ -63,7 +63,7 @@ def test_no_constant_move_finds_the_cylinder_often(move, steps, make_env):
     bound (and 6 of 60 over seeds 0-59): the start and the cylinder are spread as widely as the
     workspace allows, and the soft fingers, wide open, still catch a cylinder that lies within
     about 2.5 cm of where they come down."""
-    rate = _success_rate(make_env("SoftGrasp-v2"), _open_loop(move, steps), range(40))
+    rate = _success_rate(make_env("SoftGrasp-v3"), _open_loop(move, steps), range(40))
     assert rate <= 0.10, f"open-loop move {move} x{steps} succeeded in {rate:.0%}"
 
 
@@ -77,7 +77,7 @@ def test_scripted_policy_solves_the_soft_task(make_env, scripted):
         forces.append(obs[FORCE])
         return scripted(obs)
 
-    rate = _success_rate(make_env("SoftGrasp-v2"), watched, range(2000, 2020))
+    rate = _success_rate(make_env("SoftGrasp-v3"), watched, range(2000, 2020))
     assert rate >= 0.9, f"scripted policy: {rate:.0%}"
     # The arm only moves and lifts: the fingers press with their motors' 3 N, no more (measured
     # 2.93 N at most over 10 episodes); random arm pushes reach 220 N (the env card).
@@ -93,7 +93,7 @@ def test_rigid_fingers_press_no_harder_than_their_motors_in_the_scripted_grasp(m
         forces.append((*obs[FORCE], obs[LIFT]))
         return scripted(obs)
 
-    _success_rate(make_env("SoftGraspRigid-v2"), watched, range(100, 104))
+    _success_rate(make_env("SoftGraspRigid-v3"), watched, range(100, 104))
     forces = np.array(forces)
     assert forces[:, :2].max() <= 3.6
     lifted = forces[forces[:, 2] > 0.03]
@@ -101,7 +101,7 @@ def test_rigid_fingers_press_no_harder_than_their_motors_in_the_scripted_grasp(m
 
 
 def test_reach_start_is_above_and_away_and_options_fix_it(make_env):
-    env = make_env("SoftGrasp-v2")
+    env = make_env("SoftGrasp-v3")
     for seed in range(5):
         env.reset(seed=seed)
         sc = env.unwrapped.scene
@@ -119,9 +119,9 @@ def test_reach_start_is_above_and_away_and_options_fix_it(make_env):
 
 def test_task_is_validated():
     with pytest.raises(ValueError, match="task must be one of"):
-        gym.make("SoftGrasp-v2", task="fly")
+        gym.make("SoftGrasp-v3", task="fly")
     with pytest.raises(ValueError, match="approach_range"):
-        gym.make("SoftGrasp-v2", approach_range=(0.05, 0.2))
+        gym.make("SoftGrasp-v3", approach_range=(0.05, 0.2))
 
 
 @pytest.mark.parametrize(
@@ -141,7 +141,7 @@ def test_geometry_that_cannot_start_is_refused_when_the_env_is_made(kwargs, matc
     range extremes that put a finger into the cylinder - each a ValueError naming the settings
     and the limit, at gym.make, not at some later reset."""
     with pytest.raises(ValueError, match=match):
-        gym.make("SoftGrasp-v2", **kwargs)
+        gym.make("SoftGrasp-v3", **kwargs)
 
 
 def test_scene_geometry_check_names_the_palm_and_allows_an_offset_along_the_faces():
@@ -151,7 +151,7 @@ def test_scene_geometry_check_names_the_palm_and_allows_an_offset_along_the_face
     with pytest.raises(ValueError, match="fingers start inside the cylinder"):
         SceneConfig(cylinder_xy=(0.03, 0.0))
     with pytest.raises(ValueError, match="reset option|does not fit"):
-        env = gym.make("SoftGrasp-v2")
+        env = gym.make("SoftGrasp-v3")
         try:
             env.reset(seed=0, options={"cylinder_radius": 0.06})
         finally:
@@ -173,7 +173,7 @@ def test_reset_options_of_the_wrong_type_name_the_option_and_leave_the_env_usabl
     """Issue 12 item 5: a wrong-typed option names itself and the type it wants (it used to be
     "TypeError: 'float' object is not iterable"); the env still resets and steps afterwards,
     under gym.make's default checker too."""
-    env = gym.make("SoftGraspEasyRigid-v1")
+    env = gym.make("SoftGraspEasyRigid-v3")
     try:
         with pytest.raises(error, match=match):
             env.reset(seed=0, options=options)

@@ -1,0 +1,186 @@
+"""The env's own scripted grasp, measured as a new user would try it (issue 19's table): the aligned
+gentle start (SoftGraspEasy / SoftGraspEasyRigid with yaw, wedge, offset and cylinder position
+fixed at 0), 3 N per finger, every figure from one physics step to the next; before (the v1 ids,
+the jump arm) and after (v3, the smooth arm) in one run.
+
+    PYTHONPATH=. python benchmarks/grasp_checks.py                          # every row, v1 and v3
+    PYTHONPATH=. python benchmarks/grasp_checks.py --rows dt,arm --versions v3  # some
+
+Rows: ``dt`` the scripted grasp at dt 1/1000 ... 1/120 s (held, lift, in-hand motion from
+lift-off to the end, pad compression at the end, peak palm acceleration); ``arm`` the palm's peak
+acceleration under a full-up action from rest; ``mass`` the heaviest cylinder the env episode
+holds (bisection); ``friction`` the lowest friction scale that lifts 0.1 kg (bisection).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import gymnasium as gym
+import numpy as np
+
+import softgrasp_env  # noqa: F401  (registers the ids)
+from agents.scripted import ScriptedGraspPolicy
+from softgrasp_env.config import SimConfig
+from softgrasp_env.scene.scene import LEFT, PALM, RIGHT
+
+ALIGNED = {"yaw": 0.0, "jaw_wedge": 0.0, "lateral_offset": 0.0, "cylinder_xy": (0.0, 0.0)}
+KINDS = {"soft": dict(fingers="tissue"), "soft-consistent": dict(fingers="tissue", coupling="consistent"),
+         "rigid": dict(fingers="rigid"),
+         "soft-mu_k=mu_s": dict(fingers="tissue", friction_dynamic=0.9),
+         "soft-consistent-mu_k=mu_s": dict(fingers="tissue", coupling="consistent", friction_dynamic=0.9)}  # fmt: skip
+"""The finger kinds compared; the tissue also with kinetic friction equal to static (pybullet's
+rigid contacts have one coefficient, mu_s: issue 19's friction law)."""
+
+
+def _make(kind: dict, version: str, *, dt: float = 1.0 / 240.0, **kwargs) -> gym.Env:
+    kw = dict(kind)
+    sim = SimConfig(dt=dt, coupling=kw.pop("coupling", "thesis"))
+    env_id = f"SoftGraspEasyRigid-{version}" if kw.get("fingers") == "rigid" else f"SoftGraspEasy-{version}"
+    return gym.make(env_id, sim=sim, **kw, **kwargs)
+
+
+class Recorder:
+    """Wraps a scene's step: after every physics step, the palm's velocity and the cylinder's pose
+    in the palm's frame."""
+
+    def __init__(self, env: gym.Env) -> None:
+        self.env = env.unwrapped
+        self.palm_v: list[np.ndarray] = []
+        self.rel: list[np.ndarray] = []
+        self.lift: list[float] = []
+        self.gap: list[float] = []
+        scene = self.env.scene
+        inner = scene.step
+
+        def step(control=None):
+            inner(control)
+            self._record(scene)
+
+        scene.step = step
+
+    def _record(self, scene) -> None:
+        col = scene.world.colliders
+        self.palm_v.append(col.rigid_v[PALM].copy())
+        c = scene.client
+        pp, pq = c.getBasePositionAndOrientation(scene.gripper.body)
+        cp, _ = c.getBasePositionAndOrientation(scene.cylinder)
+        ip, iq = c.invertTransform(pp, pq)
+        self.rel.append(np.asarray(c.multiplyTransforms(ip, iq, cp, [0, 0, 0, 1])[0]))
+        self.lift.append(float(cp[2] - scene.cylinder_rest_z))
+        # gap between each core's inner face and the cylinder's surface, along the palm's x axis
+        rot = np.asarray(c.getMatrixFromQuaternion(pq)).reshape(3, 3)
+        ax = rot[:, 0]
+        fx = scene.config.finger_half_extents[0]
+        r = scene.config.cylinder_radius
+        left = float((np.asarray(cp) - col.rigid_x[LEFT]) @ ax) - fx - r
+        right = float((col.rigid_x[RIGHT] - np.asarray(cp)) @ ax) - fx - r
+        self.gap.append(0.5 * (left + right))
+
+    def peak_acceleration(self, dt: float) -> float:
+        v = np.asarray(self.palm_v)
+        return float(np.linalg.norm(np.diff(v, axis=0), axis=1).max() / dt) if len(v) > 1 else 0.0
+
+    def in_hand_motion(self, lift_off: float = 0.002) -> float:
+        """Largest distance of the cylinder centre in the palm's frame from where it was at
+        lift-off (the first step 2 mm up) to the end [m]."""
+        lift = np.asarray(self.lift)
+        up = np.flatnonzero(lift > lift_off)
+        if not len(up):
+            return math.nan
+        rel = np.asarray(self.rel)[up[0]:]
+        return float(np.linalg.norm(rel - rel[0], axis=1).max())
+
+
+def scripted_episode(kind: dict, version: str, *, dt: float = 1.0 / 240.0, options: dict | None = None,
+                     **kwargs) -> dict:  # fmt: skip
+    env = _make(kind, version, dt=dt, **kwargs)
+    policy = ScriptedGraspPolicy.for_env(env)
+    try:
+        obs, _ = env.reset(seed=0, options={**ALIGNED, **(options or {})})
+        rec = Recorder(env)
+        done = False
+        while not done:
+            obs, _, term, trunc, info = env.step(policy(obs))
+            done = term or trunc
+        u = env.unwrapped
+        pad = u.args.scene.pad_thickness
+        return {"held": bool(info["is_success"]), "lift": float(info["lift_height"]), "in_hand": rec.in_hand_motion(),
+                "compression": pad - rec.gap[-1], "pad": pad, "peak_accel": rec.peak_acceleration(dt),
+                "diverged": bool(info["diverged"])}  # fmt: skip
+    finally:
+        env.close()
+
+
+def arm_from_rest(version: str, dt: float) -> float:
+    """Peak palm acceleration [m/s^2] under a full-up action from rest (fingers open, nothing held)."""
+    env = _make(KINDS["rigid"], version, dt=dt)
+    try:
+        env.reset(seed=0, options=ALIGNED)
+        rec = Recorder(env)
+        for _ in range(10):
+            env.step(np.array([0.0, 0.0, 1.0, -1.0], dtype=np.float32))
+        return rec.peak_acceleration(dt)
+    finally:
+        env.close()
+
+
+def bisect(held, lo: float, hi: float, *, rel_tol: float = 0.02) -> float:
+    """The boundary between held (lo) and not held (hi), geometric bisection."""
+    if not held(lo) or held(hi):
+        return math.nan
+    while hi / lo > 1.0 + rel_tol:
+        mid = math.sqrt(lo * hi)
+        lo, hi = (mid, hi) if held(mid) else (lo, mid)
+    return math.sqrt(lo * hi)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--rows", default="dt,arm,mass,friction")
+    parser.add_argument("--versions", default="v1,v3", help="v1: before (the jump arm); v3: after")
+    parser.add_argument("--kinds", default=",".join(KINDS), help="for the mass and friction rows, comma-separated")
+    ns = parser.parse_args(argv)
+    rows, versions = ns.rows.split(","), ns.versions.split(",")
+    kinds = {name: KINDS[name] for name in ns.kinds.split(",")}
+    g, mu, force, mass = 9.81, 0.9, 3.0, 0.1
+    if "dt" in rows:
+        print("scripted grasp, aligned gentle start, 3 N per finger, 0.1 kg")
+        print(f"{'ids':<4}{'kind':<18}{'dt':>8}{'held':>6}{'lift mm':>9}{'in-hand mm':>11}{'pad mm':>8}"
+              f"{'compr. mm':>10}{'peak a m/s2':>12}")  # fmt: skip
+        for version in versions:
+            for name in ("soft", "rigid"):
+                for hz in (1000, 480, 240, 120):
+                    r = scripted_episode(KINDS[name], version, dt=1.0 / hz)
+                    print(f"{version:<4}{name:<18}{'1/' + str(hz):>8}{str(r['held']):>6}{r['lift'] * 1e3:>9.1f}"
+                          f"{r['in_hand'] * 1e3:>11.2f}{r['pad'] * 1e3:>8.1f}{r['compression'] * 1e3:>10.2f}"
+                          f"{r['peak_accel']:>12.1f}", flush=True)  # fmt: skip
+    if "arm" in rows:
+        for version in versions:
+            for hz in (1000, 240, 120):
+                print(f"{version}: palm peak acceleration, full-up from rest, dt 1/{hz}: "
+                      f"{arm_from_rest(version, 1.0 / hz):.2f} m/s^2", flush=True)  # fmt: skip
+    for version in versions:
+        a_peak = scripted_episode(KINDS["rigid"], version)["peak_accel"] if {"mass", "friction"} & set(rows) else 0.0
+        if "mass" in rows:
+            bound = 2 * mu * force / (g + a_peak)
+            for name, kind in kinds.items():
+                m = bisect(lambda m, kind=kind: scripted_episode(kind, version, options={"cylinder_mass": m})["held"],
+                           0.05, 1.5)  # fmt: skip
+                print(f"{version}: heaviest cylinder held, env episode, {name}: {m:.3f} kg (Coulomb 2 mu F / (g + a), "
+                      f"a = {a_peak:.2f} m/s^2: {bound:.3f} kg; {m / bound - 1:+.1%})", flush=True)  # fmt: skip
+        if "friction" in rows:
+            bound = mass * (g + a_peak) / (2 * force) / mu
+            for name, kind in kinds.items():
+                def slips(s, kind=kind):
+                    return not scripted_episode(kind, version, options={"friction_scale": s})["held"]
+
+                f = bisect(slips, 0.05, 1.0)
+                print(f"{version}: lowest friction that lifts 0.1 kg, {name}: {f:.3f} x the default (Coulomb m (g + a) "
+                      f"/ 2F: {bound:.3f} x; {f / bound - 1:+.1%})", flush=True)  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
