@@ -342,7 +342,7 @@ def stop_distance(v0: float, tissue: TissueConfig, sim: SimConfig) -> float:
         solver.step(state, col)
     state.particle_v[:, 1] += v0
     y0 = state.particle_x[:, 1].mean()
-    for _ in range(int(2.0 * v0 / (tissue.friction_dynamic * sim.gravity) / sim.dt) + 240):
+    for _ in range(int(2.0 * v0 / (tissue.friction_kinetic * sim.gravity) / sim.dt) + 240):
         solver.step(state, col)
     return float(state.particle_x[:, 1].mean() - y0)
 

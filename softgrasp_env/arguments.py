@@ -51,8 +51,9 @@ class EnvArguments:
     """The env's keyword arguments, validated (each field's metadata has its card entry)."""
 
     fingers: str | FingerConfig = _arg("tissue", "The finger kind: 'tissue' (oriented-particle tissue on rigid cores, "
-        "the thesis), 'rigid' (the bare cores), 'segmented' (sprung rigid segments), 'fem' (pybullet's FEM pads); "
-        "or a kind's config (`SegmentedConfig(segments=4)`) for its own settings", type_="str or FingerConfig")
+        "the thesis), 'rigid' (the bare cores), 'segmented' (sprung rigid segments), 'fem' (pybullet's FEM pads), "
+        "'rigid_torsion' (the bare cores with torsional friction of the tissue's contact patch); or a kind's config "
+        "(`SegmentedConfig(segments=4)`) for its own settings", type_="str or FingerConfig")
     tissue_faces: str | None = _arg(None, "fingers='tissue': 'contact' (the inner face and tip of each core) or "
         "'all' faces get tissue; None: the kind's default, 'contact'", type_="str")
     fem_resolution: str | None = _arg(None, "fingers='fem': the pads' mesh, 'coarse' or 'fine' (several times "
@@ -76,7 +77,8 @@ class EnvArguments:
         "4,000); `tissue_density` before 0.3", type_="float")
     friction_static: float | None = _arg(None, "μ_s of the finger surface (None: the preset's, 0.9; the rigid "
         "kinds' pybullet coefficient)", type_="float")
-    friction_dynamic: float | None = _arg(None, "μ_k of the tissue (None: the preset's, 0.7)", type_="float")
+    friction_dynamic: float | None = _arg(None, "μ_k of the tissue (None: the preset's: equal to μ_s, one "
+        "coefficient as pybullet's rigid contacts have; v1/v2: 0.7)", type_="float")
     tissue: TissueConfig | None = _arg(None, "A whole TissueConfig to start from (None: the preset's)",
                                        type_="TissueConfig")
     sim: SimConfig | None = _arg(None, "A whole SimConfig (dt, iterations, coupling; None: the preset's)",
@@ -216,6 +218,10 @@ class EnvArguments:
         p_cfg = presets.scene_config(self.preset)
         tissue = self.tissue if self.tissue is not None else p_cfg.tissue
         check_type("tissue", tissue, TissueConfig)
+        if self.tissue is not None and None not in (tissue.friction_dynamic, self.friction_dynamic) \
+                and tissue.friction_dynamic != self.friction_dynamic:  # fmt: skip
+            raise ValueError(f"friction_dynamic={self.friction_dynamic!r} (the v1/v2 ids give 0.7) and "
+                             f"tissue.friction_dynamic={tissue.friction_dynamic!r} disagree: give one of them")
         overrides = {k: v for k, v in (("particle_density", self.particle_density),
                                        ("friction_static", self.friction_static),
                                        ("friction_dynamic", self.friction_dynamic)) if v is not None}  # fmt: skip
@@ -348,7 +354,7 @@ class EnvArguments:
                 check_range("cylinder_mass", b.cylinder_mass * (1.0 + sign * rg.cylinder_mass), 0.001, 10.0,
                             owner="SceneConfig")  # fmt: skip
                 check_range("friction_static", b.tissue.friction_static * scale, 0.0, 10.0, owner="TissueConfig")
-                check_range("friction_dynamic", b.tissue.friction_dynamic * scale, 0.0, 10.0, owner="TissueConfig")
+                check_range("friction_dynamic", b.tissue.friction_kinetic * scale, 0.0, 10.0, owner="TissueConfig")
                 check_range("ground_friction", b.ground_friction * scale, 0.0, 10.0, owner="SceneConfig")
             except ValueError as e:
                 raise ValueError(

@@ -11,9 +11,9 @@ MAX_EPISODE_STEPS = 100
 """5 s at the default 20 Hz control frequency."""
 
 _OLD = {"arm": "jump", "carry_frequency": 2.0, "carry_acceleration": None, "carry_amplitude": 0.01,
-        "carry_direction": "across", "carry_slide_limit": None}
-"""The v1/v2 ids keep the arm and the carry test their results were made with (issue 19); the v3
-ids take EnvArguments' defaults."""
+        "carry_direction": "across", "carry_slide_limit": None, "friction_dynamic": 0.7}
+"""The v1/v2 ids keep the arm, the carry test and the tissue's two-coefficient friction their
+results were made with (issue 19); the v3 ids take EnvArguments' defaults."""
 _ENV, _GOAL = "softgrasp_env.env:SoftGraspEnv", "softgrasp_env.env:SoftGraspGoalEnv"
 
 
@@ -28,6 +28,8 @@ _SPECS: dict[str, tuple[str, dict]] = {
     **{f"SoftGraspGoal-{v}": (_GOAL, _kw("tissue", v)) for v in ("v3", "v1")},
     **{f"SoftGraspEasy-{v}": (_ENV, _kw("tissue", v, reward_type="dense", task="easy")) for v in ("v3", "v1")},
     **{f"SoftGraspEasyRigid-{v}": (_ENV, _kw("rigid", v, reward_type="dense", task="easy")) for v in ("v3", "v1")},
+    "SoftGraspRigidTorsion-v3": (_ENV, _kw("rigid_torsion", "v3", reward_type="dense", carry=True)),
+    "SoftGraspEasyRigidTorsion-v3": (_ENV, _kw("rigid_torsion", "v3", reward_type="dense", task="easy")),
     "SoftGrasp-v1": (_ENV, _kw("tissue", "v1", reward_type="dense", carry=False)),
     "SoftGraspRigid-v1": (_ENV, _kw("rigid", "v1", reward_type="dense", carry=False)),
     "SoftGraspSparse-v1": (_ENV, _kw("tissue", "v1", reward_type="sparse", carry=False)),

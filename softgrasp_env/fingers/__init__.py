@@ -6,15 +6,16 @@ from __future__ import annotations
 
 from .base import FingerConfig, FingerKind, FingerSite, Visual
 from .fem import FemConfig, FemFingers
-from .rigid import RigidConfig, RigidFingers
+from .rigid import PATCH_SPINNING_FRICTION, RigidConfig, RigidFingers, TorsionalRigidConfig, TorsionalRigidFingers
 from .segmented import SegmentedConfig, SegmentedFingers
 from .tissue import TissueFingerConfig, TissueFingers
 
 FINGERS: dict[str, type[FingerKind]] = {
-    kind.name: kind for kind in (TissueFingers, RigidFingers, SegmentedFingers, FemFingers)
+    kind.name: kind for kind in (TissueFingers, RigidFingers, SegmentedFingers, FemFingers, TorsionalRigidFingers)
 }
 """Every finger kind by name: 'tissue' (ours, the thesis), 'rigid' (the rigid-only twin),
-'segmented' (the thesis' traditional fix), 'fem' (pybullet's FEM pads)."""
+'segmented' (the thesis' traditional fix), 'fem' (pybullet's FEM pads), 'rigid_torsion' (the rigid twin with
+torsional friction of the tissue's own contact patch)."""
 
 
 def finger_config(fingers: str | FingerConfig, *, owner: str | None = None) -> FingerConfig:
@@ -31,5 +32,5 @@ def finger_config(fingers: str | FingerConfig, *, owner: str | None = None) -> F
     return FINGERS[fingers].config_type()
 
 
-__all__ = ["FINGERS", "FemConfig", "FingerConfig", "FingerKind", "FingerSite", "RigidConfig", "SegmentedConfig",
-           "TissueFingerConfig", "Visual", "finger_config"]
+__all__ = ["FINGERS", "PATCH_SPINNING_FRICTION", "FemConfig", "FingerConfig", "FingerKind", "FingerSite", "RigidConfig",
+           "SegmentedConfig", "TissueFingerConfig", "TorsionalRigidConfig", "Visual", "finger_config"]  # fmt: skip

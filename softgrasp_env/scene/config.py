@@ -217,8 +217,9 @@ def scale_friction(cfg: SceneConfig, scale: float) -> SceneConfig:
     """``cfg`` with every friction coefficient (the finger surface's static and kinetic, the
     ground's) scaled by ``scale``: how the env's ``friction_range`` and the ``friction_scale``
     reset option act."""
+    mu_k = cfg.tissue.friction_dynamic  # None (equal to mu_s) stays so
     tissue = replace(cfg.tissue, friction_static=cfg.tissue.friction_static * scale,
-                     friction_dynamic=cfg.tissue.friction_dynamic * scale)  # fmt: skip
+                     friction_dynamic=None if mu_k is None else mu_k * scale)  # fmt: skip
     return replace(cfg, tissue=tissue, ground_friction=cfg.ground_friction * scale)
 
 

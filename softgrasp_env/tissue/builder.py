@@ -345,7 +345,7 @@ def _single_body_model(
         body_particle_offsets=np.array([0, n], dtype=np.int32),
         body_core_shape=np.array([-1], dtype=np.int32),
         body_stiffness=np.array([tissue.stiffness]),
-        body_friction=np.array([[tissue.friction_static, tissue.friction_dynamic]]),
+        body_friction=np.array([[tissue.friction_static, tissue.friction_kinetic]]),
     )
 
 
