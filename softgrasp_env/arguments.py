@@ -378,7 +378,7 @@ class EnvArguments:
 
     def make_actions(self) -> GripperActions:
         return GripperActions.of(self.arm, self.gripper_speed, self.control_frequency, self.workspace,
-                                 self.scene.finger_max_opening)  # fmt: skip
+                                 self.scene.finger_travel)  # fmt: skip
 
     # --- construction from gym.make's kwargs -----------------------------------------------------
 

@@ -54,17 +54,21 @@ def _display_available() -> bool:
 
 class SoftGraspEnv(gym.Env):
     """Two fingers pick up a cylinder and hold it while the arm carries it: soft fingers, each a
-    rigid core wrapped in oriented-particle tissue (``SoftGrasp-v2``), or the same cores touching
-    the cylinder through pybullet's rigid contacts (``SoftGraspRigid-v2``). ``SoftGrasp-v1`` /
-    ``SoftGraspRigid-v1`` are the same task without the carry test.
+    rigid core wrapped in oriented-particle tissue (``SoftGrasp-v3``), or the same cores touching
+    the cylinder through pybullet's rigid contacts (``SoftGraspRigid-v3``; with the torsional
+    friction of the tissue's contact patch, ``SoftGraspRigidTorsion-v3``). The v2 / v1 ids keep
+    the arm and carry test their published results were made with (Version history).
 
     ## Description
     A gripper hangs above a cylinder (radius 3 cm, height 10 cm, 0.1 kg) standing on the ground.
-    The gripper is a palm pulled by a force-limited arm (200 N) and two finger cores that close
-    along the palm's x axis, each driven by a force-limited motor (3 N): squeezing is a force, not a
-    teleport. The task is to reach the cylinder, close on it, lift it at least 5 cm and keep it
-    through the carry test, the episode's last 1.5 s, in which the arm sways it 1 cm at 2 Hz
-    sideways across the jaw as a transport would. The gripper starts above the cylinder's top and
+    The gripper is a palm pulled by a force-limited arm (40 N) along a smooth path (at most
+    0.15 m/s and 1.5 m/s^2, the same at every dt) and two finger cores that close along the palm's
+    x axis, each driven by a force-limited motor (3 N): squeezing is a force, not a teleport. The
+    finger surface has one friction coefficient, mu 0.9, for every finger kind. The task is to
+    reach the cylinder, close on it, lift it at least 5 cm and keep it through the carry test, the
+    episode's last 1.5 s, in which the arm sways it as a transport would: per episode a sway of
+    1.2-3.0 Hz (around the two-point grasp's ~1.9 Hz pendulum frequency), 0.5-1.0 m/s^2 peak, in
+    any horizontal direction. The gripper starts above the cylinder's top and
     4-14 cm away from the origin, the cylinder anywhere within 7 cm of it, and the fingers are
     only approximately aligned (thesis: "only approximate orientation of the fingers relative to
     the object"): a jaw wedge, a yaw and a lateral offset. Physics runs at 240 Hz; one env step
@@ -76,11 +80,15 @@ class SoftGraspEnv(gym.Env):
 
     | index | meaning | scaling |
     |---|---|---|
-    | 0, 1, 2 | gripper displacement x, y, z (world frame; ignored during the carry test) | ``a * gripper_speed / control_frequency`` m added to the arm's target |
-    | 3 | finger closing | target travel ``(a + 1) / 2 * finger_max_opening`` from fully open: -1 fully open, +1 fingers meet (the force limit sets the squeeze) |
+    | 0, 1, 2 | palm velocity x, y, z (world frame; ignored during the carry test) | ``a * gripper_speed`` m/s (0.15 at full action; the vector capped at that speed), reached with the arm's acceleration limit ``arm_acceleration`` |
+    | 3 | finger closing | target travel ``(a + 1) / 2 * travel`` from fully open: -1 fully open, +1 closed to the stop, where the pads meet (v1/v2: the cores' faces, ``finger_max_opening``); the force limit sets the squeeze |
 
-    The arm's target is kept inside the workspace (x, y within ±15 cm of the origin, fingertip
-    height between just above the ground and 20 cm) and at most 2 cm from where the palm is.
+    The arm brakes before the workspace's walls (x, y within ±15 cm of the origin, fingertip
+    height between just above the ground and 20 cm) and waits for a palm that is blocked 2 cm
+    behind it. Peak palm acceleration under any action sequence, measured at every physics step:
+    1.5 m/s^2 (at most 2, tests/scene/test_gripper.py). With ``arm="jump"`` (v1/v2) the action
+    moves the arm's target by ``a * gripper_speed / control_frequency`` m instead, and the palm's
+    constraint chases it (86 m/s^2 at each control step at 1/240 s).
     Out-of-range actions are clipped to [-1, 1] and ``info["action_clipped"]`` says so; a NaN/inf
     action or one of the wrong shape raises ``ValueError``, one that is not real numbers
     ``TypeError``.
@@ -106,14 +114,14 @@ class SoftGraspEnv(gym.Env):
     | 22 | gripper_yaw | palm yaw (the misalignment the agent cannot command) [rad] |
     | 23 | time | time since reset [s] (only with the carry test, which starts at a fixed time) |
 
-    The forces are reported, not capped: the arm (200 N) can press a finger onto the cylinder far
-    harder than the motors squeeze (up to 220 N soft, 267 N rigid measured under random actions).
+    The forces are reported, not capped: the arm (40 N; 200 N on v1/v2) can press a finger onto
+    the cylinder far harder than the motors squeeze.
 
     ## Rewards
     ``reward_type="dense"`` (default): ``lift + reach``, ``lift = clip(lift_height /
     success_height, 0, 1)`` (1 once the cylinder is 5 cm up) and ``reach = -reach_weight *
     min(d, 0.1 m) / 0.1 m`` with ``d`` the grip point's distance to the cylinder centre; both terms
-    are in ``info["reward_terms"]``. ``reward_type="sparse"`` (``SoftGraspSparse-v2``): 1 on steps
+    are in ``info["reward_terms"]``. ``reward_type="sparse"`` (``SoftGraspSparse-v3``): 1 on steps
     where ``info["held"]``, else 0.
 
     ## Starting state
@@ -126,12 +134,15 @@ class SoftGraspEnv(gym.Env):
     cylinder radius and mass are randomised too if their ranges are non-zero. Every draw comes from
     the env's ``np_random``; ``reset(options=...)`` fixes any of them (``cylinder_xy``,
     ``lateral_offset``, ``yaw``, ``jaw_wedge``, ``friction_scale``, ``cylinder_radius``,
-    ``cylinder_mass``, ``gripper_xy``).
+    ``cylinder_mass``, ``gripper_xy``; with the carry test also ``carry_frequency`` [Hz],
+    ``carry_acceleration`` [m/s^2] and ``carry_direction`` [rad from across the jaw], each checked
+    against the arm's limits).
 
     ## Episode end
     - ``info["is_success"]``: ``info["held"]`` - lifted ≥ ``success_height``, both fingers pressing
       (≥ 0.05 N each), tilted no more than ``max_tilt`` - and, with the carry test, the carry over
-      (``info["carrying"]`` while it runs).
+      (``info["carrying"]`` while it runs) with the cylinder held at every env step of it and its
+      in-hand slide at most ``carry_slide_limit`` (5 mm; v1/v2: held at the end only).
     - Terminated: the cylinder tilts more than ``max_tilt`` (knocked over), leaves the workspace
       (more than 15 cm from the origin horizontally, below the ground or above 50 cm), or the
       simulation diverges (non-finite numbers, a body faster than 20 m/s, tissue torn more than
@@ -141,7 +152,7 @@ class SoftGraspEnv(gym.Env):
     - Truncated: by the registered time limit (100 steps = 5 s at 20 Hz).
 
     ## Arguments
-    ``gym.make("SoftGrasp-v2", **kwargs)``, every one keyword-only but ``render_mode``
+    ``gym.make("SoftGrasp-v3", **kwargs)``, every one keyword-only but ``render_mode``
     (softgrasp_env/arguments.py checks them all; a bad value or a combination that would not run
     is a ``ValueError`` naming it and the limit):
 
@@ -169,6 +180,10 @@ class SoftGraspEnv(gym.Env):
     step 99).
 
     ## Version history
+    - v3 (issue 19): the smooth arm and velocity actions (``arm="smooth"``), 40 N; the carry test
+      drawn per episode over a band and success held through it; the tissue's mu_k = mu_s (one
+      friction law for every kind); the torsional rigid peer. v1/v2 keep ``arm="jump"``, 200 N,
+      the 1 cm / 2 Hz carry with success at its end and mu_k 0.7, and replay bit for bit.
     - v2: the carry test (the soft, rigid and sparse ids; the observation gains the time); the v1
       ids stay unchanged because their published baselines reproduce on them.
     - v1: the reach task for every id; the gentle start as the Easy ids; the contact-face tissue

@@ -95,7 +95,7 @@ out["reset_s"] = time.perf_counter() - tic
 tic = time.perf_counter()
 obs, *_ = env.step(env.action_space.sample())
 out["first_step_s"] = time.perf_counter() - tic
-policy = ScriptedGraspPolicy()
+policy = ScriptedGraspPolicy.for_env(env)  # the arm's speed and acceleration limits of this id
 obs, info = env.reset(seed=1000)
 steps, done = 0, False
 while not done:
@@ -153,7 +153,7 @@ def test_the_wheel_works_in_a_fresh_venv_without_extras(tmp_path):
     assert run.returncode == 0, run.stderr
     result = json.loads(next(line for line in run.stdout.splitlines() if line.startswith("RESULT "))[7:])
     assert result["file"].startswith(str(env_dir)), result  # the installed copy, not the checkout's
-    assert result["env"] == "SoftGrasp-v2" and result["steps"] == 100 and result["success"] and result["in_space"]
+    assert result["env"] == "SoftGrasp-v3" and result["steps"] == 100 and result["success"] and result["in_space"]
     assert result["baselines"] == 25
     assert "softgrasp-env[train]" in result["load_error"]
     assert not any(result[m] for m in ("agents", "torch", "stable_baselines3", "matplotlib")), result

@@ -25,6 +25,10 @@ GEOMETRY_MARGIN = 0.001
 """Clearance the start geometry must leave between the cylinder and the open fingers or palm [m]."""
 
 
+ARM_PUSH = 40.0
+"""What the smooth arm pushes or pulls with beyond carrying the gripper's weight [N]."""
+
+
 @dataclass(frozen=True)
 class SceneConfig:
     """The grasp scene: ground, a two-finger gripper and a cylinder (thesis 5.2.1)."""
@@ -63,8 +67,19 @@ class SceneConfig:
     """Largest distance of a finger core's inner face from the gripper centre [m]."""
     palm_mass: float = 0.5
     """Mass of the gripper palm [kg]."""
-    palm_force: float = 200.0
-    """Force limit of the constraint that drives the palm [N]."""
+    palm_force: float | None = None
+    """Force limit of the constraint that drives the palm, the arm's strength [N]; None: for the
+    smooth arm the gripper's weight (palm and cores) plus :data:`ARM_PUSH` (40 N), as an arm
+    that compensates gravity and pushes or pulls with at most 40 N more; 200 N for the jump arm
+    (v1/v2). 40 N carries the heaviest cylinder the grasp holds (0.5 kg at the lift's 1.5 m/s^2:
+    6 N) with room to spare; 200 N pressed the tissue onto the cylinder's rim hard enough to tear
+    it, 4 times in 10^5 noisy scripted steps (benchmarks/random_soak.py), once at 40 N."""
+    finger_stop: str | None = None
+    """Where the fingers' closing travel ends: ``"pads"`` when the two pads' surfaces meet (each core
+    face stops a pad thickness from the centre), ``"faces"`` when the bare cores' inner faces meet
+    (the pads, if any, crushed to nothing between them); None: "pads" with the smooth arm, "faces"
+    with the jump arm (v1/v2). Fingers closing on nothing crushed the tissue between the cores and
+    tore it (tests/test_extremes.py's fuzz); a real gripper's jaws stop on their pads."""
     arm: str = "smooth"
     """How the arm moves the palm's constraint pivot: ``"smooth"`` along a speed- and
     acceleration-limited path, one physics step at a time (softgrasp_env/scene/gripper.py,
@@ -102,6 +117,21 @@ class SceneConfig:
     pads, the particles' discretisation for the tissue."""
     sim: SimConfig = field(default_factory=SimConfig)
 
+    @property
+    def finger_travel(self) -> float:
+        """Each finger's closing travel from fully open to its stop [m] (``finger_stop``)."""
+        stop = self.finger_stop or ("pads" if self.arm == "smooth" else "faces")
+        return self.finger_max_opening - (self.pad_thickness if stop == "pads" else 0.0)
+
+    @property
+    def arm_force(self) -> float:
+        """The palm constraint's force limit [N]: ``palm_force``, or the arm's default."""
+        if self.palm_force is not None:
+            return self.palm_force
+        if self.arm == "jump":
+            return 200.0
+        return ARM_PUSH + (self.palm_mass + 2.0 * self.finger_mass) * self.sim.gravity
+
     def __post_init__(self) -> None:
         o = "SceneConfig"
         object.__setattr__(self, "fingers", finger_config(self.fingers, owner=o))
@@ -118,8 +148,11 @@ class SceneConfig:
         check_range("finger_speed", self.finger_speed, 0.0, 10.0, lo_open=True, owner=o)
         check_range("finger_max_opening", self.finger_max_opening, 0.005, 0.3, owner=o)
         check_range("palm_mass", self.palm_mass, 0.01, 100.0, owner=o)
-        check_range("palm_force", self.palm_force, 0.0, 1e4, lo_open=True, owner=o)
+        if self.palm_force is not None:
+            check_range("palm_force", self.palm_force, 0.0, 1e4, lo_open=True, owner=o)
         check_choice("arm", self.arm, ("smooth", "jump"), owner=o)
+        if self.finger_stop is not None:
+            check_choice("finger_stop", self.finger_stop, ("pads", "faces"), owner=o)
         check_range("arm_speed", self.arm_speed, 0.0, 2.0, lo_open=True, owner=o)
         check_range("arm_acceleration", self.arm_acceleration, 0.0, 50.0, lo_open=True, owner=o)
         check_range("ground_friction", self.ground_friction, 0.0, 10.0, owner=o)
@@ -266,4 +299,4 @@ for _old, (_cls, _new) in _LEGACY_FIELDS.items():
     setattr(SceneConfig, _old, property(_read, doc=f"Deprecated: ``fingers.{_new}`` of a {_cls.__name__}."))
 
 
-__all__ = ["FINGER_DROP", "GEOMETRY_MARGIN", "PALM_HALF_EXTENTS", "SceneConfig", "fit_error", "geometry_error", "open_half_gap", "scale_friction"]
+__all__ = ["ARM_PUSH", "FINGER_DROP", "GEOMETRY_MARGIN", "PALM_HALF_EXTENTS", "SceneConfig", "fit_error", "geometry_error", "open_half_gap", "scale_friction"]

@@ -2,7 +2,7 @@
 travel, each driven by a force-limited position motor - and its control.
 
 The palm is a pybullet base held by a fixed constraint whose target the arm moves and whose
-force limit is the arm's strength (``SceneConfig.palm_force``); the finger cores are links 0 and
+force limit is the arm's strength (``SceneConfig.arm_force``); the finger cores are links 0 and
 1, boxes closing along the palm's x axis. The motors push and whatever the fingers meet pushes
 back, so the squeeze is a force, not a teleport. A finger kind (softgrasp_env/fingers/) may add
 links of its own to the gripper before it is created (``extend_gripper``).
@@ -199,8 +199,8 @@ class Gripper:
             c.changeDynamics(g, link, lateralFriction=mu)
             if c.getDynamicsInfo(g, link)[1] != mu:
                 raise RuntimeError(f"pybullet did not take the friction of gripper link {link}")
-        for j in self.core_links:  # travel from fully open (0) to the faces meeting at the centre
-            c.changeDynamics(g, j, jointLowerLimit=0.0, jointUpperLimit=cfg.finger_max_opening)
+        for j in self.core_links:  # travel from fully open (0) to the stop: the pads or the faces meeting
+            c.changeDynamics(g, j, jointLowerLimit=0.0, jointUpperLimit=cfg.finger_travel)
         # The fingers are geared to each other (q_left = q_right), as a parallel gripper's rack and
         # pinion does: with two independent force-limited motors both saturated against the
         # cylinder, the pair and the cylinder were free to drift sideways together (neutral
@@ -250,7 +250,7 @@ class Gripper:
         self._pivot = pos
         self.client.changeConstraint(self.palm_constraint, jointChildPivot=[float(v) for v in pos],
                                      jointChildFrameOrientation=self._orientation,
-                                     maxForce=self.config.palm_force)  # fmt: skip
+                                     maxForce=self.config.arm_force)  # fmt: skip
 
     def _set_finger_closing(self, closing: float) -> None:
         cfg = self.config

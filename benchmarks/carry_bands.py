@@ -1,0 +1,89 @@
+"""The v3 carry test per band (issue 19, item 6): soft vs rigid vs rigid with torsional friction.
+
+The scripted grasp on the reach task (SoftGrasp-v3, SoftGraspRigid-v3, SoftGraspRigidTorsion-v3),
+the sway fixed per episode by reset options on a grid: frequency from below to above the
+two-point grasp's pendulum frequency (~1.9 Hz with the cylinder's own inertia, issue 19), peak
+acceleration, and direction (across the jaw, where a two-point grasp swings about the line
+through its contacts; along the closing axis; between). Each cell runs the same seeds for every
+kind; an episode counts for the carry only if the cylinder was held when the carry began, so the
+table separates "lost in the carry" from "never got a grip".
+
+    PYTHONPATH=. python benchmarks/carry_bands.py                  # 10 seeds per cell
+    PYTHONPATH=. python benchmarks/carry_bands.py --seeds 3 --kinds tissue,rigid
+
+Prints, per kind and cell: held when the carry began / episodes, held through it (v3 success) /
+those, the median in-hand slide and the largest tilt [deg] over the held-at-start episodes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+
+import gymnasium as gym
+import numpy as np
+
+import softgrasp_env  # noqa: F401  (registers the ids)
+from softgrasp_env.policies import ScriptedGraspPolicy
+
+IDS = {"tissue": "SoftGrasp-v3", "rigid": "SoftGraspRigid-v3", "rigid_torsion": "SoftGraspRigidTorsion-v3"}
+FREQUENCIES = (1.2, 1.6, 1.9, 2.3, 3.0)
+ACCELERATIONS = (0.5, 1.0)
+DIRECTIONS = {"across": 0.0, "diagonal": math.pi / 4, "along": math.pi / 2}
+
+
+def episode(env, policy, seed: int, options: dict) -> tuple[bool, bool, float, float]:
+    """(held when the carry began, success, in-hand slide [m], largest tilt during the carry [deg])."""
+    obs, _ = env.reset(seed=seed, options=options)
+    held_at_start, tilt, done = None, 0.0, False
+    while not done:
+        obs, _, term, trunc, info = env.step(policy(obs))
+        done = term or trunc
+        if info["carrying"]:
+            if held_at_start is None:
+                held_at_start = bool(info["held"])
+            tilt = max(tilt, math.degrees(env.unwrapped.scene.cylinder_tilt()))
+    return bool(held_at_start), bool(info["is_success"]), env.unwrapped.task.slide, tilt
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--seeds", type=int, default=10, help="episodes per cell (seeds 1000, 1001, ...)")
+    parser.add_argument("--kinds", default=",".join(IDS))
+    ns = parser.parse_args(argv)
+    seeds = range(1000, 1000 + ns.seeds)
+    print(f"scripted grasp, reach task, seeds {seeds.start}-{seeds.stop - 1}; 1 process")
+    print(f"{'kind':<15}{'f Hz':>6}{'a m/s2':>8}{'direction':>10}{'held@start':>12}{'held through':>14}"
+          f"{'slide mm':>10}{'tilt deg':>10}")  # fmt: skip
+    totals: dict[str, list[int]] = {}
+    for kind in ns.kinds.split(","):
+        env = gym.make(IDS[kind])
+        policy = ScriptedGraspPolicy.for_env(env)
+        tic = time.perf_counter()
+        tot = totals.setdefault(kind, [0, 0, 0])
+        try:
+            for f in FREQUENCIES:
+                for a in ACCELERATIONS:
+                    for name, angle in DIRECTIONS.items():
+                        opts = dict(carry_frequency=f, carry_acceleration=a, carry_direction=angle)
+                        rows = [episode(env, policy, s, opts) for s in seeds]
+                        started = [r for r in rows if r[0]]
+                        through = sum(r[1] for r in started)
+                        slide = np.median([r[2] for r in started]) * 1e3 if started else math.nan
+                        tilt = max((r[3] for r in started), default=math.nan)
+                        tot[0] += len(rows)
+                        tot[1] += len(started)
+                        tot[2] += through
+                        print(f"{kind:<15}{f:>6.1f}{a:>8.1f}{name:>10}{len(started):>6}/{len(rows):<5}"
+                              f"{through:>8}/{len(started):<5}{slide:>10.2f}{tilt:>10.1f}", flush=True)  # fmt: skip
+        finally:
+            env.close()
+        print(f"{kind}: {time.perf_counter() - tic:.0f} s", flush=True)
+    for kind, (n, started, through) in totals.items():
+        print(f"{kind:<15} all cells: held when the carry began {started}/{n}, held through it {through}/{started}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

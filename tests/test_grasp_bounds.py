@@ -1,0 +1,66 @@
+"""The env's own scripted grasp against Coulomb, at the defaults users get (issue 19's targets):
+the aligned gentle start (SoftGraspEasy-v3 / SoftGraspEasyRigid-v3, yaw, wedge, offset and
+position 0), 3 N per finger, mu_s = mu_k = 0.9, dt 1/240 unless stated; every figure from one
+physics step to the next (benchmarks/grasp_checks.py, which also bisects the bounds)."""
+
+from __future__ import annotations
+
+import pytest
+
+from benchmarks.grasp_checks import KINDS, NO_SLIP, scripted_episode
+
+G, MU, FORCE = 9.81, 0.9, 3.0
+A_ARM = 1.5
+"""The arm's acceleration limit: the lift's peak acceleration (measured 1.49 m/s^2 at 1/240 s)."""
+
+
+@pytest.mark.parametrize("hz", [1000, 480, 240, 120])
+@pytest.mark.parametrize("kind", ["soft", "rigid"])
+def test_the_scripted_grasp_holds_with_little_in_hand_motion_at_every_dt(kind, hz):
+    """Held at every dt from 1/1000 to 1/120 s with in-hand motion (lift-off to the end) under
+    2 mm and the palm under 2 m/s^2. Measured soft 0.15 / 0.34 / 1.10 / 0.03 mm, rigid <= 0.01 mm,
+    palm 1.4-1.5 m/s^2 (the v1 ids' arm: dropped at 1/1000, 48.7 / 3.7 / 3.0 mm soft, 71 / 31 /
+    7.4 / 0 mm rigid, 500 / 344 / 86 / 22 m/s^2)."""
+    r = scripted_episode(KINDS[kind], "v3", dt=1.0 / hz)
+    assert r["held"] and not r["diverged"]
+    assert r["in_hand"] < 0.002, f"{r['in_hand'] * 1e3:.2f} mm"
+    assert r["peak_accel"] <= 2.0
+
+
+def _held(kind: str, **options) -> bool:
+    r = scripted_episode(KINDS[kind], "v3", options=options)
+    return r["held"] and r["in_hand"] < NO_SLIP
+
+
+BOUNDS = {"soft": (0.88, 1.05), "soft-consistent": (0.88, 1.05), "rigid": (1.0, 1.12), "rigid_torsion": (1.0, 1.12)}
+"""Held at the first multiple of Coulomb's bound, not at the second. Bisected (benchmarks/
+grasp_checks.py): soft 0.433 kg (-9.3 %), consistent 0.433 (-9.3 %), rigid and torsional 0.515
+(+7.8 %). Issue 19 asked for 5 %: the soft pads miss it because the cylinder bounces on them
+(its own peak acceleration after lift-off 4.2-4.8 m/s^2, three times the palm's), the rigid grasp
+beats it because the cylinder leaves the ground part-way through the arm's acceleration (its own
+peak 1.1 m/s^2: 2 mu F / (g + 1.1) = 0.494 kg, +4.2 %)."""
+
+
+@pytest.mark.parametrize("kind", list(BOUNDS))
+def test_the_heaviest_cylinder_held_is_near_coulombs_bound(kind):
+    """2 mu_s F / (g + a) = 0.478 kg with the lift's a = 1.5 m/s^2; held: at the end, with at most
+    5 mm of in-hand motion (the v3 success's slide limit)."""
+    bound = 2 * MU * FORCE / (G + A_ARM)
+    low, high = BOUNDS[kind]
+    assert _held(kind, cylinder_mass=low * bound)
+    assert not _held(kind, cylinder_mass=high * bound)
+
+
+FRICTION = {"soft": (1.12, 1.0), "soft-consistent": (1.12, 1.0), "rigid": (1.05, 0.9), "rigid_torsion": (1.05, 0.9)}
+"""Lifts at the first multiple of Coulomb's lowest friction, not at the second. Bisected: soft and
+consistent 0.225 x the default (+7.5 %), rigid and torsional 0.205 x (-2.2 %); issue 19's target
+was 10 %."""
+
+
+@pytest.mark.parametrize("kind", list(FRICTION))
+def test_the_lowest_friction_that_lifts_is_near_coulombs(kind):
+    """m (g + a) / 2F mu = 0.209 x the default friction lifts 0.1 kg."""
+    bound = 0.1 * (G + A_ARM) / (2 * FORCE) / MU
+    lifts, slips = FRICTION[kind]
+    assert _held(kind, friction_scale=lifts * bound)
+    assert not _held(kind, friction_scale=slips * bound)
