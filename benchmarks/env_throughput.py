@@ -39,13 +39,20 @@ def env_steps_per_second(env_id: str, steps: int, *, scripted: bool, repeats: in
     return best
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--steps", type=int, default=300, help="timed env steps per run")
-    args = parser.parse_args()
+    parser.add_argument("--ids", default="", help="comma-separated ids (default: every registered one)")
+    args = parser.parse_args(argv)
+    ids = args.ids.split(",") if args.ids else softgrasp_env.ENV_IDS
+    unknown = sorted(set(ids) - set(softgrasp_env.ENV_IDS))
+    if unknown:
+        parser.error(f"unknown ids {unknown}; choose from {', '.join(softgrasp_env.ENV_IDS)}")
     print(f"{'env id':<22}{'random env steps/s':>20}{'scripted env steps/s':>22}{'physics steps/s (random)':>26}")
-    for env_id in softgrasp_env.ENV_IDS:
-        sub = gym.make(env_id).unwrapped._substeps
+    for env_id in ids:
+        probe = gym.make(env_id)
+        sub = probe.unwrapped.args.substeps
+        probe.close()
         rnd = env_steps_per_second(env_id, args.steps, scripted=False)
         scr = env_steps_per_second(env_id, args.steps, scripted=True)
         print(f"{env_id:<22}{rnd:>20.0f}{scr:>22.0f}{rnd * sub:>26.0f}")

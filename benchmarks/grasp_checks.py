@@ -190,6 +190,10 @@ def main(argv: list[str] | None = None) -> int:
                     return r["held"] and r["in_hand"] < NO_SLIP
 
                 m = bisect(holds, 0.05, 1.5)
+                if math.isnan(m):
+                    print(f"{version}: heaviest cylinder held, env episode, {name}: none between 0.05 and 1.5 kg "
+                          f"(held with at most {NO_SLIP * 1e3:g} mm in the hand)", flush=True)  # fmt: skip
+                    continue
                 # the load at the boundary: the palm's and the cylinder's own peak acceleration
                 r = scripted_episode(kind, version, options={"cylinder_mass": m / 1.01})
                 palm, cyl = 2 * mu * force / (g + r["peak_accel"]), 2 * mu * force / (g + r["cyl_accel"])
@@ -203,6 +207,10 @@ def main(argv: list[str] | None = None) -> int:
                     return not (r["held"] and r["in_hand"] < NO_SLIP)
 
                 f = bisect(slips, 0.05, 1.0)
+                if math.isnan(f):
+                    print(f"{version}: lowest friction that lifts 0.1 kg, {name}: none between 0.05 and 1 x the default "
+                          f"(held with at most {NO_SLIP * 1e3:g} mm in the hand)", flush=True)  # fmt: skip
+                    continue
                 r = scripted_episode(kind, version, options={"friction_scale": f * 1.01})
                 palm = mass * (g + r["peak_accel"]) / (2 * force) / mu
                 cyl = mass * (g + r["cyl_accel"]) / (2 * force) / mu
