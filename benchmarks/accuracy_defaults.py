@@ -60,7 +60,7 @@ def friction_rows() -> None:
     tissue = TissueConfig()
     for v0 in (0.25, 0.5, 1.0):
         d = accuracy.stop_distance(v0, tissue, sim)
-        ref = v0 * v0 / (2.0 * tissue.friction_dynamic * sim.gravity)
+        ref = v0 * v0 / (2.0 * tissue.friction_kinetic * sim.gravity)
         print(f"  stops from {v0} m/s after {d * 1000:.2f} mm vs {ref * 1000:.2f} mm ({pct(d, ref)})")
 
 
