@@ -77,7 +77,8 @@ def grasp_rows(kind: dict, sim: SimConfig, *, bound: bool) -> dict[str, tuple[fl
     if bound:
         ref = coulomb_hold_bound(cfg.tissue.friction_static, cfg.finger_force, sim.gravity)
 
-        slow = GraspPlan(lift=4.0, hold=3.0)  # the static bound (tests/sim/test_world.py): a 1 s lift loses ~24 % to its transient
+        # the static bound (tests/sim/test_world.py): a 1 s lift loses ~24 % to its transient
+        slow = GraspPlan(lift=4.0, hold=3.0)
 
         def held(mass: float) -> bool:
             return _grasp(_scene(kind, sim, cylinder_mass=mass), slow).holds_without_slip(slow)

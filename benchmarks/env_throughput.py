@@ -14,7 +14,6 @@ import argparse
 import time
 
 import gymnasium as gym
-import numpy as np
 
 import softgrasp_env
 from agents.scripted import ScriptedGraspPolicy

@@ -141,8 +141,8 @@ def main(argv: list[str] | None = None) -> int:
         for policy in ns.policies:
             if policy == "learned" and not list_baselines(env=env_id):
                 if "--policies" in (argv if argv is not None else sys.argv):  # asked for by name
-                    parser.error(f"no shipped baseline for {env_id!r}, so no learned dataset; "
-                                 f"ids with one: {', '.join(sorted({n.rsplit('_', 2)[0] for n in list_baselines()}))}")  # fmt: skip
+                    have = sorted({n.rsplit("_", 2)[0] for n in list_baselines()})
+                    parser.error(f"no shipped baseline for {env_id!r}, so no learned dataset; ids with one: {', '.join(have)}")
                 print(f"{env_id}: no shipped baseline, no learned dataset")
                 continue
             jobs.append((env_id, policy))
