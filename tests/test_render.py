@@ -93,11 +93,11 @@ def test_the_ground_is_a_checkerboard(make_env):
     assert len(grey) > 1000 and np.percentile(grey, 90) - np.percentile(grey, 10) > 20
 
 
-def test_the_readme_gif_script_draws_both_grasps(tmp_path):
+def test_the_readme_gif_script_draws_every_grasp(tmp_path):
     PIL = pytest.importorskip("PIL")
     from scripts import make_readme_gif
 
     out = tmp_path / "g.gif"
     assert make_readme_gif.main(["--every", "25", "--width", "64", "--height", "48", "--out", str(out)]) == 0
     im = PIL.Image.open(out)
-    assert im.size == (128, 48) and im.n_frames == 5  # reset + steps 25, 50, 75, 100 (the rigid one padded)
+    assert im.size == (3 * 64, 48) and im.n_frames == 5  # three panels; reset + steps 25, 50, 75, 100 (the rigid one padded)
