@@ -176,20 +176,23 @@ def test_segmented_holds_at_a_wedge_where_rigid_slips(make_env, scripted) -> Non
 
 
 @pytest.mark.slow
-def test_soak_holds_60_s() -> None:
-    """60 s of hold after the default lift. Measured: it holds but drifts, steadily: slip from the
-    start of the hold 0.007 / 0.014 / 0.022 / 0.030 / 0.038 / 0.046 mm and tilt 0.04 / 0.07 / 0.11 /
-    0.15 / 0.18 / 0.22 deg at 10 / 20 / ... / 60 s - linear, 0.76 um/s and 0.0037 deg/s, the
-    thesis' "slowly growing instabilities" of multi-body fingers (the tissue and the rigid twin stay
-    below 0.01 mm and 0.1 deg). At this rate 2 deg takes ~9 min and 1 mm ~22 min. Recorded as the
-    expectation: within tilt 2 deg, slip 1 mm at 60 s, and the drift no faster than twice measured."""
+def test_soak_holds_120_s() -> None:
+    """120 s of hold after the default lift: the multi-body fingers settle and stay. Measured at
+    the v3 defaults (the smooth arm): slip from the start of the hold 0.015 / 0.026 / 0.033 /
+    0.035 / 0.123 / 0.153 mm and tilt 0.08 / 0.16 / 0.23 / 0.26 / 0.44 / 0.61 deg at 10 / 20 / ...
+    / 60 s, then 0.156 mm and 0.668 deg at 120 s and the same at 300 s (with 200 N on the arm too:
+    the path, not the arm's force, sets it). With the v1/v2 jump arm the drift was linear instead,
+    0.76 um/s and 0.0037 deg/s (0.046 mm, 0.224 deg at 60 s), the thesis' "slowly growing
+    instabilities" of multi-body fingers; the tissue and the rigid twin stay below 0.02 mm and
+    0.05 deg (benchmarks/accuracy_defaults.py). Recorded as the expectation: within 2 deg and 1 mm,
+    and no more than twice the measured settling."""
     sc = _scene()
     try:
-        plan = GraspPlan(hold=60.0)
+        plan = GraspPlan(hold=120.0)
         rec = run_grasp(sc, plan)
         assert rec.finite and rec.holds_without_slip(plan)
         assert rec.max_tilt < math.radians(2.0) and rec.hold_slip < 1e-3
-        assert rec.hold_slip < 2 * 0.046e-3 and rec.max_tilt < math.radians(2 * 0.224)
+        assert rec.hold_slip < 2 * 0.156e-3 and rec.max_tilt < math.radians(2 * 0.668)
         assert rec.min_lift_during_hold > 0.9 * plan.lift_distance
         np.testing.assert_allclose(sc.finger_forces(), sc.config.finger_force, rtol=0.03)
     finally:
