@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 import pybullet as p
@@ -27,7 +27,6 @@ from .config import FINGER_DROP, PALM_HALF_EXTENTS, SceneConfig
 
 if TYPE_CHECKING:
     from ..fingers import FingerKind
-    from .scene import GraspScene
 FINGER_GEAR_FORCE = 100.0
 """Force limit of the gear that keeps both fingers' travel equal [N]: far above what the motors
 (``finger_force``) or the tissue can make, so it never gives way."""
@@ -287,6 +286,18 @@ class Workspace:
         return np.clip(grip, self.low, self.high)
 
 
+class PalmReadout(Protocol):
+    """What an action mapping reads of the scene (GraspScene has it): declared here, not imported,
+    so that the gripper module does not depend on the scene built on it."""
+
+    @property
+    def palm_target(self) -> np.ndarray | None: ...
+
+    def grip_to_palm(self) -> np.ndarray: ...
+
+    def palm_state(self) -> tuple[np.ndarray, ...]: ...
+
+
 class GripperActions:
     """The env's action, ``Box(-1, 1, (4,))``, as a gripper control: x, y, z move the grip point,
     kept in the workspace; the last entry is the finger closing (-1 fully open, +1 the faces
@@ -312,7 +323,7 @@ class GripperActions:
         """The finger closing for ``action``'s last entry [m]."""
         return 0.5 * (float(action[3]) + 1.0) * self.finger_max_opening
 
-    def control(self, action: np.ndarray, scene: GraspScene) -> GripperControl:
+    def control(self, action: np.ndarray, scene: PalmReadout) -> GripperControl:
         """The control for ``action`` (clipped to [-1, 1] already) in ``scene``'s state now."""
         raise NotImplementedError
 
@@ -322,7 +333,7 @@ class VelocityActions(GripperActions):
     (the vector capped at ``speed`` by the arm); the arm reaches it with its acceleration limit and
     brakes before the workspace's walls."""
 
-    def control(self, action: np.ndarray, scene: GraspScene) -> GripperControl:
+    def control(self, action: np.ndarray, scene: PalmReadout) -> GripperControl:
         ws, g2p = self.workspace, scene.grip_to_palm()
         return GripperControl(None, self.closing(action), palm_velocity=action[:3] * self.speed,
                               palm_box=(ws.low + g2p, ws.high + g2p))  # fmt: skip
@@ -333,7 +344,7 @@ class TargetActions(GripperActions):
     ``speed / control_frequency`` per env step, the target kept in the workspace and within
     ``MAX_LEAD`` of the palm; the palm's constraint chases the target."""
 
-    def control(self, action: np.ndarray, scene: GraspScene) -> GripperControl:
+    def control(self, action: np.ndarray, scene: PalmReadout) -> GripperControl:
         ws, g2p, palm = self.workspace, scene.grip_to_palm(), scene.palm_state()[0]
         step = self.speed / self.control_frequency  # as v1/v2 computed it, to the bit
         target_grip = ws.clip((scene.palm_target - g2p) + action[:3] * step)
