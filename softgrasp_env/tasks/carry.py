@@ -63,20 +63,32 @@ rigid fingers 0.2-0.5 mm, a rigid two-point grasp swinging 5-37 deg 3-18 mm (scr
 1.2-3 Hz, issue 19)."""
 CARRY_OPTIONS = ("carry_frequency", "carry_acceleration", "carry_direction")
 """Reset options that fix the v3 sway for one episode."""
+RAMP_ACCELERATION_FACTOR = math.sqrt(1.0 + 1.0 / math.pi**2)
+"""The v3 sway's peak acceleration while it ramps in, over its steady peak (sway_limits_error)."""
+RAMP_SPEED_FACTOR = math.sqrt(1.0 + 1.0 / (4.0 * math.pi**2))
+"""The v3 sway's peak speed while it ramps in, over its steady peak (sway_limits_error)."""
 _EPS = 1e-9
 """Slack on the carry's time window [s]: physics steps land on its ends up to rounding."""
 
 
 def sway_limits_error(frequency: float, *, amplitude: float | None = None, acceleration: float | None = None,
                       speed: float, arm_acceleration: float) -> str | None:  # fmt: skip
-    """What is wrong with a sway the smooth arm cannot follow (None: it can): its peak speed
-    A 2 pi f above the arm's ``speed`` or its peak acceleration A (2 pi f)^2 above the arm's."""
+    """What is wrong with a sway the smooth arm cannot follow (None: it can): its peak speed or
+    acceleration above the arm's ``speed`` / ``arm_acceleration``, the ramp over the first period
+    included (:meth:`CarryTest.steer`: x = A (f t) sin(w t), w = 2 pi f, so x'' = A w (2 f cos -
+    f t w sin) peaks at up to A w^2 sqrt(1 + 1/pi^2), 4.9 % above the steady A w^2, and x' at up
+    to A w sqrt(1 + 1/(4 pi^2)), 1.3 % above A w). Otherwise the arm's path would clip the sway
+    without a word."""
     omega = 2.0 * math.pi * frequency
-    a = acceleration if acceleration is not None else amplitude * omega * omega
+    steady = acceleration if acceleration is not None else amplitude * omega * omega
+    a = steady * RAMP_ACCELERATION_FACTOR
+    v = steady / omega * RAMP_SPEED_FACTOR
     if a > arm_acceleration * (1 + 1e-12):
-        return f"peaks at {a:.3g} m/s^2, above the arm's arm_acceleration={arm_acceleration:g} m/s^2"
-    if a / omega > speed * (1 + 1e-12):
-        return f"peaks at {a / omega:.3g} m/s, above the arm's gripper_speed={speed:g} m/s"
+        return (f"peaks at {a:.3g} m/s^2 ({steady:.3g} steady, more while it ramps in), above the arm's "
+                f"arm_acceleration={arm_acceleration:g} m/s^2")  # fmt: skip
+    if v > speed * (1 + 1e-12):
+        return (f"peaks at {v:.3g} m/s ({steady / omega:.3g} steady, more while it ramps in), above the arm's "
+                f"gripper_speed={speed:g} m/s")  # fmt: skip
     return None
 
 

@@ -79,14 +79,20 @@ def test_the_v3_sway_is_drawn_per_episode_in_its_bands_and_reproduces(make_env):
 
 
 def test_a_sway_the_arm_cannot_follow_is_refused_at_reset_and_at_make(make_env):
+    """Peak acceleration and speed with the ramp over the first period included (4.9 % and 1.3 %
+    above the steady sway's): 1.45 m/s^2 steady is 1.52 while it ramps in, past the arm's 1.5."""
     env = make_env("SoftGraspRigid-v3")
-    with pytest.raises(ValueError, match=r"peaks at 2 m/s\^2, above the arm's arm_acceleration=1.5"):
+    with pytest.raises(ValueError, match=r"peaks at 2.1 m/s\^2 \(2 steady, more while it ramps in\), above the arm's "
+                                         r"arm_acceleration=1.5"):  # fmt: skip
         env.reset(seed=0, options=dict(carry_acceleration=2.0))
-    with pytest.raises(ValueError, match=r"peaks at 0.159 m/s, above the arm's gripper_speed=0.15"):
+    with pytest.raises(ValueError, match=r"peaks at 1.52 m/s\^2 \(1.45 steady"):
+        env.reset(seed=0, options=dict(carry_frequency=2.0, carry_acceleration=1.45))
+    env.reset(seed=0, options=dict(carry_frequency=2.0, carry_acceleration=1.4))  # 1.47 while ramping: followed
+    with pytest.raises(ValueError, match=r"peaks at 0.161 m/s \(0.159 steady.*gripper_speed=0.15"):
         env.reset(seed=0, options=dict(carry_frequency=1.0, carry_acceleration=1.0))
     with pytest.raises(ValueError, match="reset option 'carry_frequency' must be in"):
         env.reset(seed=0, options=dict(carry_frequency=0.0))
-    with pytest.raises(ValueError, match=r"sway at 2 Hz \(1 cm\) peaks at 1.58 m/s\^2"):
+    with pytest.raises(ValueError, match=r"sway at 2 Hz \(1 cm\) peaks at 1.66 m/s\^2 \(1.58 steady"):
         gym.make("SoftGrasp-v3", carry_amplitude=0.01, carry_acceleration=None, carry_frequency=2.0)
 
 
@@ -202,13 +208,16 @@ def test_a_rigid_two_point_grasp_swings_out_near_its_pendulum_frequency_the_tiss
         assert not ends["SoftGraspRigid-v3"]["is_success"]
 
 
-@pytest.mark.parametrize("coupling", ["thesis", "consistent"])
-def test_a_soft_grasp_holds_through_a_30_s_carry(coupling, make_env):
+@pytest.mark.parametrize("env_id, coupling", [("SoftGrasp-v3", "thesis"), ("SoftGrasp-v3", "consistent"),
+                                              ("SoftGraspRigidTorsion-v3", None)])  # fmt: skip
+def test_the_grasp_holds_through_a_30_s_carry(env_id, coupling, make_env):
     """Long runs count: the carry test lasts 1.5 s; here 30 s (57 periods at 1.9 Hz, 1 m/s^2, the
-    hardest of the band for a two-point grasp) on two seeds, with both couplings at the default
-    preset: held at every step, little tilt, no creep in the hand."""
-    sim = replace(presets.scene_config("default").sim, coupling=coupling)
-    env = make_env("SoftGrasp-v3", sim=sim, carry_duration=30.0, max_episode_steps=670)
+    hardest of the band for a two-point grasp) on two seeds: the soft fingers with both couplings
+    at the default preset, and the torsional peer the v3 maps find as good as the tissue (it must
+    hold as long; measured tilt 0.20 / 0.11 deg, slide 0.37 / 0.35 mm, the lift steady within
+    0.10 / 0.06 mm). Held at every step, little tilt, no creep in the hand."""
+    kwargs = {} if coupling is None else {"sim": replace(presets.scene_config("default").sim, coupling=coupling)}
+    env = make_env(env_id, carry_duration=30.0, max_episode_steps=670, **kwargs)
     for seed in (1000, 1001):
         opts = dict(carry_frequency=1.9, carry_acceleration=1.0, carry_direction=0.0)
         infos, obs, tilt = _run(env, seed=seed, options=opts)
@@ -216,20 +225,6 @@ def test_a_soft_grasp_holds_through_a_30_s_carry(coupling, make_env):
         assert tilt < 1.0 and env.unwrapped.task.slide < 1e-3
         lift = obs[70:, LIFT]
         assert lift.max() - lift.min() < 5e-4  # no slip in the hand
-
-
-def test_the_torsional_peer_holds_through_a_30_s_carry(make_env):
-    """The peer the v3 maps find as good as the tissue must also hold as long: the same 30 s carry
-    at 1.9 Hz, 1 m/s^2 across the jaw. Measured: held at every step on both seeds, tilt 0.20 /
-    0.11 deg, slide 0.37 / 0.35 mm, the lift steady within 0.10 / 0.06 mm."""
-    env = make_env("SoftGraspRigidTorsion-v3", carry_duration=30.0, max_episode_steps=670)
-    for seed in (1000, 1001):
-        opts = dict(carry_frequency=1.9, carry_acceleration=1.0, carry_direction=0.0)
-        infos, obs, tilt = _run(env, seed=seed, options=opts)
-        assert len(infos) == 670 and infos[-1]["is_success"], seed
-        assert tilt < 1.0 and env.unwrapped.task.slide < 1e-3
-        lift = obs[70:, LIFT]
-        assert lift.max() - lift.min() < 5e-4
 
 
 # --- v1/v2 ---------------------------------------------------------------------------------------
