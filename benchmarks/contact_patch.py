@@ -20,7 +20,8 @@ aligned, no wedge, centred, the scripted policy's squeeze) and at a two-point mi
 largest |r - c| = a and what a uniformly pressed disc of that radius would give, (2/3) a.
 
 It reads the tissue solver's per-contact scratch (``TissueSolver._scratch``: ``c_lambda``, the
-accumulated normal multiplier, a positional impulse [kg m], so N_i = lambda_i / dt^2;
+accumulated normal multiplier, a positional impulse [kg m], so N_i = lambda_i / h^2, h the world
+step, dt / world_substeps;
 ``c_point``, where the contact touches; ``c_patch``, its (tissue body, shape) patch) after every
 env step of the hold. No timing, no assertions: a measurement.
 """
@@ -91,7 +92,9 @@ def measure(options: dict, *, steps: int = 100, seed: int = 0, **env_kwargs) -> 
         policy = ScriptedGraspPolicy.for_env(env)
         obs, _ = env.reset(seed=seed, options=options)
         scene = base.scene
-        solver, dt = scene.world.solver, base.args.scene.sim.dt
+        # the solver's own step: a world step, dt / world_substeps (the multipliers are per step)
+        solver = scene.world.solver
+        dt = solver.sim.dt
         rows: list[list[dict]] = [[], []]
         # an env step is several physics steps and the scratch holds the last one's contacts: the
         # hold is sampled once per env step

@@ -120,16 +120,17 @@ def scripted_episode(kind: dict, version: str, *, dt: float = 1.0 / 240.0, optio
     try:
         obs, _ = env.reset(seed=0, options={**ALIGNED, **(options or {})})
         rec = Recorder(env)
-        done = False
+        u = env.unwrapped
+        done, deviation = False, 0.0
         while not done:
             obs, _, term, trunc, info = env.step(policy(obs))
             done = term or trunc
-        u = env.unwrapped
+            deviation = max(deviation, u.scene.world.tissue_deviation())
         pad = u.args.scene.pad_thickness
         return {"held": bool(info["is_success"]), "lift": float(info["lift_height"]), "in_hand": rec.in_hand_motion(),
                 "compression": pad - rec.gap[-1], "pad": pad, "peak_accel": rec.peak_acceleration(dt),
                 "cyl_accel": rec.cylinder_peak_acceleration(dt),
-                "diverged": bool(info["diverged"])}  # fmt: skip
+                "diverged": bool(info["diverged"]), "deviation": deviation}  # fmt: skip
     finally:
         env.close()
 

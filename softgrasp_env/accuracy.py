@@ -25,7 +25,8 @@ from .scene import GraspScene
 from .tissue.builder import build_free_block
 from .tissue.collision import SHAPE_CODES
 from .tissue.model import TissueModel
-from .tissue.rigid import empty_colliders
+from .tissue.compliant import substeps_for
+from .tissue.rigid import Colliders, empty_colliders
 from .tissue.rotation import quat_to_matrix
 from .tissue.solver import TissueSolver
 from .tissue.state import TissueState, state_at_rest
@@ -281,20 +282,47 @@ PAD_HALF_EXTENTS = (0.016, 0.016, 0.008)
 """The test pad: a free two-layer tissue block 32 x 32 x 16 mm at 8 mm spacing (75 particles)."""
 
 
-def _pad(theta: float, tissue: TissueConfig, sim: SimConfig):
-    """A pad resting on a static plane tilted by ``theta`` about x; returns (model, state, solver,
-    colliders, downhill unit vector)."""
-    model = build_free_block(PAD_HALF_EXTENTS, tissue, spacing=0.008)
-    col = empty_colliders()
-    q = np.array([math.sin(theta / 2), 0.0, 0.0, math.cos(theta / 2)])
-    col.shape_kind = np.array([SHAPE_CODES["plane"]], dtype=np.int32)
-    col.shape_params = np.zeros((1, 3))
-    col.shape_rigid = np.array([-1], dtype=np.int32)
-    col.shape_local_x = np.zeros((1, 3))
-    col.shape_local_q = q[None].copy()
-    rot = quat_to_matrix(q)
-    state = state_at_rest(model, (rot[:, 2] * PAD_HALF_EXTENTS[2])[None], q[None])
-    return model, state, TissueSolver(model, sim), col, -rot[:, 1]
+class _Pad:
+    """A pad resting on a plane tilted by ``theta`` about x (through the origin), stepped as the
+    world steps tissue (sim/world.py): in steps of dt / n short enough for its material
+    (compliant.substeps_for). The plane sits on a kinematic rigid slot (no mass: nothing the
+    tissue does moves it) that turns at ``rate`` [rad/s] within every step, as a body would: turned
+    in one jump per dt, a pad in shorter steps met each jump in its first one and slipped in the
+    next, 1.5 % early on the ramp."""
+
+    def __init__(self, theta: float, tissue: TissueConfig, sim: SimConfig, *, rate: float = 0.0) -> None:
+        self.model = build_free_block(PAD_HALF_EXTENTS, tissue, spacing=0.008)
+        self.n = substeps_for(self.model, sim.dt)
+        self.h = sim.dt / self.n
+        self.theta, self.rate = theta, rate
+        q = np.array([math.sin(theta / 2), 0.0, 0.0, math.cos(theta / 2)])
+        self.col = Colliders(
+            rigid_x=np.zeros((1, 3)), rigid_q=q[None].copy(), rigid_v=np.zeros((1, 3)), rigid_w=np.zeros((1, 3)),
+            rigid_inv_mass=np.zeros(1), rigid_inv_inertia=np.zeros((1, 3)), rigid_gravity=np.zeros(1, dtype=np.bool_),
+            rigid_in_solve=np.zeros(1, dtype=np.bool_), shape_kind=np.array([SHAPE_CODES["plane"]], dtype=np.int32),
+            shape_params=np.zeros((1, 3)), shape_rigid=np.zeros(1, dtype=np.int32), shape_local_x=np.zeros((1, 3)),
+            shape_local_q=np.array([[0.0, 0.0, 0.0, 1.0]]),
+        )  # fmt: skip
+        rot = quat_to_matrix(q)
+        self.state = state_at_rest(self.model, (rot[:, 2] * PAD_HALF_EXTENTS[2])[None], q[None])
+        self.solver = TissueSolver(self.model, replace(sim, dt=self.h) if self.n > 1 else sim)
+        self.down = -rot[:, 1]
+        self._pose()
+
+    def _pose(self) -> None:
+        self.col.rigid_q[0] = (math.sin(self.theta / 2), 0.0, 0.0, math.cos(self.theta / 2))
+        self.col.rigid_w[0] = (self.rate, 0.0, 0.0)
+
+    def step(self) -> None:
+        """One step of sim.dt."""
+        for _ in range(self.n):
+            self.solver.step(self.state, self.col)
+            self.theta += self.rate * self.h
+            self._pose()
+
+    def on_ramp(self) -> np.ndarray:
+        """The pad's centre in the ramp's frame [m]."""
+        return quat_to_matrix(self.col.rigid_q[0]).T @ self.state.particle_x.mean(axis=0)
 
 
 def ramp_breakaway(tissue: TissueConfig, sim: SimConfig, *, rate: float = 0.05, threshold: float = 1e-4) -> float:
@@ -302,48 +330,43 @@ def ramp_breakaway(tissue: TissueConfig, sim: SimConfig, *, rate: float = 0.05, 
     ramp is tilted slowly (``rate`` rad/s) from 0.08 rad below atan mu_s until the pad's centre has
     moved ``threshold`` along the ramp. Coulomb: tan theta = mu_s. Detection lags the true onset a
     little (0.1 mm at 0.05 rad/s reads ~0.1 % high); NaN if it never slid."""
-    theta = math.atan(tissue.friction_static) - 0.08
-    model, state, solver, col, _ = _pad(theta, tissue, sim)
+    pad = _Pad(math.atan(tissue.friction_static) - 0.08, tissue, sim)
     for _ in range(int(round(0.5 / sim.dt))):  # settle
-        solver.step(state, col)
-
-    def on_ramp() -> np.ndarray:
-        return quat_to_matrix(col.shape_local_q[0]).T @ state.particle_x.mean(axis=0)
-
-    start = on_ramp()
+        pad.step()
+    start = pad.on_ramp()
+    pad.rate = rate
     for _ in range(int(round(0.2 / rate / sim.dt))):
-        theta += rate * sim.dt
-        col.shape_local_q[0] = (math.sin(theta / 2), 0.0, 0.0, math.cos(theta / 2))
-        solver.step(state, col)
-        if np.linalg.norm(on_ramp() - start) > threshold:
-            return math.tan(theta)
+        pad.step()
+        if np.linalg.norm(pad.on_ramp() - start) > threshold:
+            return math.tan(pad.theta)
     return math.nan
 
 
 def slide_acceleration(theta: float, tissue: TissueConfig, sim: SimConfig, *, t0: float = 0.5, t1: float = 1.0) -> float:
     """Acceleration of the pad's centre of mass down a ramp of angle ``theta`` steep enough to slide,
     from its velocity at t0 and t1 [m/s^2]. Coulomb: g (sin theta - mu_k cos theta)."""
-    model, state, solver, col, down = _pad(theta, tissue, sim)
-    m = model.particle_mass[:, None]
+    pad = _Pad(theta, tissue, sim)
+    m = pad.model.particle_mass[:, None]
     speeds = {}
     n0, n1 = int(round(t0 / sim.dt)), int(round(t1 / sim.dt))
     for k in range(1, n1 + 1):
-        solver.step(state, col)
+        pad.step()
         if k in (n0, n1):
-            speeds[k] = float(((m * state.particle_v).sum(axis=0) / m.sum()) @ down)
+            speeds[k] = float(((m * pad.state.particle_v).sum(axis=0) / m.sum()) @ pad.down)
     return (speeds[n1] - speeds[n0]) / ((n1 - n0) * sim.dt)
 
 
 def stop_distance(v0: float, tissue: TissueConfig, sim: SimConfig) -> float:
     """How far the pad's centre slides on level ground after being launched at ``v0`` [m].
     Coulomb: v0^2 / (2 mu_k g)."""
-    model, state, solver, col, _ = _pad(0.0, tissue, sim)
+    pad = _Pad(0.0, tissue, sim)
     for _ in range(int(round(0.5 / sim.dt))):  # settle onto the ground first
-        solver.step(state, col)
+        pad.step()
+    state = pad.state
     state.particle_v[:, 1] += v0
     y0 = state.particle_x[:, 1].mean()
     for _ in range(int(2.0 * v0 / (tissue.friction_kinetic * sim.gravity) / sim.dt) + 240):
-        solver.step(state, col)
+        pad.step()
     return float(state.particle_x[:, 1].mean() - y0)
 
 

@@ -79,6 +79,11 @@ class EnvArguments:
         "kinds' pybullet coefficient)", type_="float")
     friction_dynamic: float | None = _arg(None, "μ_k of the tissue (None: the preset's: equal to μ_s, one "
         "coefficient as pybullet's rigid contacts have; v1/v2: 0.7)", type_="float")
+    tissue_material: str | None = _arg(None, "The tissue's elasticity: 'compliant' (v3: a shear modulus in Pa, the "
+        "same material at every dt) or 'per_step' (v1/v2: a fraction of the way to the goal per step, the thesis'); "
+        "None: the preset's, 'compliant'", type_="str")
+    shear_modulus: float | None = _arg(None, "The compliant tissue's shear modulus [Pa] (None: the preset's, 4,000: "
+        "the pad compresses ~4.4 mm under 3 N)", type_="float")
     tissue: TissueConfig | None = _arg(None, "A whole TissueConfig to start from (None: the preset's)",
                                        type_="TissueConfig")
     sim: SimConfig | None = _arg(None, "A whole SimConfig (dt, iterations, coupling; None: the preset's)",
@@ -224,7 +229,9 @@ class EnvArguments:
                              f"tissue.friction_dynamic={tissue.friction_dynamic!r} disagree: give one of them")
         overrides = {k: v for k, v in (("particle_density", self.particle_density),
                                        ("friction_static", self.friction_static),
-                                       ("friction_dynamic", self.friction_dynamic)) if v is not None}  # fmt: skip
+                                       ("friction_dynamic", self.friction_dynamic),
+                                       ("material", self.tissue_material),
+                                       ("shear_modulus", self.shear_modulus)) if v is not None}  # fmt: skip
         self._set("tissue", replace(tissue, **overrides))  # validated by TissueConfig
         sim = self.sim if self.sim is not None else p_cfg.sim
         check_type("sim", sim, SimConfig)

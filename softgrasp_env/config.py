@@ -13,9 +13,20 @@ import warnings
 from dataclasses import dataclass, fields, replace
 from typing import Literal
 
-from .validation import accept_old_names, check_int, check_range
+from .validation import accept_old_names, check_choice, check_int, check_range
 
 CouplingMode = Literal["thesis", "consistent"]
+MATERIALS: tuple[str, ...] = ("compliant", "per_step")
+DEFAULT_SHEAR_MODULUS = 4_000.0
+"""The compliant tissue's shear modulus when none is given [Pa]."""
+DEFAULT_MAX_DEVIATION = 0.02
+"""The compliant tissue's strain limit when none is given [m] (TissueConfig.max_deviation)."""
+DEFAULT_STEP_STIFFNESS = 0.5
+"""The per-step material's stiffness when none is given (v1/v2)."""
+COMPLIANT_DAMPING = 300.0
+"""SimConfig.damping for the compliant tissue when none is given [1/s]."""
+STEP_DAMPING = 0.5
+"""SimConfig.damping for the per-step tissue when none is given [1/s] (v1/v2)."""
 COUPLING_MODES: tuple[str, ...] = ("thesis", "consistent")
 
 
@@ -47,11 +58,32 @@ class TissueConfig:
     tore in 2 of 3 random-action episodes, 1e5 in every episode, scripted ones too; 1e4 ran all.
     Tissue lighter than foam (2 and 13 kg/m^3) tore in two of the fuzzed settings, and setting
     that alone back to 1,000 made both run."""
-    stiffness: float = 0.5
-    """Shape-matching stiffness k in [0.1, 1] per *step*; made iteration-independent (Mueller
-    2007). Slacker tissue does not follow its core under the arm's shoves: at 0.001 every episode
-    tore past the divergence limit by the second step, at 0.01 one of three random-action
-    episodes, at 0.03 one of five (issue 12's extremes probe and tests/test_extremes.py)."""
+    material: str = "compliant"
+    """How the shape matching's elasticity is defined (Mueller & Chentanez 2011 sec. 4):
+    ``"compliant"`` (v3) - a material in SI, ``shear_modulus`` [Pa], projected as XPBD compliance
+    (Macklin, Mueller & Chentanez 2016) with the attached particles held by their cores inside the
+    solve: the pad compresses the same under a load at every dt and iteration count;
+    ``"per_step"`` (v1/v2, the thesis) - ``stiffness``, the fraction of the way to the goal a
+    particle moves per step, which is a different material at every dt (issue 19: the pad
+    compressed 0.64 mm under 3 N at 1/1000 s and 11 mm, crushed, at 1/120 s)."""
+    shear_modulus: float | None = None
+    """The compliant material's shear modulus G [Pa], 1e3 to 1e6; None: the default,
+    DEFAULT_SHEAR_MODULUS. Each implicit group's shape matching is an elastic energy
+    G V e^2 / l^2 (V a member's volume, l the group's radius of gyration), so a group's stiffness
+    per unit mass is kappa = G / (rho l^2): its shear wave across the group (builder.group_kappa)."""
+    max_deviation: float | None = None
+    """The compliant material's strain limit [m], 1 mm to 3 cm: the farthest a particle may be pulled
+    from the spot its core carries it to (a deformation constraint, Provot 1995, projected after
+    friction: tissue/anchors.py, limit_deviation); None: DEFAULT_MAX_DEVIATION. A particle snagged
+    on the cylinder's top face is pulled through the cylinder by its group and held there by its
+    own friction; without the limit the tissue tore (past the 3 cm divergence limit) 5 times in
+    2 x 10^5 random-action env steps."""
+    stiffness: float | None = None
+    """The per-step material's shape-matching stiffness k in [0.1, 1] per *step* (``material=
+    "per_step"`` only); None: 0.5. Made iteration-independent (Mueller 2007), not dt-independent.
+    Slacker tissue does not follow its core under the arm's shoves: at 0.001 every episode tore past
+    the divergence limit by the second step, at 0.01 one of three random-action episodes, at 0.03
+    one of five (issue 12's extremes probe and tests/test_extremes.py)."""
     radius_scale: float = 0.6
     """Tangential ellipsoid radius as a fraction of the particle spacing (>0.5 closes gaps)."""
     normal_radius: float = 0.003
@@ -73,7 +105,27 @@ class TissueConfig:
         check_range("extrude", self.extrude, 0.0, 0.1, lo_open=True, owner=o)
         check_int("group_size", self.group_size, 4, 16, owner=o)
         check_range("mass_density", self.mass_density, 100.0, 1e4, owner=o)
-        check_range("stiffness", self.stiffness, 0.1, 1.0, owner=o)
+        check_choice("material", self.material, MATERIALS, owner=o)
+        if self.material == "compliant":
+            if self.stiffness is not None:
+                raise ValueError(
+                    f"TissueConfig.stiffness={self.stiffness!r} is the per-step material's fraction; with "
+                    "material='compliant' the tissue's elasticity is shear_modulus [Pa] (or pass material='per_step')")
+            if self.shear_modulus is not None:
+                check_range("shear_modulus", self.shear_modulus, 1e3, 1e6, owner=o)
+            if self.max_deviation is not None:
+                check_range("max_deviation", self.max_deviation, 1e-3, 0.03, owner=o)
+        else:
+            if self.max_deviation is not None:
+                raise ValueError(
+                    f"TissueConfig.max_deviation={self.max_deviation!r} is the compliant material's strain limit; "
+                    "material='per_step' has none")
+            if self.shear_modulus is not None:
+                raise ValueError(
+                    f"TissueConfig.shear_modulus={self.shear_modulus!r} is the compliant material's; with "
+                    "material='per_step' the tissue's elasticity is stiffness (a fraction per step)")
+            if self.stiffness is not None:
+                check_range("stiffness", self.stiffness, 0.1, 1.0, owner=o)
         check_range("radius_scale", self.radius_scale, 0.0, 2.0, lo_open=True, owner=o)
         check_range("normal_radius", self.normal_radius, 0.0, 0.1, lo_open=True, owner=o)
         check_range("friction_static", self.friction_static, 0.0, 10.0, owner=o)
@@ -89,6 +141,24 @@ class TissueConfig:
     def friction_kinetic(self) -> float:
         """mu_k as the solver uses it: ``friction_dynamic``, or mu_s when that is None."""
         return self.friction_static if self.friction_dynamic is None else self.friction_dynamic
+
+    @property
+    def modulus(self) -> float:
+        """G [Pa] as the compliant material uses it: ``shear_modulus``, or the default."""
+        return DEFAULT_SHEAR_MODULUS if self.shear_modulus is None else self.shear_modulus
+
+    @property
+    def deviation_limit(self) -> float:
+        """The strain limit as the solver uses it [m]: ``max_deviation``, or the default; inf (none)
+        for the per-step material."""
+        if self.material != "compliant":
+            return math.inf
+        return DEFAULT_MAX_DEVIATION if self.max_deviation is None else self.max_deviation
+
+    @property
+    def step_stiffness(self) -> float:
+        """k as the per-step material uses it: ``stiffness``, or 0.5."""
+        return DEFAULT_STEP_STIFFNESS if self.stiffness is None else self.stiffness
 
     @property
     def spacing(self) -> float:
@@ -119,9 +189,15 @@ class SimConfig:
     mm) and cost 20 % of the speed."""
     gravity: float = 9.81
     """Gravitational acceleration along -z [m/s^2]."""
-    damping: float = 0.5
+    damping: float | None = None
     """Damping rate of each tissue body's deviation from its rigid motion [1/s] (Mueller et al.
-    2007 sec. 3.5): the deviation shrinks by exp(-damping * dt) per step. 0 disables it."""
+    2007 sec. 3.5): the deviation's velocity shrinks by exp(-damping * dt) per step, the same rate
+    at every dt; rigid motion, so momentum and angular momentum, are kept. 0 disables it; None:
+    the material's, COMPLIANT_DAMPING (300/s) for the compliant tissue, 0.5/s for the per-step one
+    (v1/v2). The compliant pad is stiff enough to ring: its finger core, pushed on by the pad a
+    step late and held back by its motor's speed limit, swung 0.6 mm in a steady 20 Hz cycle under
+    a 3 N squeeze at 0.5/s; 300/s (a ratio of about 0.8 of critical for the pad's own ~180 rad/s
+    mode) settles it within a few steps."""
     coupling: CouplingMode = "thesis"
     """'thesis': core infinitely heavy inside the solve, error -> impulse, snap back (thesis 5.1.3).
     'consistent': attachment projected with the core's generalised inverse mass (XPBD); a core on a
@@ -141,7 +217,8 @@ class SimConfig:
         check_int("iterations", self.iterations, 1, 200, owner=o)
         check_int("rotation_iterations", self.rotation_iterations, 1, 100, owner=o)
         check_range("gravity", self.gravity, 0.0, 100.0, owner=o)
-        check_range("damping", self.damping, 0.0, 1e4, owner=o)
+        if self.damping is not None:
+            check_range("damping", self.damping, 0.0, 1e4, owner=o)
         if self.coupling not in COUPLING_MODES:
             raise ValueError(f"SimConfig.coupling must be one of {COUPLING_MODES}, got {self.coupling!r}")
         if self.orientation == "reaction":

@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from .accuracy import GraspPlan, run_grasp
-from .config import SimConfig, TissueConfig
+from .config import MATERIALS, SimConfig, TissueConfig
 from .scene import GraspScene, SceneConfig
 
 _OLD_FLAGS = {"particle_density": "--density", "mass_density": "--tissue-density"}
@@ -32,10 +32,14 @@ class _Deprecated(argparse.Action):
         setattr(namespace, self.dest, values)
 
 
+_NUMBERS = {"float": float, "int": int, "float | None": float, "int | None": int}
+"""Field annotations (strings: the config modules use postponed annotations) that get a flag."""
+
+
 def _add_dataclass_flags(parser: argparse.ArgumentParser, cls: type, prefix: str = "") -> None:
     for f in dataclasses.fields(cls):
-        if f.type in ("float", "int", float, int):
-            kind = float if f.type in ("float", float) else int
+        if f.type in _NUMBERS:
+            kind = _NUMBERS[f.type]
             flags = [f"--{prefix}{f.name.replace('_', '-')}"] + ([_OLD_FLAGS[f.name]] if f.name in _OLD_FLAGS else [])
             parser.add_argument(*flags, dest=prefix + f.name, type=kind, default=None, action=_Deprecated,
                                 help=f"{cls.__name__}.{f.name} (default {f.default})")  # fmt: skip
@@ -55,6 +59,9 @@ def main(argv: list[str] | None = None) -> int:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     parser.add_argument("--rigid", action="store_true", help="rigid-only fingers (no tissue)")
     parser.add_argument("--coupling", choices=["thesis", "consistent"], default=None, help="core-tissue coupling")
+    parser.add_argument("--material", choices=MATERIALS, default=None,
+                        help="the tissue's material: compliant (a shear modulus in Pa, the default) or per_step "
+                             "(v1/v2: a stiffness per step)")  # fmt: skip
     parser.add_argument("--gui", action="store_true", help="open the pybullet GUI (needs a display)")
     parser.add_argument("--hold", type=float, default=GraspPlan().hold, help="seconds to hold the lifted cylinder")
     _add_dataclass_flags(parser, TissueConfig)
@@ -63,7 +70,10 @@ def main(argv: list[str] | None = None) -> int:
         parser.add_argument(f"--{name.replace('_', '-')}", type=float, default=None)
     ns = parser.parse_args(argv)
     try:
-        tissue = TissueConfig(**_collect(ns, TissueConfig))
+        tissue_kw = _collect(ns, TissueConfig)
+        if ns.material:
+            tissue_kw["material"] = ns.material
+        tissue = TissueConfig(**tissue_kw)
         sim_kw = _collect(ns, SimConfig)
         if ns.coupling:
             sim_kw["coupling"] = ns.coupling

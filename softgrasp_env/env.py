@@ -147,8 +147,8 @@ class SoftGraspEnv(gym.Env):
       (more than 15 cm from the origin horizontally, below the ground or above 50 cm), or the
       simulation diverges (non-finite numbers, a body faster than 20 m/s, tissue torn more than
       3 cm from its core, a finger segment turning faster than 90 rad/s): then
-      ``info["diverged"]`` is True and ``info["divergence"]`` says why, the reward is 0 and the
-      observation the last finite one, never a NaN.
+      ``info["diverged"]`` is True and ``info["divergence"]`` says why, the reward is 0 (the goal
+      ids: -1, their failure reward) and the observation the last finite one, never a NaN.
     - Truncated: by the registered time limit (100 steps = 5 s at 20 Hz).
 
     ## Arguments

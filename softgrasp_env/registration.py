@@ -11,9 +11,10 @@ MAX_EPISODE_STEPS = 100
 """5 s at the default 20 Hz control frequency."""
 
 _OLD = {"arm": "jump", "carry_frequency": 2.0, "carry_acceleration": None, "carry_amplitude": 0.01,
-        "carry_direction": "across", "carry_slide_limit": None, "friction_dynamic": 0.7}
-"""The v1/v2 ids keep the arm, the carry test and the tissue's two-coefficient friction their
-results were made with (issue 19); the v3 ids take EnvArguments' defaults."""
+        "carry_direction": "across", "carry_slide_limit": None, "friction_dynamic": 0.7, "tissue_material": "per_step"}
+"""The v1/v2 ids keep the arm, the carry test, the tissue's two-coefficient friction and its
+per-step material their results were made with (issue 19); the v3 ids take EnvArguments'
+defaults."""
 _ENV, _GOAL = "softgrasp_env.env:SoftGraspEnv", "softgrasp_env.env:SoftGraspGoalEnv"
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 import pytest
 
 from benchmarks.grasp_checks import KINDS, NO_SLIP, scripted_episode
+from softgrasp_env.config import DEFAULT_MAX_DEVIATION
 
 G, MU, FORCE = 9.81, 0.9, 3.0
 A_ARM = 1.5
@@ -18,12 +19,16 @@ A_ARM = 1.5
 @pytest.mark.parametrize("kind", ["soft", "rigid"])
 def test_the_scripted_grasp_holds_with_little_in_hand_motion_at_every_dt(kind, hz):
     """Held at every dt from 1/1000 to 1/120 s with in-hand motion (lift-off to the end) under
-    2 mm and the palm under 2 m/s^2. Measured soft 0.15 / 0.34 / 1.10 / 0.03 mm, rigid <= 0.01 mm,
-    palm 1.4-1.5 m/s^2 (the v1 ids' arm: dropped at 1/1000, 48.7 / 3.7 / 3.0 mm soft, 71 / 31 /
+    1 mm and the palm under 2 m/s^2. Measured soft 0.29 / 0.41 / 0.35 / 0.30 mm (the per-step
+    material of 0.4.0: 0.15 / 0.34 / 1.10 / 0.04, its pad crushed at 1/120), rigid <= 0.01 mm,
+    palm 1.0-1.5 m/s^2 (the v1 ids' arm: dropped at 1/1000, 48.7 / 3.7 / 3.0 mm soft, 71 / 31 /
     7.4 / 0 mm rigid, 500 / 344 / 86 / 22 m/s^2)."""
     r = scripted_episode(KINDS[kind], "v3", dt=1.0 / hz)
     assert r["held"] and not r["diverged"]
-    assert r["in_hand"] < 0.002, f"{r['in_hand'] * 1e3:.2f} mm"
+    assert r["in_hand"] < 0.001, f"{r['in_hand'] * 1e3:.2f} mm"
+    # the tissue's strain limit (TissueConfig.max_deviation, 2 cm) is for snags, never reached in a
+    # grasp (measured: the largest deviation 5.5 mm at 0.45 kg, 5.2 mm through the carry)
+    assert r["deviation"] < DEFAULT_MAX_DEVIATION / 2
     assert r["peak_accel"] <= 2.0
 
 
@@ -32,13 +37,14 @@ def _held(kind: str, **options) -> bool:
     return r["held"] and r["in_hand"] < NO_SLIP
 
 
-BOUNDS = {"soft": (0.88, 1.05), "soft-consistent": (0.88, 1.05), "rigid": (1.0, 1.12), "rigid_torsion": (1.0, 1.12)}
+BOUNDS = {"soft": (0.95, 1.05), "soft-consistent": (0.95, 1.05), "rigid": (1.0, 1.12), "rigid_torsion": (1.0, 1.12)}
 """Held at the first multiple of Coulomb's bound, not at the second. Bisected (benchmarks/
-grasp_checks.py): soft 0.433 kg (-9.3 %), consistent 0.433 (-9.3 %), rigid and torsional 0.515
-(+7.8 %). Issue 19 asked for 5 %: the soft pads miss it because the cylinder bounces on them
-(its own peak acceleration after lift-off 4.2-4.8 m/s^2, three times the palm's), the rigid grasp
-beats it because the cylinder leaves the ground part-way through the arm's acceleration (its own
-peak 1.1 m/s^2: 2 mu F / (g + 1.1) = 0.494 kg, +4.2 %)."""
+grasp_checks.py): soft and consistent 0.463 kg (-3.0 % against this bound; -4.5 % with the palm's
+peak measured at the boundary, 1.33 m/s^2; +1.3 / -1.0 % with the cylinder's own, 2.00 / 1.74),
+within issue 19's 5 % (the per-step material of v1/v2: 0.433, -9.3 %: the cylinder bounced on
+pads whose stiffness was a per-step number); rigid and torsional 0.515 (+7.8 %: the cylinder
+leaves the ground part-way through the arm's acceleration, its own peak 1.1 m/s^2:
+2 mu F / (g + 1.1) = 0.494 kg, +4.2 %)."""
 
 
 @pytest.mark.parametrize("kind", list(BOUNDS))
@@ -51,10 +57,10 @@ def test_the_heaviest_cylinder_held_is_near_coulombs_bound(kind):
     assert not _held(kind, cylinder_mass=high * bound)
 
 
-FRICTION = {"soft": (1.12, 1.0), "soft-consistent": (1.12, 1.0), "rigid": (1.05, 0.9), "rigid_torsion": (1.05, 0.9)}
-"""Lifts at the first multiple of Coulomb's lowest friction, not at the second. Bisected: soft and
-consistent 0.225 x the default (+7.5 %), rigid and torsional 0.205 x (-2.2 %); issue 19's target
-was 10 %."""
+FRICTION = {"soft": (1.05, 0.95), "soft-consistent": (1.05, 0.95), "rigid": (1.05, 0.9), "rigid_torsion": (1.05, 0.9)}
+"""Lifts at the first multiple of Coulomb's lowest friction, not at the second. Bisected: soft
+0.210 x the default (+0.3 %), consistent 0.207 x (-1.1 %) (the per-step material: 0.225 x,
++7.5 %), rigid and torsional 0.205 x (-2.2 %); issue 19's target was 10 %."""
 
 
 @pytest.mark.parametrize("kind", list(FRICTION))

@@ -144,6 +144,12 @@ class FingerKind:
         """pybullet steps per world step (each ``sim.dt / bullet_substeps`` long)."""
         return 1
 
+    @property
+    def world_substeps(self) -> int:
+        """Whole-world steps (tissue and pybullet) per physics step of ``sim.dt``: more than 1 where
+        the kind's coupling to pybullet is only stable in shorter steps."""
+        return 1
+
     def ground_shape(self, client: BulletClient) -> int:
         """The ground's collision shape (its top face at z = 0)."""
         return client.createCollisionShape(p.GEOM_PLANE)

@@ -9,13 +9,15 @@ tissue. Its combination rules (``check``) refuse what tore the tissue in issue 1
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..config import TissueConfig
 from ..sim.world import TissueSpec, World
-from ..tissue.builder import build_combined_body, core_shape_from_bullet
+from ..tissue.builder import CoreShape, build_combined_body, core_shape_from_bullet
+from ..tissue.compliant import world_substeps as compliant_world_substeps
 from ..validation import check_choice
 from .base import FingerConfig, FingerKind, FingerSite, Visual
 
@@ -92,11 +94,11 @@ class TissueFingers(FingerKind):
         # Shape matching pulls a particle a fraction k of the way to its goal per step
         # (Mueller 2005, alpha = k), so gravity's g dt^2 per step settles at a sag of
         # g dt^2 / k (MAX_TISSUE_SAG: at 1.7 cm the probe's tissue tore one episode in three).
-        sag = sim.gravity * sim.dt**2 / tissue.stiffness
-        if sag > MAX_TISSUE_SAG:
+        sag = sim.gravity * sim.dt**2 / tissue.step_stiffness
+        if tissue.material == "per_step" and sag > MAX_TISSUE_SAG:
             raise ValueError(
                 f"SceneConfig: the tissue is too slack for the time step: gravity={sim.gravity:g} m/s^2 "
-                f"times dt={sim.dt:g} s squared over stiffness={tissue.stiffness:g} sags it "
+                f"times dt={sim.dt:g} s squared over stiffness={tissue.step_stiffness:g} sags it "
                 f"{sag * 100:.2f} cm, more than {MAX_TISSUE_SAG * 100:g} cm; raise the stiffness to at least "
                 f"{sim.gravity * sim.dt**2 / MAX_TISSUE_SAG:.3g} or shorten dt")  # fmt: skip
         # Coarse pads of wide particles overhang the core's edges and catch on the cylinder.
@@ -107,6 +109,13 @@ class TissueFingers(FingerKind):
                 f"times the spacing {tissue.spacing:.4f} m (particle_density={tissue.particle_density:g} per m^2) "
                 f"gives {reach:.4f} m, more than {MAX_PARTICLE_RADIUS:g} m; raise the particle density to at least "
                 f"{(tissue.radius_scale / MAX_PARTICLE_RADIUS) ** 2:.0f} per m^2 or lower radius_scale")  # fmt: skip
+
+    @property
+    def world_substeps(self) -> int:
+        """World steps per physics step for the compliant material (the per-step one takes 1): the
+        fewest that keep its groups within compliant.MAX_STEP_STIFFNESS and the pad's stiffness
+        against its core within compliant.MAX_COUPLING_FOLD."""
+        return world_substeps(self.scene_config)
 
     def mount(self, site: FingerSite) -> list[TissueSpec]:
         super().mount(site)
@@ -152,5 +161,35 @@ class TissueFingers(FingerKind):
                                            in_scene=False)]  # fmt: skip
 
 
-__all__ = ["MAX_CONSISTENT_SQUEEZE_IMPULSE", "MAX_PARTICLE_RADIUS", "MAX_TISSUE_SAG", "TISSUE_FACES",
-           "TissueFingerConfig", "TissueFingers"]  # fmt: skip
+def world_substeps(scene_config) -> int:
+    """World steps per physics step of ``scene_config`` with tissue fingers (TissueFingers.world_substeps):
+    compliant.world_substeps on the pads mount() builds, on cores of ``finger_mass``; 1 for the
+    per-step material."""
+    if scene_config.tissue.material != "compliant":
+        return 1
+    return _world_substeps(scene_config.tissue, tuple(scene_config.finger_half_extents), scene_config.fingers.faces,
+                           scene_config.finger_mass, scene_config.sim.dt)  # fmt: skip
+
+
+@functools.lru_cache(maxsize=64)
+def _world_substeps(tissue: TissueConfig, half_extents: tuple[float, float, float], faces: str, core_mass: float,
+                    dt: float) -> int:  # fmt: skip
+    """The pads built as mount() builds them (the same builder, the same core boxes), once per
+    setting, before the scene: it must know its pybullet time step before the first motor command."""
+    core = CoreShape("box", half_extents=half_extents)
+    n = 1
+    for k in (0, 1):
+        model = build_combined_body(core, tissue, faces=CONTACT_FACES[k] if faces == "contact" else None)
+        n = max(n, compliant_world_substeps(model, np.array([core_mass]), dt))
+    return n
+
+
+__all__ = [
+    "MAX_CONSISTENT_SQUEEZE_IMPULSE",
+    "MAX_PARTICLE_RADIUS",
+    "MAX_TISSUE_SAG",
+    "TISSUE_FACES",
+    "TissueFingerConfig",
+    "TissueFingers",
+    "world_substeps",
+]  # fmt: skip

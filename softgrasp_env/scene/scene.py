@@ -63,8 +63,11 @@ class GraspScene:
         # motor command: pybullet turns a motor's force limit into an impulse limit with the time
         # step current when the command is sent.
         self.bullet_steps = fingers.bullet_substeps
-        if self.bullet_steps > 1:
-            c.setPhysicsEngineParameter(fixedTimeStep=sim.dt / self.bullet_steps)
+        # ... and a kind may run the whole world (tissue and pybullet) in several shorter steps (the
+        # compliant tissue, where its coupling to pybullet would ring at a long step)
+        self.world_steps = fingers.world_substeps
+        if self.bullet_steps * self.world_steps > 1:
+            c.setPhysicsEngineParameter(fixedTimeStep=sim.dt / (self.bullet_steps * self.world_steps))
 
         # --- ground
         self.ground = c.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=fingers.ground_shape(c))
@@ -115,7 +118,8 @@ class GraspScene:
             "right_core": ShapeSpec("box", tuple(fh), rigid=RIGHT),
             "palm": ShapeSpec("box", PALM_HALF_EXTENTS, rigid=PALM),
         }
-        self.world = World(c, sim, [rigid[s] for s in SLOTS], [shapes[s] for s in SHAPES], tissue)
+        self.world = World(c, sim, [rigid[s] for s in SLOTS], [shapes[s] for s in SHAPES], tissue,
+                           substeps=self.world_steps)
         fingers.connect(self.world)
 
     # --- stepping --------------------------------------------------------------------------------

@@ -12,7 +12,8 @@ A world without tissue (rigid-only fingers) is the same recipe with the tissue l
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pybullet as p
@@ -20,6 +21,7 @@ from pybullet_utils.bullet_client import BulletClient
 
 from ..config import SimConfig
 from ..tissue.collision import SHAPE_CODES
+from ..tissue.compliant import world_substeps
 from ..tissue.model import TissueModel, concatenate, with_core_shapes
 from ..tissue.rigid import Colliders
 from ..tissue.rotation import quat_to_matrix
@@ -91,6 +93,10 @@ class TissueSpec:
     core_shape: int
 
 
+def _mass(inv_mass: float) -> float:
+    return math.inf if inv_mass == 0.0 else 1.0 / inv_mass
+
+
 class World:
     """pybullet rigid bodies plus oriented-particle tissue, stepped together."""
 
@@ -101,9 +107,17 @@ class World:
         rigid: list[RigidRef],
         shapes: list[ShapeSpec],
         tissue: list[TissueSpec],
+        *,
+        substeps: int = 1,
     ) -> None:
+        if not (isinstance(substeps, int) and substeps >= 1):
+            raise ValueError(f"World substeps must be an int >= 1, got {substeps!r}")
         self.client = client
         self.sim = sim
+        self.substeps = substeps
+        """World steps of sim.dt / substeps per step(): tissue and pybullet each take them (pybullet's
+        fixedTimeStep must be set to match by the caller)."""
+        self._h = sim.dt / substeps
         self.rigid = list(rigid)
         self.shapes = list(shapes)
         nr = len(self.rigid)
@@ -143,7 +157,17 @@ class World:
                     raise ValueError(f"tissue core_shape {t.core_shape} must be a shape on a rigid slot")
             model = concatenate([with_core_shapes(t.model, np.array([t.core_shape])) for t in tissue])
             self.model = model
-            self.solver = TissueSolver(model, sim)
+            # The compliant material needs steps short enough for itself and for its pull on the
+            # cores (compliant.world_substeps): a World asked for fewer would ring or go unstable.
+            core_mass = np.array([_mass(inv_m[self.shapes[t.core_shape].rigid]) for t in tissue])
+            need = world_substeps(model, core_mass, sim.dt)
+            if substeps < need:
+                raise ValueError(
+                    f"World(substeps={substeps}) at dt={sim.dt:g} s: this tissue needs at least {need} world steps per "
+                    f"step (compliant.world_substeps: its material's stiffness and its pull on cores of "
+                    f"{', '.join(f'{m:g}' for m in core_mass)} kg); pass substeps={need} and pybullet's fixedTimeStep "
+                    f"dt / {need}")  # fmt: skip
+            self.solver = TissueSolver(model, replace(sim, dt=self._h) if substeps > 1 else sim)
             cores = [self.shapes[t.core_shape].rigid for t in tissue]
             self.state = state_at_rest(model, self.colliders.rigid_x[cores], self.colliders.rigid_q[cores])
             self._sync()
@@ -152,21 +176,22 @@ class World:
     # --- the step ----------------------------------------------------------------------------------
 
     def step(self) -> None:
-        """Advance the world by ``sim.dt``."""
+        """Advance the world by ``sim.dt`` (in ``substeps`` world steps)."""
         col = self.colliders
-        if self.solver is not None:
-            out = self.solver.step(self.state, col)
-            self.last_output = out
-            # A NaN impulse would poison pybullet's bodies (and its broadphase) for good: the applier
-            # hands nothing over then, and we stop here so the caller can end the episode and rebuild.
-            if not self._impulses.apply(col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w, col.rigid_inv_mass,
-                                        col.rigid_inv_inertia, out.rigid_impulse, out.rigid_angular_impulse,
-                                        self.sim.dt):  # fmt: skip
-                raise SimulationDiverged(f"non-finite tissue impulse at step {self.step_count}")
-        self.client.stepSimulation()
-        self.refresh()
-        if self.solver is not None:
-            self._sync()
+        for _ in range(self.substeps):
+            if self.solver is not None:
+                out = self.solver.step(self.state, col)
+                self.last_output = out
+                # A NaN impulse would poison pybullet's bodies (and its broadphase) for good: the applier
+                # hands nothing over then, and we stop here so the caller can end the episode and rebuild.
+                if not self._impulses.apply(col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w, col.rigid_inv_mass,
+                                            col.rigid_inv_inertia, out.rigid_impulse, out.rigid_angular_impulse,
+                                            self._h):  # fmt: skip
+                    raise SimulationDiverged(f"non-finite tissue impulse at step {self.step_count}")
+            self.client.stepSimulation()
+            self.refresh()
+            if self.solver is not None:
+                self._sync()
         self.step_count += 1
 
     def refresh(self) -> None:

@@ -330,6 +330,9 @@ def _single_body_model(
 ) -> TissueModel:
     offsets, members, rest_offset = build_groups(rest_x, mass, partner, tissue.group_size)
     n = rest_x.shape[0]
+    compliant = tissue.material == "compliant"
+    kappa = group_kappa(offsets, members, rest_offset, mass, tissue.modulus, tissue.mass_density) if compliant \
+        else np.zeros(n)  # fmt: skip
     return TissueModel(
         particle_rest_x=np.ascontiguousarray(rest_x, dtype=np.float64),
         particle_rest_q=np.ascontiguousarray(rest_q, dtype=np.float64),
@@ -344,9 +347,34 @@ def _single_body_model(
         group_rest_offset=rest_offset,
         body_particle_offsets=np.array([0, n], dtype=np.int32),
         body_core_shape=np.array([-1], dtype=np.int32),
-        body_stiffness=np.array([tissue.stiffness]),
+        body_stiffness=np.array([tissue.step_stiffness]),
         body_friction=np.array([[tissue.friction_static, tissue.friction_kinetic]]),
+        body_compliant=np.array([compliant]),
+        group_kappa=kappa,
+        body_max_deviation=np.array([tissue.deviation_limit]),
     )
+
+
+def group_kappa(offsets: np.ndarray, members: np.ndarray, rest_offset: np.ndarray, mass: np.ndarray, modulus: float,
+                density: float) -> np.ndarray:  # fmt: skip
+    """(N,) each implicit group's stiffness per unit mass kappa = G / (rho l^2) [1/s^2], l its mass-
+    weighted radius of gyration at rest, l^2 = sum m_j |x_bar_j - c_bar|^2 / sum m_j.
+
+    Why: shape matching is the gradient of E = sum_j k_j |x_j - g_j|^2 / 2 (the fit R, c minimises
+    it), and a group strained by e moves its members by about e l from their goals; with
+    k_j = G V_j / l^2 (V_j = m_j / rho the member's volume) its energy is G e^2 sum V_j, a
+    material's shear energy. So k_j / m_j = G / (rho l^2) is the same for every member: the
+    projection conserves momentum, and kappa is the squared angular frequency of a shear wave
+    across the group, sqrt(G / rho) / l. The constant of order one this leaves out is measured,
+    not assumed: docs/RESULTS.md gives the pad's compression and shear under load."""
+    n = offsets.shape[0] - 1
+    out = np.empty(n)
+    for i in range(n):
+        e = slice(int(offsets[i]), int(offsets[i + 1]))
+        m = mass[members[e]]
+        l2 = float((m * (rest_offset[e] ** 2).sum(axis=1)).sum() / m.sum())
+        out[i] = modulus / (density * l2)
+    return out
 
 
 BYTES_PER_PARTICLE = 3200

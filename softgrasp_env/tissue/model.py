@@ -50,6 +50,23 @@ class TissueModel:
     """(B,) shape-matching stiffness k in (0, 1] per step."""
     body_friction: np.ndarray
     """(B, 2) Coulomb friction coefficients (static, dynamic) of the tissue surface."""
+    body_compliant: np.ndarray | None = None
+    """(B,) bool: the body's shape matching is the compliant material (XPBD, ``group_kappa``) rather
+    than the per-step fraction ``body_stiffness``; None: all False (per-step)."""
+    group_kappa: np.ndarray | None = None
+    """(N,) stiffness per unit mass of each group's shape matching, kappa = G / (rho l^2) [1/s^2]
+    (compliant bodies; see builder.group_kappa); None: all 0 (per-step bodies)."""
+    body_max_deviation: np.ndarray | None = None
+    """(B,) the strain limit of each body [m]: the farthest a free particle may be from the spot its
+    core carries it to (compliant bodies; anchors.limit_deviation); None: all inf (none)."""
+
+    def __post_init__(self) -> None:
+        if self.body_compliant is None:
+            object.__setattr__(self, "body_compliant", np.zeros(self.body_core_shape.shape[0], dtype=np.bool_))
+        if self.group_kappa is None:
+            object.__setattr__(self, "group_kappa", np.zeros(self.particle_mass.shape[0]))
+        if self.body_max_deviation is None:
+            object.__setattr__(self, "body_max_deviation", np.full(self.body_core_shape.shape[0], np.inf))
 
     @property
     def particle_count(self) -> int:
@@ -107,6 +124,9 @@ def concatenate(models: list[TissueModel]) -> TissueModel:
         body_core_shape=cat("body_core_shape"),
         body_stiffness=cat("body_stiffness"),
         body_friction=cat("body_friction"),
+        body_compliant=cat("body_compliant"),
+        group_kappa=cat("group_kappa"),
+        body_max_deviation=cat("body_max_deviation"),
     )
 
 

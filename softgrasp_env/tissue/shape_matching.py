@@ -178,27 +178,10 @@ def group_frames(g_off, g_mem, mass, xs, frame, torque):
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def _shape_match_group(i, k_iter, rot_iters, g_off, g_mem, g_pack, frame, torque, xs, xp, group_q, moment):
-    """Project implicit group i (centred on particle i) toward its goal shape, on precomputed rest
-    data (see group_pack), without a net torque over the step.
-
-    Mueller & Chentanez 2011 eq. (10): A = sum_j (A_j + m_j x_j x_bar_j^T) - M c c_bar^T, written
-    with rest offsets q_j = x_bar_j - c_bar (sum_j m_j q_j = 0) as c = sum_j (m_j / M) x_j and
-    A = sum_j (A_j + x_j (m_j q_j)^T), so no division and no mass product per member. R = rot(A)
-    (Mueller et al. 2016), goals g_j = R q_j + c (eq. 4.8 of the thesis), corrections
-    dx_j = k (g_j - x_j); sum_j m_j dx_j = 0, so linear momentum is kept exactly. The centre turns
-    toward quat(R) q_bar_i (_turn_centre, called by the sweep with the R returned).
-
-    Internal forces must not turn a body, but these corrections do: A carries the particles' own
-    moments, so R is not the rotation that fits the positions alone, and the centre's turn changes
-    its spin with nothing to balance it. A free block lost 23 % of its angular momentum in 1,000
-    steps, and a block resting on the ground kept turning. So the step's corrections of each group
-    are made torque-free: its torque T = sum_j m_j r_j x dx_j (r_j = xs_j - cs about the group's
-    centre of mass at the step's start) is summed over the iterations, and after the last one
-    balance_torques adds the centre's spin change and turns the group back. Position-based dynamics differences positions against the step's
-    start, v = (x - xs) / dt, so the angular momentum a step leaves is sum m xs x v, and torque-free
-    about xs is what conserves it."""
-    i = np.uint64(i)
+def _fit_group(i, rot_iters, g_off, g_mem, g_pack, xp, group_q, moment):
+    """Group i's rigid fit to the predicted positions (Mueller & Chentanez 2011 eq. 10, see
+    _shape_match_group): its centre of mass c and rotation R = rot(A), warm-started from and
+    stored in ``group_q[i]``. Returns (quat(R), c). Shared by both materials."""
     start = np.uint64(g_off[i])
     end = np.uint64(g_off[i + 1])
     cx = 0.0
@@ -238,6 +221,34 @@ def _shape_match_group(i, k_iter, rot_iters, g_off, g_mem, g_pack, frame, torque
     group_q[i, 1] = qr[1]
     group_q[i, 2] = qr[2]
     group_q[i, 3] = qr[3]
+    return qr, cx, cy, cz
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _shape_match_group(i, k_iter, rot_iters, g_off, g_mem, g_pack, frame, torque, xs, xp, group_q, moment):
+    """Project implicit group i (centred on particle i) toward its goal shape, on precomputed rest
+    data (see group_pack), without a net torque over the step.
+
+    Mueller & Chentanez 2011 eq. (10): A = sum_j (A_j + m_j x_j x_bar_j^T) - M c c_bar^T, written
+    with rest offsets q_j = x_bar_j - c_bar (sum_j m_j q_j = 0) as c = sum_j (m_j / M) x_j and
+    A = sum_j (A_j + x_j (m_j q_j)^T), so no division and no mass product per member. R = rot(A)
+    (Mueller et al. 2016), goals g_j = R q_j + c (eq. 4.8 of the thesis), corrections
+    dx_j = k (g_j - x_j); sum_j m_j dx_j = 0, so linear momentum is kept exactly. The centre turns
+    toward quat(R) q_bar_i (_turn_centre, called by the sweep with the R returned).
+
+    Internal forces must not turn a body, but these corrections do: A carries the particles' own
+    moments, so R is not the rotation that fits the positions alone, and the centre's turn changes
+    its spin with nothing to balance it. A free block lost 23 % of its angular momentum in 1,000
+    steps, and a block resting on the ground kept turning. So the step's corrections of each group
+    are made torque-free: its torque T = sum_j m_j r_j x dx_j (r_j = xs_j - cs about the group's
+    centre of mass at the step's start) is summed over the iterations, and after the last one
+    balance_torques adds the centre's spin change and turns the group back. Position-based dynamics differences positions against the step's
+    start, v = (x - xs) / dt, so the angular momentum a step leaves is sum m xs x v, and torque-free
+    about xs is what conserves it."""
+    i = np.uint64(i)
+    start = np.uint64(g_off[i])
+    end = np.uint64(g_off[i + 1])
+    qr, cx, cy, cz = _fit_group(i, rot_iters, g_off, g_mem, g_pack, xp, group_q, moment)
     r00, r01, r02, r10, r11, r12, r20, r21, r22 = qmat(qr)
     csx, csy, csz = frame[i, 0], frame[i, 1], frame[i, 2]
     tx = ty = tz = 0.0  # sum_j (m_j / M) r_j x dx_j
@@ -270,13 +281,16 @@ def _shape_match_group(i, k_iter, rot_iters, g_off, g_mem, g_pack, frame, torque
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
-def shape_match_sweep(iterations, rot_iters, body_off, body_stiffness, g_off, g_mem, g_pack, frame, torque, attached,
-                      rest_q, rest_moment, xs, xp, qp, group_q, moment):  # fmt: skip
-    """One Gauss-Seidel sweep over every implicit group, body by body. Stiffness per iteration
+def shape_match_sweep(iterations, rot_iters, body_off, body_stiffness, body_compliant, g_off, g_mem, g_pack, frame, torque,
+                      attached, rest_q, rest_moment, xs, xp, qp, group_q, moment):  # fmt: skip
+    """One Gauss-Seidel sweep over the implicit groups of every per-step body (the compliant ones:
+    compliant.compliant_sweep), body by body. Stiffness per iteration
     k' = 1 - (1 - k)^(1/n) makes the per-step stiffness independent of the iteration count (Mueller
     et al. 2007 sec. 3.3). A function of its own so the sweep can be timed alone; as fast as the
     same loop written inside _step (measured)."""
     for b in range(body_off.shape[0] - 1):
+        if body_compliant[b]:
+            continue  # compliant.compliant_sweep
         k_it = 1.0 - (1.0 - body_stiffness[b]) ** (1.0 / iterations)
         for i in range(body_off[b], body_off[b + 1]):
             qr = _shape_match_group(i, k_it, rot_iters, g_off, g_mem, g_pack, frame, torque, xs, xp, group_q, moment)
@@ -287,15 +301,23 @@ def shape_match_sweep(iterations, rot_iters, body_off, body_stiffness, g_off, g_
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
-def balance_torques(g_off, g_mem, frame, torque, attached, inertia, xs, xp, qp, q_pred, spin_kick):
+def balance_torques(g_off, g_mem, frame, torque, attached, fixed, inertia, xs, xp, qp, q_pred, spin_kick):
     """After the step's last sweep: give each group's centre the spin of its turns (_spin_gained)
     and turn each group back by dth = I^-1 T, T its summed torque plus that spin (I its inertia
     about cs, frame): x_j -= dth x r_j, r_j = xs_j - cs. Then every group's corrections of the step
     together exert no torque (_shape_match_group). One turn by the summed torque is the sum of the
     turns of each iteration: the lever arms r_j do not change over the step. (In the sweep itself,
-    this branch made every sweep 50 % slower.)"""
+    this branch made every sweep 50 % slower.) A group with a member held by its core (``fixed``,
+    the compliant material) is left: the core takes its torque through that member; the compliant
+    groups' own passes are free of torque already (compliant._apply_deformation), so for them
+    only the centre's spin is balanced here."""
     for i in range(g_off.shape[0] - 1):
         i = np.uint64(i)  # unsigned indices: no negative-index wraparound per access
+        held = False
+        for e in range(np.uint64(g_off[i]), np.uint64(g_off[i + 1])):
+            held = held or fixed[np.uint64(g_mem[e])]
+        if held:
+            continue
         tx, ty, tz = torque[i, 0], torque[i, 1], torque[i, 2]
         if not attached[i]:
             kx, ky, kz = _spin_gained(i, q_pred, qp, inertia, spin_kick)

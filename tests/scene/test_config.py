@@ -33,11 +33,11 @@ def test_spacing_follows_density():
 @pytest.mark.parametrize(
     "kwargs, field",
     [
-        (dict(stiffness=0.0), "stiffness"),
-        (dict(stiffness=1.5), "stiffness"),
-        (dict(stiffness=-0.1), "stiffness"),
-        (dict(stiffness=NAN), "stiffness"),
-        (dict(stiffness=0.03), "stiffness"),  # too slack: tore under random actions (issue 12)
+        (dict(material="per_step", stiffness=0.0), "stiffness"),
+        (dict(material="per_step", stiffness=1.5), "stiffness"),
+        (dict(material="per_step", stiffness=-0.1), "stiffness"),
+        (dict(material="per_step", stiffness=NAN), "stiffness"),
+        (dict(material="per_step", stiffness=0.03), "stiffness"),  # too slack: tore under random actions (issue 12)
         (dict(mass_density=3e4), "mass_density"),  # too heavy: tore under random actions
         (dict(group_size=2), "group_size"),
         (dict(group_size=17), "group_size"),  # bigger groups sagged and tore (issue 12)
@@ -57,8 +57,17 @@ def test_spacing_follows_density():
         (dict(friction_static=NAN), "friction_static"),
         (dict(friction_dynamic=0.95), "friction_dynamic"),
         (dict(friction_static=0.3, friction_dynamic=0.31), "friction_dynamic"),
-        (dict(stiffness="0.5"), "stiffness"),
-        (dict(stiffness=True), "stiffness"),
+        (dict(material="per_step", stiffness="0.5"), "stiffness"),
+        (dict(stiffness=0.5), "stiffness"),  # the per-step material's, given to the compliant one
+        (dict(material="per_step", shear_modulus=4e3), "shear_modulus"),  # the other way round
+        (dict(shear_modulus=999.0), "shear_modulus"),
+        (dict(max_deviation=0.031), "max_deviation"),  # past the 3 cm that counts as torn
+        (dict(max_deviation=0.0), "max_deviation"),
+        (dict(material="per_step", max_deviation=0.02), "max_deviation"),  # the compliant material's
+        (dict(shear_modulus=1.1e6), "shear_modulus"),
+        (dict(shear_modulus=NAN), "shear_modulus"),
+        (dict(material="linear"), "material"),
+        (dict(material="per_step", stiffness=True), "stiffness"),
     ],
 )
 def test_tissue_config_rejects(kwargs, field):
@@ -69,10 +78,10 @@ def test_tissue_config_rejects(kwargs, field):
 @pytest.mark.parametrize(
     "kwargs",
     [
-        dict(stiffness=1.0),  # closed upper end
-        dict(stiffness=0.1),  # closed lower end
+        dict(material="per_step", stiffness=1.0),  # closed upper end
+        dict(material="per_step", stiffness=0.1),  # closed lower end
         dict(mass_density=1e4),
-        dict(stiffness=1),  # int for a float field is fine
+        dict(material="per_step", stiffness=1),  # int for a float field is fine
         dict(group_size=4),
         dict(group_size=16),
         dict(particle_density=100.0),
@@ -80,12 +89,30 @@ def test_tissue_config_rejects(kwargs, field):
         dict(extrude=0.1),
         dict(friction_static=0.5, friction_dynamic=0.5),  # equal coefficients allowed
         dict(friction_static=0.0, friction_dynamic=0.0),
+        dict(shear_modulus=1e3),
+        dict(shear_modulus=1e6),
+        dict(max_deviation=1e-3),
+        dict(max_deviation=0.03),
+        dict(material="per_step"),
     ],
 )
 def test_tissue_config_accepts_boundaries(kwargs):
     cfg = TissueConfig(**kwargs)
     for k, v in kwargs.items():
         assert getattr(cfg, k) == v
+
+
+def test_the_materials_numbers_as_the_solver_reads_them():
+    """None means the material's default; the other material's numbers do not apply (inf: no
+    strain limit for the per-step material)."""
+    from softgrasp_env.config import DEFAULT_MAX_DEVIATION, DEFAULT_SHEAR_MODULUS, DEFAULT_STEP_STIFFNESS
+
+    compliant, per_step = TissueConfig(), TissueConfig(material="per_step")
+    assert (compliant.modulus, compliant.deviation_limit) == (DEFAULT_SHEAR_MODULUS, DEFAULT_MAX_DEVIATION)
+    assert TissueConfig(shear_modulus=8e3, max_deviation=0.01).modulus == 8e3
+    assert TissueConfig(max_deviation=0.01).deviation_limit == 0.01
+    assert per_step.step_stiffness == DEFAULT_STEP_STIFFNESS and per_step.deviation_limit == math.inf
+    assert TissueConfig(material="per_step", stiffness=0.7).step_stiffness == 0.7
 
 
 @pytest.mark.parametrize(
@@ -168,7 +195,8 @@ def test_scene_config_rejects(kwargs, field):
 
 
 def test_scene_config_accepts():
-    cfg = SceneConfig(fingers="rigid", yaw=math.pi / 4, lateral_offset=-0.1, tissue=TissueConfig(stiffness=0.2),
+    cfg = SceneConfig(fingers="rigid", yaw=math.pi / 4, lateral_offset=-0.1,
+                      tissue=TissueConfig(material="per_step", stiffness=0.2),
                       sim=SimConfig(coupling="consistent"))  # fmt: skip
     assert cfg.soft is False
     assert cfg.yaw == pytest.approx(math.pi / 4)
@@ -178,12 +206,12 @@ def test_scene_config_accepts():
 
 def test_nested_configs_validate_on_their_own():
     with pytest.raises(ValueError, match=r"TissueConfig\.stiffness"):
-        SceneConfig(tissue=TissueConfig(stiffness=2.0))
+        SceneConfig(tissue=TissueConfig(material="per_step", stiffness=2.0))
 
 
 def test_error_message_names_the_range_and_the_value():
     with pytest.raises(ValueError) as info:
-        TissueConfig(stiffness=1.5)
+        TissueConfig(material="per_step", stiffness=1.5)
     msg = str(info.value)
     assert "[0.1, 1.0]" in msg and "1.5" in msg
     with pytest.raises(ValueError) as info:
@@ -192,12 +220,14 @@ def test_error_message_names_the_range_and_the_value():
 
 
 def test_configs_are_frozen_and_replace_revalidates():
-    cfg = TissueConfig()
+    cfg = TissueConfig(material="per_step")
     with pytest.raises(dataclasses.FrozenInstanceError):
         cfg.stiffness = 0.9  # type: ignore[misc]
     assert replace(cfg, stiffness=0.9).stiffness == 0.9
     with pytest.raises(ValueError, match=r"TissueConfig\.stiffness"):
         replace(cfg, stiffness=0.0)
+    with pytest.raises(ValueError, match=r"TissueConfig\.shear_modulus"):
+        replace(TissueConfig(), shear_modulus=10.0)
     with pytest.raises(ValueError, match=r"SimConfig\.dt"):
         replace(SimConfig(), dt=-1.0)
 

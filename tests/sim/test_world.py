@@ -15,25 +15,45 @@ from softgrasp_env.scene import GraspScene, SceneConfig
 from softgrasp_env.sim.bullet import RigidRef, connect
 from softgrasp_env.sim.world import ShapeSpec, TissueSpec, World
 from softgrasp_env.tissue.builder import build_combined_body, core_shape_from_bullet
+from softgrasp_env.tissue.compliant import world_substeps
 
 
 def falling_box_world(coupling: str):
+    """A 50 g box in tissue on every face, falling freely: in the world steps its tissue needs
+    (compliant.world_substeps; 2 at the defaults, where 1 grew a mode from round-off)."""
     client = connect()
     sim = SimConfig(coupling=coupling)
     client.setGravity(0, 0, -sim.gravity)
-    client.setPhysicsEngineParameter(fixedTimeStep=sim.dt, numSubSteps=0)
     col = client.createCollisionShape(p.GEOM_BOX, halfExtents=[0.01, 0.02, 0.03])
     body = client.createMultiBody(baseMass=0.05, baseCollisionShapeIndex=col, basePosition=[0, 0, 1.0])
     client.changeDynamics(body, -1, linearDamping=0.0, angularDamping=0.0)
     core, offset, _ = core_shape_from_bullet(client, body)
+    model = build_combined_body(core, TissueConfig(), shape_offset=offset)
+    n = world_substeps(model, np.array([0.05]), sim.dt)
+    client.setPhysicsEngineParameter(fixedTimeStep=sim.dt / n, numSubSteps=0)
     world = World(
         client,
         sim,
         [RigidRef(body, -1, gravity=True, in_solve=False, free_base=True, core=True)],
         [ShapeSpec("box", core.half_extents, rigid=0)],
-        [TissueSpec(build_combined_body(core, TissueConfig(), shape_offset=offset), 0)],
+        [TissueSpec(model, 0)],
+        substeps=n,
     )
     return client, body, world
+
+
+def test_world_refuses_fewer_steps_than_its_tissue_needs():
+    client = connect()
+    try:
+        col = client.createCollisionShape(p.GEOM_BOX, halfExtents=[0.01, 0.02, 0.03])
+        body = client.createMultiBody(baseMass=0.05, baseCollisionShapeIndex=col)
+        core, offset, _ = core_shape_from_bullet(client, body)
+        spec = TissueSpec(build_combined_body(core, TissueConfig(), shape_offset=offset), 0)
+        refs = [RigidRef(body, -1, gravity=True, in_solve=False, free_base=True, core=True)]
+        with pytest.raises(ValueError, match=r"World\(substeps=1\) .* at least 2 world steps .* 0\.05 kg"):
+            World(client, SimConfig(), refs, [ShapeSpec("box", core.half_extents, rigid=0)], [spec])
+    finally:
+        client.disconnect()
 
 
 @pytest.mark.parametrize("coupling", ["thesis", "consistent"])
@@ -42,12 +62,12 @@ def test_combined_body_free_fall_matches_semi_implicit_euler(coupling):
     try:
         z0 = client.getBasePositionAndOrientation(body)[0][2]
         rest = world.state.particle_x - np.asarray(client.getBasePositionAndOrientation(body)[0])
-        dt, g = world.sim.dt, world.sim.gravity
-        n = 240
-        for _ in range(n):
+        h, g = world.sim.dt / world.substeps, world.sim.gravity
+        n = 240 * world.substeps
+        for _ in range(240):
             world.step()
         pos = np.asarray(client.getBasePositionAndOrientation(body)[0])
-        assert abs(pos[2] - (z0 - g * dt * dt * n * (n + 1) / 2)) < 1e-6
+        assert abs(pos[2] - (z0 - g * h * h * n * (n + 1) / 2)) < 1e-6
         sag = np.abs((world.state.particle_x - pos) - rest).max()
         assert sag < 5e-4
     finally:

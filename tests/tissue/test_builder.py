@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -355,14 +356,18 @@ def test_combined_body_group_size(group_size):
 
 
 def test_combined_body_metadata_from_config():
-    tissue = TissueConfig(stiffness=0.3, friction_static=0.8, friction_dynamic=0.4, particle_density=20_000.0,
-                          mass_density=1200.0, extrude=0.004)  # fmt: skip
+    tissue = TissueConfig(material="per_step", stiffness=0.3, friction_static=0.8, friction_dynamic=0.4,
+                          particle_density=20_000.0, mass_density=1200.0, extrude=0.004)  # fmt: skip
     shape = SHAPES["box"]
     model = build_combined_body(shape, tissue)
     assert model.body_count == 1
     assert model.body_particle_offsets.tolist() == [0, model.particle_count]
     assert model.body_core_shape.tolist() == [-1]
     assert model.body_stiffness.tolist() == [0.3]
+    assert model.body_compliant.tolist() == [False] and not model.group_kappa.any()
+    compliant = build_combined_body(shape, replace(tissue, material="compliant", stiffness=None, shear_modulus=5e3))
+    assert compliant.body_compliant.tolist() == [True]
+    assert (compliant.group_kappa > 0).all()  # G / (rho l^2) per group: tests/tissue/test_compliant.py
     assert model.body_friction.tolist() == [[0.8, 0.4]]
     assert (model.particle_body == 0).all()
     assert model.particle_mass.sum() == pytest.approx(1200.0 * shape.area * 0.004, rel=1e-9)

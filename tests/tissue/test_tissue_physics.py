@@ -81,11 +81,12 @@ def test_free_body_energy_never_grows(kind):
 def test_block_resting_on_the_ground_comes_to_rest():
     """A block set on the ground at the defaults settles and then stays still: no turning from the
     internal forces (the paper's projection turned it; measured now: 2e-14 rad/s)."""
-    model, state, solver, col, _ = accuracy._pad(0.0, TissueConfig(), SimConfig())
-    m = model.particle_mass[:, None]
+    pad = accuracy._Pad(0.0, TissueConfig(), SimConfig())
+    state = pad.state
+    m = pad.model.particle_mass[:, None]
     worst = 0.0
     for k in range(2400):
-        solver.step(state, col)
+        pad.step()
         if k >= 720:
             c = (m * state.particle_x).sum(axis=0) / m.sum()
             r = state.particle_x - c

@@ -1,0 +1,366 @@
+"""The compliant material: shape matching whose stiffness is a modulus in Pa, solved as the implicit
+step it stands for, the same material at every dt and iteration count (issue 19).
+
+Shape matching (Mueller & Chentanez 2011 sec. 4) is the gradient of an energy: a group's fit - its
+centre of mass c and rotation R (shape_matching._fit_group) - minimises
+E = sum_j kappa m_j |x_j - g_j|^2 / 2, g_j = R q_j + c, so dE/dx_j = kappa m_j e_j, e_j = x_j - g_j.
+With kappa = G / (rho l^2) (builder.group_kappa) that is an elastic force in N. The per-step
+material moves each member a fraction k of the way to its goal per step: a spring kappa = k / dt^2,
+a different material at every dt. Here each group's part of the implicit (backward Euler) step,
+m (x - x*) = -dt^2 dE/dx, is solved by a Newton step per group and pass (the primal form of XPBD,
+Macklin, Mueller & Chentanez 2016), Gauss-Seidel over the groups:
+
+    rho_j = u_j + s e_j,  s = kappa dt^2       the residual of member j per unit mass, u_j the
+                                               displacement this group gave it this step
+    free members:      dx_j = -(rho_j + Y) / (1 + s)
+    attached members:  held by their core (w = 0): their force goes to it (deliver_to_core)
+
+with Y from one 3x3 solve (Woodbury; see project_group). A group alone is solved exactly in one
+pass, whatever s, and every pass keeps momentum exactly. Across groups the passes are
+Gauss-Seidel: a pad pressed on the cylinder closes the gap to the implicit step by about
+s / (1 + s) a pass, so the world runs in steps short enough that s <= MAX_STEP_STIFFNESS
+(substeps_for; world_substeps also keeps a pad's force on a light core, handed to pybullet a step
+late, from ringing: MAX_COUPLING_FOLD).
+
+An attached particle of a compliant body sits on its core through the solve (thesis 5.1.3, "the
+core infinitely heavy inside the solve", taken literally): a group's force on it is an impulse on
+the core at its spot. Under the consistent coupling the core slides inside the solve, and the
+group's Newton step moves it (project_group's core unknown). The per-step material of v1/v2
+instead moved attached particles with their own mass inside the solve and handed the error over
+afterwards (anchors.snap_attached): an impulse m e / dt that can carry at most about m e / dt^2,
+a force that falls with dt^2 (issue 19: pads crushed at 1/120 s and stiff at 1/1000 s).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+
+from .linalg import solve_sym3
+from .model import TissueModel
+from .rigid import rigid_apply
+from .rotation import qmat
+from .shape_matching import _fit_group, _turn_centre
+
+MAX_STEP_STIFFNESS = 0.25
+"""Largest s = kappa dt^2 of a compliant group in one step: the world runs in steps short enough
+(substeps_for). Pressed on the cylinder, the pad's passes close the gap to the implicit step by a
+factor of about s / (1 + s) each (what contacts and friction hold, a group's Newton step takes as
+free), so 0.25 leaves 4 % after 2 iterations and under 1 % after 3. Measured on the squeezed pad
+(3 N, G 4,000 Pa, 1.5 s): in steps of 1/480 s (s 0.14) its compression is 3.3 % above the finest
+setting's at 2 iterations and 0.6 % below at 3 (tests/sim/test_material.py); in single steps of
+1/240 s (s 0.54) an earlier revision of this solve was 11 % and 6 % above."""
+
+
+MAX_COUPLING_FOLD = 0.5
+"""Largest K dt^2 / m_core of one step [-], K a compliant pad's stiffness against its core
+(core_stiffness) and m_core the core's mass: the pad's force reaches a core that pybullet moves a
+step late (thesis 5.2.2), and beyond about 1 it rings. Measured on the squeeze (3 N, G 4,000 Pa,
+50 g cores, K 1,310 N/m): 1.03 (1/160 s) held the core in a 20 Hz limit cycle against its motor's
+speed limit, the pad's compression swinging 0.6 mm; 0.66 (1/200 s) settled; a free-falling 50 g
+box in tissue on every face (K 3,800 N/m) at 1.3 grew a mode from round-off to 3 mN s in 80 steps."""
+
+
+def substeps_for(model: TissueModel, dt: float) -> int:
+    """The fewest steps of dt / n that keep every compliant group's s = kappa (dt / n)^2 at most
+    MAX_STEP_STIFFNESS (1 for the per-step material, whose stiffness is a fraction per step)."""
+    if not model.body_compliant.any() or model.group_kappa.size == 0:
+        return 1
+    kappa = float(model.group_kappa.max())
+    return max(1, math.ceil(dt * math.sqrt(kappa / MAX_STEP_STIFFNESS) - 1e-9))
+
+
+def core_stiffness(model: TissueModel) -> np.ndarray:
+    """(B,) each compliant body's stiffness against its core [N/m]: its groups as springs in
+    parallel, sum_i kappa_i m_fix m_free / M over the groups with attached and free members (a
+    group of attached members, mass m_fix, and free ones, m_free, is a spring kappa m_fix m_free / M
+    between them: project_group's column). 1,310 N/m for a default pad (G 4,000 Pa), against
+    G A / extrude = 1,520 N/m for the layer it stands for."""
+    out = np.zeros(model.body_count)
+    for b in range(model.body_count):
+        if not model.body_compliant[b]:
+            continue
+        for i in range(int(model.body_particle_offsets[b]), int(model.body_particle_offsets[b + 1])):
+            members = model.group_members[model.group_offsets[i]:model.group_offsets[i + 1]]
+            m = model.particle_mass[members]
+            fix = model.particle_attached[members]
+            out[b] += model.group_kappa[i] * m[fix].sum() * m[~fix].sum() / m.sum()
+    return out
+
+
+def coupling_substeps(model: TissueModel, core_mass: np.ndarray, dt: float) -> int:
+    """The fewest steps of dt / n that keep every compliant body's K (dt / n)^2 / m_core at most
+    MAX_COUPLING_FOLD; ``core_mass`` (B,) [kg], 0 or inf where a body has no moving core."""
+    n = 1
+    for k, m in zip(core_stiffness(model), core_mass):
+        if k > 0.0 and 0.0 < m < math.inf:
+            n = max(n, math.ceil(dt * math.sqrt(k / (MAX_COUPLING_FOLD * m)) - 1e-9))
+    return n
+
+
+def world_substeps(model: TissueModel, core_mass: np.ndarray, dt: float) -> int:
+    """World steps (tissue and rigid bodies together) per step of dt: the larger of substeps_for
+    and coupling_substeps."""
+    return max(substeps_for(model, dt), coupling_substeps(model, core_mass, dt))
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def compliant_sweep(iterations, rot_iters, body_off, body_compliant, group_kappa, dt, g_off, g_mem, g_pack, frame,
+                    attached, fixed, rest_q, rest_moment, xs, xp, qp, group_q, moment, g_u, g_raw, mass,
+                    body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
+                    imp_lin, imp_ang, coupling_imp):  # fmt: skip
+    """One Gauss-Seidel sweep over the groups of every compliant body (project_group). A group's
+    centre turns toward quat(R) q_bar by s / (1 + s) a step (the same implicit spring on its
+    orientation, Mueller & Chentanez 2011 sec. 4.3's goal), spread over the iterations."""
+    for b in range(body_off.shape[0] - 1):
+        if not body_compliant[b]:
+            continue
+        cs = body_core_shape[b]
+        core = shape_rigid[cs] if cs >= 0 else -1
+        m_att = 0.0
+        for k in range(body_off[b], body_off[b + 1]):
+            if fixed[k]:
+                m_att += mass[k]
+        for i in range(body_off[b], body_off[b + 1]):
+            s = group_kappa[i] * dt * dt
+            qr = project_group(i, s, core, body_off[b], body_off[b + 1], m_att, rot_iters, g_off, g_mem, g_pack, frame,
+                               xs, xp, group_q, moment, fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass,
+                               rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+            if not attached[i]:
+                _turn_centre(i, qr, 1.0 - (1.0 / (1.0 + s)) ** (1.0 / iterations), rest_q, qp, rest_moment, moment)
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def project_group(i, s, core, core_lo, core_hi, m_att, rot_iters, g_off, g_mem, g_pack, frame, xs, xp, group_q, moment,
+                  fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin,
+                  imp_ang, coupling_imp, dt):  # fmt: skip
+    """One Newton step of group i's implicit equations (module docstring); returns its rotation.
+
+    Members held by their core (``fixed``) move only with it - not at all under the thesis
+    coupling (the core infinitely heavy in the solve), along its joint axis a under the consistent
+    one: the core, mass m_c, slides inside the solve with all its attached particles, M_att, one
+    more unknown dc, with residual R_c = (m_c + M_att) U_c + s a . sum_fix m_j e_j (U_c what this
+    group has moved it). With R held, the Hessian over the unknowns is
+    diag((1 + s) m_j I, m_c + M_att + s M_fix) - (s / M) B B^T, the centre of mass moving with the
+    members (B: rows m_j I for the free members and M_fix a^T; M the group's mass, w_j = m_j / M,
+    f = sum_free w_j), and Woodbury gives its Newton step through one 3x3 solve:
+
+        z_j = rho_j / (1 + s),  z_c = R_c / d_c,  d_c = m_c + M_att + s M_fix
+        Y = [(1 / s - f / (1 + s)) I - (M_fix^2 / (M d_c)) a a^T]^-1 (sum w_j z_j + (M_fix / M) a z_c)
+        dx_j = -(z_j + Y / (1 + s)),   dc = -(z_c + M_fix a . Y / d_c)
+
+    (the thesis coupling: no core unknown, and the solve is a scalar). After it, each fixed member's
+    force, what is left of its residual, goes to its core (what does not move the core along its
+    joint, the joint takes). For a group alone every residual then vanishes and sum_j m_j u_j = 0:
+    momentum is exact at every pass (a column of one attached and one outer particle moves
+    s w_a / (1 + s w_a) of its stretch, a spring kappa m_a m_f / M to a fixed point). (Per member,
+    each with its own multiplier, the members' constraints are redundant - they sum to zero - and
+    a Jacobi update over them overshot by up to 2x with a fixed member; warm-started from the last
+    step, the pad's force lagged its motion and pumped energy into the fingers.) A group with no
+    fixed member is made free of momentum and angular momentum about the step's start positions
+    instead (_apply_deformation)."""
+    i = np.uint64(i)
+    start = np.uint64(g_off[i])
+    end = np.uint64(g_off[i + 1])
+    qr, cx, cy, cz = _fit_group(i, rot_iters, g_off, g_mem, g_pack, xp, group_q, moment)
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = qmat(qr)
+    inv = 1.0 / (1.0 + s)
+    zx = zy = zz = 0.0  # sum w_j z_j over the free members
+    f = 0.0  # their mass fraction
+    fx = fy = fz = 0.0  # sum_fix m_j rho_j
+    mfix = 0.0
+    for e in range(start, end):
+        j = np.uint64(g_mem[e])
+        q0 = g_pack[e, 4]
+        q1 = g_pack[e, 5]
+        q2 = g_pack[e, 6]
+        rx = g_u[e, 0] + s * (xp[j, 0] - (r00 * q0 + r01 * q1 + r02 * q2 + cx))
+        ry = g_u[e, 1] + s * (xp[j, 1] - (r10 * q0 + r11 * q1 + r12 * q2 + cy))
+        rz = g_u[e, 2] + s * (xp[j, 2] - (r20 * q0 + r21 * q1 + r22 * q2 + cz))
+        g_raw[e, 0] = rx
+        g_raw[e, 1] = ry
+        g_raw[e, 2] = rz
+        if fixed[j]:
+            m = mass[j]
+            mfix += m
+            fx += m * rx
+            fy += m * ry
+            fz += m * rz
+            continue
+        w = g_pack[e, 0]
+        f += w
+        zx += w * inv * rx
+        zy += w * inv * ry
+        zz += w * inv * rz
+    if mfix == 0.0:
+        # no member held: dx_j = -rho_j / (1 + s) - s / (1 + s) sum w rho (= s sum w z), made a pure
+        # deformation
+        for e in range(start, end):
+            g_raw[e, 0] = -g_raw[e, 0] * inv - s * zx
+            g_raw[e, 1] = -g_raw[e, 1] * inv - s * zy
+            g_raw[e, 2] = -g_raw[e, 2] * inv - s * zz
+        _apply_deformation(i, start, end, g_mem, g_pack, frame, xs, xp, g_u, g_raw)
+        return qr
+    msum = frame[i, 9]
+    a = 1.0 / s - f * inv  # the 3x3 matrix's isotropic part
+    q00 = q01 = q02 = q11 = q12 = q22 = 0.0  # its core part
+    # the core's own unknown, if it slides inside the solve along a joint axis
+    ax = ay = az = 0.0
+    zc = dcore = mcore = 0.0
+    if rig_move[core] and rig_inv_mass[core] > 0.0:
+        ax, ay, az = rig_axis[core, 0], rig_axis[core, 1], rig_axis[core, 2]
+        if ax != 0.0 or ay != 0.0 or az != 0.0:
+            mcore = 1.0 / rig_inv_mass[core]
+            uc = 0.0  # U_c: along a, a fixed member's u is its core's move (what the joint took is across a)
+            for e in range(start, end):
+                if fixed[np.uint64(g_mem[e])]:
+                    uc = ax * g_u[e, 0] + ay * g_u[e, 1] + az * g_u[e, 2]
+                    break
+            dcore = mcore + m_att + s * mfix
+            zc = ((mcore + m_att - mfix) * uc + ax * fx + ay * fy + az * fz) / dcore
+            k = mfix * mfix / (msum * dcore)
+            q00, q01, q02 = k * ax * ax, k * ax * ay, k * ax * az
+            q11, q12, q22 = k * ay * ay, k * ay * az, k * az * az
+            k = mfix / msum * zc
+            zx += k * ax
+            zy += k * ay
+            zz += k * az
+    yx, yy, yz = solve_sym3(a - q00, -q01, -q02, a - q11, -q12, a - q22, zx, zy, zz)
+    dc = 0.0
+    if dcore > 0.0:
+        dc = -(zc + mfix * (ax * yx + ay * yy + az * yz) / dcore)
+    yx *= inv
+    yy *= inv
+    yz *= inv
+    # the free members' step; dcx.. is the centre's move, sum w_j dx_j
+    dcx = dcy = dcz = 0.0
+    for e in range(start, end):
+        j = np.uint64(g_mem[e])
+        w = g_pack[e, 0]
+        if fixed[j]:
+            dcx += w * dc * ax
+            dcy += w * dc * ay
+            dcz += w * dc * az
+            continue
+        dx = g_raw[e, 0] * inv + yx
+        dy = g_raw[e, 1] * inv + yy
+        dz = g_raw[e, 2] * inv + yz
+        xp[j, 0] -= dx
+        xp[j, 1] -= dy
+        xp[j, 2] -= dz
+        g_u[e, 0] -= dx
+        g_u[e, 1] -= dy
+        g_u[e, 2] -= dz
+        dcx -= w * dx
+        dcy -= w * dy
+        dcz -= w * dz
+    if dc != 0.0:
+        # the core slides by dc with all its attached particles: the impulse m_c dc on it, which
+        # pybullet applies too
+        rig_x[core, 0] += dc * ax
+        rig_x[core, 1] += dc * ay
+        rig_x[core, 2] += dc * az
+        k = mcore * dc / dt
+        imp_lin[core, 0] += k * ax
+        imp_lin[core, 1] += k * ay
+        imp_lin[core, 2] += k * az
+        coupling_imp[core, 0] += k * ax
+        coupling_imp[core, 1] += k * ay
+        coupling_imp[core, 2] += k * az
+        for k in range(core_lo, core_hi):
+            if fixed[k]:
+                xp[k, 0] += dc * ax
+                xp[k, 1] += dc * ay
+                xp[k, 2] += dc * az
+    # each fixed member's force, the rest of its residual once the group moved (its own move, the
+    # core's, enters u and e; the centre's shifts e by -dc), goes to its core
+    for e in range(start, end):
+        j = np.uint64(g_mem[e])
+        if not fixed[j]:
+            continue
+        rx = g_raw[e, 0] - s * dcx
+        ry = g_raw[e, 1] - s * dcy
+        rz = g_raw[e, 2] - s * dcz
+        if dcore > 0.0:
+            k = (1.0 + s) * dc
+            rx += k * ax
+            ry += k * ay
+            rz += k * az
+            g_u[e, 0] += dc * ax
+            g_u[e, 1] += dc * ay
+            g_u[e, 2] += dc * az
+            k = rx * ax + ry * ay + rz * az  # balanced by the core's inertia: m_c dc above
+            rx -= k * ax
+            ry -= k * ay
+            rz -= k * az
+        m = mass[j]
+        deliver_to_core(j, -m * rx, -m * ry, -m * rz, core, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
+                        imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+        g_u[e, 0] -= rx
+        g_u[e, 1] -= ry
+        g_u[e, 2] -= rz
+    return qr
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def deliver_to_core(j, px, py, pz, core, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang,
+                    coupling_imp, dt):  # fmt: skip
+    """The positional impulse P a group puts on fixed member j, onto its core at the member's spot,
+    recorded for pybullet (a core that slides inside the solve has moved by its share already: the
+    group's Newton step holds it as an unknown)."""
+    rigid_apply(core, xp[j, 0] - rig_x[core, 0], xp[j, 1] - rig_x[core, 1], xp[j, 2] - rig_x[core, 2], px, py, pz,
+                False, dt, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang)  # fmt: skip
+    coupling_imp[core, 0] += px / dt
+    coupling_imp[core, 1] += py / dt
+    coupling_imp[core, 2] += pz / dt
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _apply_deformation(i, start, end, g_mem, g_pack, frame, xs, xp, g_u, g_raw):
+    """Move group i's members by ``g_raw`` made a pure deformation: its mass-weighted mean and its
+    turn about the step's start centre (I^-1 of frame) taken out, so momentum and angular momentum
+    about the start positions - what PBD's velocities are differenced over - are kept exactly (the
+    share the group's translation and rotation, which the Newton step holds, take)."""
+    bx = by = bz = 0.0
+    for e in range(start, end):
+        w = g_pack[e, 0]
+        bx += w * g_raw[e, 0]
+        by += w * g_raw[e, 1]
+        bz += w * g_raw[e, 2]
+    csx, csy, csz = frame[i, 0], frame[i, 1], frame[i, 2]
+    lx = ly = lz = 0.0  # sum_k w_k r_k x (raw_k - b)
+    for e in range(start, end):
+        j = np.uint64(g_mem[e])
+        w = g_pack[e, 0]
+        dx = g_raw[e, 0] - bx
+        dy = g_raw[e, 1] - by
+        dz = g_raw[e, 2] - bz
+        rx = xs[j, 0] - csx
+        ry = xs[j, 1] - csy
+        rz = xs[j, 2] - csz
+        lx += w * (ry * dz - rz * dy)
+        ly += w * (rz * dx - rx * dz)
+        lz += w * (rx * dy - ry * dx)
+    msum = frame[i, 9]
+    lx *= msum
+    ly *= msum
+    lz *= msum
+    wx = frame[i, 3] * lx + frame[i, 4] * ly + frame[i, 5] * lz
+    wy = frame[i, 4] * lx + frame[i, 6] * ly + frame[i, 7] * lz
+    wz = frame[i, 5] * lx + frame[i, 7] * ly + frame[i, 8] * lz
+    for e in range(start, end):
+        j = np.uint64(g_mem[e])
+        rx = xs[j, 0] - csx
+        ry = xs[j, 1] - csy
+        rz = xs[j, 2] - csz
+        dx = g_raw[e, 0] - bx - (wy * rz - wz * ry)
+        dy = g_raw[e, 1] - by - (wz * rx - wx * rz)
+        dz = g_raw[e, 2] - bz - (wx * ry - wy * rx)
+        xp[j, 0] += dx
+        xp[j, 1] += dy
+        xp[j, 2] += dz
+        g_u[e, 0] += dx
+        g_u[e, 1] += dy
+        g_u[e, 2] += dz
