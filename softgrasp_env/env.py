@@ -182,8 +182,14 @@ class SoftGraspEnv(gym.Env):
     ## Version history
     - v3 (issue 19): the smooth arm and velocity actions (``arm="smooth"``), 40 N; the carry test
       drawn per episode over a band and success held through it; the tissue's mu_k = mu_s (one
-      friction law for every kind); the torsional rigid peer. v1/v2 keep ``arm="jump"``, 200 N,
-      the 1 cm / 2 Hz carry with success at its end and mu_k 0.7, and replay bit for bit.
+      friction law for every kind); the torsional rigid peer. Since 0.5.0 the tissue is the
+      compliant material (``tissue_material="compliant"``: a shear modulus in Pa, the pad
+      compressing ~4.4 mm under 3 N at every dt, a 2 cm strain limit) and the peer's lever is its
+      patch's 16.7 mm; 0.4.0's v3 (the per-step material, 17.7 mm) replays bit for bit with
+      ``tissue_material="per_step"`` (the peer with ``fingers=TorsionalRigidConfig(spinning_friction=
+      0.0177)``). v1/v2 keep
+      ``arm="jump"``, 200 N, the 1 cm / 2 Hz carry with success at its end, mu_k 0.7 and the
+      per-step material, and replay bit for bit.
     - v2: the carry test (the soft, rigid and sparse ids; the observation gains the time); the v1
       ids stay unchanged because their published baselines reproduce on them.
     - v1: the reach task for every id; the gentle start as the Easy ids; the contact-face tissue

@@ -63,18 +63,20 @@ import numpy as np
 from ..validation import check_range
 from .base import FingerConfig, FingerKind, FingerSite
 
-PATCH_SPINNING_FRICTION = 0.0177
+PATCH_SPINNING_FRICTION = 0.0167
 """The tissue's own torsional lever on the cylinder [m]: l = sum N_i |r_i - c| / sum N_i over its
 particle contacts (benchmarks/contact_patch.py), in the default soft grasp (SoftGraspEasy-v3,
-aligned, centred, the scripted policy's squeeze, 2.83 N per finger) measured 17.75 mm on both
-fingers over the hold (17.74-17.75), and the same (17.74-17.76 mm) at a two-point misaligned
-start (jaw wedge -0.1 rad): the pad wraps the cylinder either way, 12 particle contacts spanning
-44.5 mm along its axis and 23.8 mm around it. A uniformly pressed disc of the patch's largest
-radius (27.1 mm) would give (2/3) a = 18.1 mm. Finer or coarser tissue hardly moves it: 17.6 mm
-at 2,500 particles per m^2, 17.9 at 8,000, 18.1 at 16,000 (the pad wraps nearly its whole face).
-The tissue's patch friction bounds torsion by mu times this radius (tissue/friction.py, its
-``e``), so the rigid peer resists spin as the tissue does - though Bullet bounds torsion and
-lateral friction each on its own, where the tissue's limit surface makes them share mu N."""
+aligned, centred, the scripted policy's squeeze, 2.89 N per finger) measured 16.67 / 16.66 mm on
+the two fingers over the hold (steady to 0.01 mm); 15.6 mm at a two-point misaligned start (jaw
+wedge -0.1 rad): the pad wraps the cylinder either way, 12 particle contacts spanning 44.9 mm
+along its axis and 23.2 mm around it. A uniformly pressed disc of the patch's largest radius
+(26.7 mm) would give (2/3) a = 17.8 mm. Finer or coarser tissue hardly moves it: 17.0 mm at 2,500
+particles per m^2, 16.1 at 8,000, 17.0 at 16,000. (0.4.0's per-step material, its pad pressed
+7 mm deep at 1/240 s against the compliant one's 4.3 mm, wrapped more of the cylinder: 17.75 mm,
+the default then.) The tissue's patch friction bounds torsion by mu times this radius
+(tissue/friction.py, its ``e``), so the rigid peer resists spin as the tissue does - though
+Bullet bounds torsion and lateral friction each on its own, where the tissue's limit surface
+makes them share mu N."""
 
 SPINNING_FRICTION_MAX = 0.1
 """Largest ``spinning_friction`` taken [m]: 10 cm (the scene checks the lever against its own
@@ -140,7 +142,7 @@ class TorsionalRigidConfig(RigidConfig):
     kind = "rigid_torsion"
     spinning_friction: float = PATCH_SPINNING_FRICTION
     """Torsional lever l of each core's contact [m] (as ``RigidConfig.spinning_friction``); the
-    default is the tissue's own patch, :data:`PATCH_SPINNING_FRICTION` (17.7 mm)."""
+    default is the tissue's own patch, :data:`PATCH_SPINNING_FRICTION` (16.7 mm)."""
 
 
 class TorsionalRigidFingers(RigidFingers):

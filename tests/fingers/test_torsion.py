@@ -52,7 +52,7 @@ def test_the_lever_reaches_pybullet_on_the_cores_alone_as_mu_core_times_l(mu):
         finally:
             sc.close()
     assert FINGERS["rigid_torsion"].config_type is TorsionalRigidConfig
-    assert TorsionalRigidConfig().spinning_friction == PATCH_SPINNING_FRICTION == 0.0177
+    assert TorsionalRigidConfig().spinning_friction == PATCH_SPINNING_FRICTION == 0.0167
     assert RigidConfig().spinning_friction == 0.0
 
 
@@ -137,7 +137,7 @@ def test_spinning_friction_holds_a_torque_below_mu_l_n_and_gives_way_above_it():
     0.95 -> 0.005 deg, 1.05 -> 51 deg, no lever at 0.1 -> 101 deg)."""
     still, bound, points = _twist(0.95)
     assert points == [1, 1]
-    assert 0.04 < bound < 0.06  # 0.9 * 0.5 * 17.7 mm * 6 N
+    assert 0.04 < bound < 0.06  # 0.9 * 0.5 * 16.7 mm * 6 N
     assert still < 0.05
     turned, _, _ = _twist(1.05)
     assert turned > 20.0
