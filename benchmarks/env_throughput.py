@@ -2,7 +2,12 @@
 scripted grasp policy (contacts active most of the time). One env step is 240 / 20 = 12 physics
 steps at the defaults.
 
-    python benchmarks/env_throughput.py [--steps 300]
+    python benchmarks/env_throughput.py [--steps 300] [--ids ID,ID@key=value@key=value,...]
+
+An id may carry ``gym.make`` keyword arguments after ``@`` (values read as Python literals, else
+as strings), so a setting is timed beside the default in the same run, e.g.
+``--ids SoftGrasp-v3,SoftGrasp-v3@tissue_material=per_step`` (issue 19's cost of the compliant
+material).
 
 Prints a table; the machine is shared, so each figure is the best of three runs. Episode resets
 are inside the timed loop, as in training.
@@ -11,6 +16,7 @@ are inside the timed loop, as in training.
 from __future__ import annotations
 
 import argparse
+import ast
 import time
 
 import gymnasium as gym
@@ -19,10 +25,25 @@ import softgrasp_env
 from agents.scripted import ScriptedGraspPolicy
 
 
-def env_steps_per_second(env_id: str, steps: int, *, scripted: bool, repeats: int = 3) -> float:
+def parse_spec(spec: str) -> tuple[str, dict]:
+    """``"ID@key=value@..."`` -> (ID, kwargs); a malformed keyword argument is an error naming it."""
+    env_id, *pairs = spec.split("@")
+    kwargs = {}
+    for pair in pairs:
+        key, sep, text = pair.partition("=")
+        if not sep or not key:
+            raise ValueError(f"{spec!r}: {pair!r} is not key=value")
+        try:
+            kwargs[key] = ast.literal_eval(text)
+        except (ValueError, SyntaxError):
+            kwargs[key] = text
+    return env_id, kwargs
+
+
+def env_steps_per_second(env_id: str, steps: int, *, scripted: bool, repeats: int = 3, **kwargs) -> float:
     best = 0.0
     for r in range(repeats):
-        env = gym.make(env_id)
+        env = gym.make(env_id, **kwargs)
         policy = ScriptedGraspPolicy.for_env(env)
         env.action_space.seed(r)
         obs, _ = env.reset(seed=r)
@@ -43,18 +64,23 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--steps", type=int, default=300, help="timed env steps per run")
     parser.add_argument("--ids", default="", help="comma-separated ids (default: every registered one)")
     args = parser.parse_args(argv)
-    ids = args.ids.split(",") if args.ids else softgrasp_env.ENV_IDS
-    unknown = sorted(set(ids) - set(softgrasp_env.ENV_IDS))
+    specs = args.ids.split(",") if args.ids else softgrasp_env.ENV_IDS
+    try:
+        runs = [(spec, *parse_spec(spec)) for spec in specs]
+    except ValueError as err:
+        parser.error(str(err))
+    unknown = sorted({env_id for _, env_id, _ in runs} - set(softgrasp_env.ENV_IDS))
     if unknown:
         parser.error(f"unknown ids {unknown}; choose from {', '.join(softgrasp_env.ENV_IDS)}")
-    print(f"{'env id':<22}{'random env steps/s':>20}{'scripted env steps/s':>22}{'physics steps/s (random)':>26}")
-    for env_id in ids:
-        probe = gym.make(env_id)
+    width = max(22, *(len(spec) + 2 for spec in specs))
+    print(f"{'env id':<{width}}{'random env steps/s':>20}{'scripted env steps/s':>22}{'physics steps/s (random)':>26}")
+    for spec, env_id, kwargs in runs:
+        probe = gym.make(env_id, **kwargs)
         sub = probe.unwrapped.args.substeps
         probe.close()
-        rnd = env_steps_per_second(env_id, args.steps, scripted=False)
-        scr = env_steps_per_second(env_id, args.steps, scripted=True)
-        print(f"{env_id:<22}{rnd:>20.0f}{scr:>22.0f}{rnd * sub:>26.0f}")
+        rnd = env_steps_per_second(env_id, args.steps, scripted=False, **kwargs)
+        scr = env_steps_per_second(env_id, args.steps, scripted=True, **kwargs)
+        print(f"{spec:<{width}}{rnd:>20.0f}{scr:>22.0f}{rnd * sub:>26.0f}")
 
 
 if __name__ == "__main__":

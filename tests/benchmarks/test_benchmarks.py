@@ -110,10 +110,20 @@ def test_no_tearing_in_a_hundred_thousand_random_steps():
 
 
 def test_env_throughput_prints_every_id_asked_for():
-    out = _run_plain("env_throughput.py", "--steps", "5", "--ids", "SoftGraspRigid-v3,SoftGraspRigidTorsion-v3")
+    ids = "SoftGraspRigid-v3,SoftGraspRigidTorsion-v3@cylinder_mass=0.2"
+    out = _run_plain("env_throughput.py", "--steps", "5", "--ids", ids)
     rows = [line.split() for line in out.splitlines() if line.startswith("SoftGrasp")]
-    assert [r[0] for r in rows] == ["SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3"], out
+    assert [r[0] for r in rows] == ids.split(","), out
     assert all(float(x) > 0 for r in rows for x in r[1:]), out
+
+
+def test_env_throughput_names_a_malformed_keyword_argument():
+    from benchmarks.env_throughput import parse_spec
+
+    assert parse_spec("SoftGrasp-v3@tissue_material=per_step@shear_modulus=2e3") == (
+        "SoftGrasp-v3", {"tissue_material": "per_step", "shear_modulus": 2000.0})
+    with pytest.raises(ValueError, match="'shear_modulus' is not key=value"):
+        parse_spec("SoftGrasp-v3@shear_modulus")
 
 
 def test_grasp_checks_arm_row_is_smooth_on_v3_and_kicks_on_v1():
