@@ -23,18 +23,24 @@ offset, no wedge) unless the map says otherwise:
 7. ``aim_offset_yaw``: the same offsets x yaw;
 8. ``aim_height_wedge``: the grasp's height above the cylinder's centre (the policy aims there) x
    jaw wedge: a two-point grasp off the centre of mass needs torsion to keep the cylinder upright;
-9. ``radius_force``: small cylinders (down to 5 mm, the smallest radius SceneConfig takes) x
+9. ``force_wedge``: finger force (down to 0.5 N) x jaw wedge, on the default cylinder;
+10. ``radius_force``: small cylinders (down to 5 mm, the smallest radius SceneConfig takes) x
    finger force (down to 0.5 N);
-10. ``radius_wedge``: small cylinders x jaw wedge at 3 N;
-11. ``mass_friction``: heavier cylinders x friction scale, aligned;
-12. ``mass_friction_wedge``: the same at a 0.15 rad wedge (the reach task's edge);
-13. ``carry_wedge_freq``: the v3 carry test (``carry=True``, 1.5 s of sway from 3.5 s, success:
+11. ``radius_wedge``: small cylinders x jaw wedge at 3 N;
+12. ``mass_friction``: heavier cylinders x friction scale, aligned;
+13. ``mass_friction_wedge``: the same at a 0.15 rad wedge (the reach task's edge);
+14. ``carry_wedge_freq``: the v3 carry test (``carry=True``, 1.5 s of sway from 3.5 s, success:
     held at every step and in-hand slide <= 5 mm) with the sway fixed by reset options - peak
     acceleration 1 m/s^2 across the jaw - x frequency (1.2-3.0 Hz, the v3 band) x jaw wedge;
-14. ``carry_wedge_dir``: the carry at 1.9 Hz (the two-point pendulum), 1 m/s^2, x its direction
+15. ``carry_wedge_dir``: the carry at 1.9 Hz (the two-point pendulum), 1 m/s^2, x its direction
     (0 across the jaw, pi/2 along the closing axis) x jaw wedge;
-15. ``carry_mass_wedge``: the carry at 1.9 Hz, 1 m/s^2, across, x cylinder mass x jaw wedge;
-16. ``carry_aim_height``: the carry at 1.9 Hz, 1 m/s^2, across, x the grasp's height x jaw wedge.
+16. ``carry_mass_wedge``: the carry at 1.9 Hz, 1 m/s^2, across, x cylinder mass x jaw wedge;
+17. ``carry_aim_height``: the carry at 1.9 Hz, 1 m/s^2, across, x the grasp's height x jaw wedge;
+18. ``carry_accel_wedge``: the carry's peak acceleration (0.5-1.4 m/s^2: the sway ramps in ~5 %
+    above its steady peak, and the arm takes at most 1.5) x jaw wedge;
+19.-22. ``carry_force_wedge``, ``carry_friction_wedge``, ``carry_radius_wedge``,
+    ``carry_mass_force``: the carry at 1.9 Hz, 1 m/s^2, across, x finger force, friction scale,
+    cylinder radius, each x jaw wedge, and cylinder mass x finger force.
 The object is a cylinder: a tapered object (a cone's slanted side) is not modelled, and no map
 pretends to test one (the jaw wedge tilts the faces against a straight side instead, which is the
 same contact geometry up to the taper's angle).
@@ -290,8 +296,8 @@ V3_MAPS = (
         {**ALIGNED, **SWAY}, [0.1, 0.3], [-0.15, 0.0, 0.15], CARRY),
     Map("carry_aim_height", ("aim_height", HEIGHTS), ("jaw_wedge", [-WEDGE_MAX, -0.3, -0.15, 0.0, 0.15, 0.3, WEDGE_MAX]),
         {**ALIGNED, **SWAY}, HEIGHTS_QUICK, [-0.3, 0.0, 0.3], CARRY),
-    Map("carry_accel_wedge", ("carry_acceleration", [0.5, 0.75, 1.0, 1.25, 1.5]), ("jaw_wedge", WEDGES),
-        {**ALIGNED, **SWAY}, [0.5, 1.5], WEDGES_QUICK, CARRY),
+    Map("carry_accel_wedge", ("carry_acceleration", [0.5, 0.75, 1.0, 1.25, 1.4]), ("jaw_wedge", WEDGES),
+        {**ALIGNED, **SWAY}, [0.5, 1.4], WEDGES_QUICK, CARRY),
     Map("carry_force_wedge", ("finger_force", FORCES), ("jaw_wedge", [-WEDGE_MAX, -0.3, -0.15, 0.0, 0.15, 0.3, WEDGE_MAX]),
         {**ALIGNED, **SWAY}, [0.75, 1.0, 3.0], [-0.3, 0.0, 0.3], CARRY),
     Map("carry_friction_wedge", ("friction_scale", [0.25, 0.3, 0.4, 0.5, 0.75, 1.0]),

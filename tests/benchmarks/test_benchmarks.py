@@ -10,6 +10,8 @@ from pathlib import Path
 
 import pytest
 
+from softgrasp_env.config import DEFAULT_MAX_DEVIATION
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -97,16 +99,19 @@ def test_random_soak_counts_divergences_and_reports_the_tissue_deviation():
 
 
 @pytest.mark.slow
-def test_no_tearing_in_a_hundred_thousand_random_steps():
-    """Issue 19, item 8: 10^5 env steps of uniform random actions on SoftGrasp-v3, about 1,000
-    episodes, without one divergence (measured: none; the largest tissue deviation 26.4 mm of the
-    30 mm tear limit; 4-5 min). The harsher noisy-scripted stream of benchmarks/random_soak.py
-    tore once in 10^5 steps (episode seed 603, step 58: the pad caught on the cylinder's rim; four
-    times with the v2 arm's 200 N)."""
+@pytest.mark.parametrize("stream", ["uniform", "noisy-scripted"])
+def test_no_tearing_in_a_hundred_thousand_random_steps(stream):
+    """Issue 19, item 8: 10^5 env steps on SoftGrasp-v3, about 1,000 episodes, without one
+    divergence: uniform random actions, and the harsher noisy scripted grasp (benchmarks/
+    random_soak.py: the scripted policy plus Gaussian noise, pressing on rim and ground thousands
+    of times). Measured: none in either (8-9 min each); the largest tissue deviation 20.00 mm, the
+    strain limit (TissueConfig.max_deviation). Without the limit the compliant pad tore 2 and 3
+    times, caught on the cylinder's top rim; 0.4.0's per-step pad 0 and 1."""
     from benchmarks.random_soak import soak
 
-    r = soak("SoftGrasp-v3", 100_000, "uniform")
+    r = soak("SoftGrasp-v3", 100_000, stream)
     assert r["divergences"] == [], r["divergences"]
+    assert r["max_deviation"] <= DEFAULT_MAX_DEVIATION + 1e-9
 
 
 def test_env_throughput_prints_every_id_asked_for():
@@ -150,7 +155,7 @@ def test_stability_diff_reads_the_shipped_v3_map():
     out = _run_plain("stability_diff.py", str(ROOT / "docs" / "results" / "stability_map_v3.csv"),
                      "--a", "tissue, thesis", "--b", "rigid_torsion")  # fmt: skip
     assert "tissue, thesis holds, rigid_torsion does not: 0 of 719 cells" in out, out
-    assert "rigid_torsion holds, tissue, thesis does not: 20 of 719 cells" in out, out
+    assert "rigid_torsion holds, tissue, thesis does not: 16 of 719 cells" in out, out
 
 
 def test_convergence_reads_monotone_series_and_the_pad_rows_against_coulomb():
