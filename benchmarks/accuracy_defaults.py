@@ -26,7 +26,7 @@ from dataclasses import replace
 
 from softgrasp_env import accuracy, presets
 from softgrasp_env.accuracy import GraspPlan, coulomb_hold_bound, find_hold_bound, run_grasp
-from softgrasp_env.config import SimConfig, TissueConfig
+from softgrasp_env.config import COMPLIANT_DAMPING, STEP_DAMPING, SimConfig, TissueConfig
 from softgrasp_env.scene import GraspScene, SceneConfig
 from softgrasp_env.tissue.builder import build_free_block
 from softgrasp_env.tissue.rigid import empty_colliders
@@ -48,7 +48,10 @@ def pct(value: float, reference: float) -> str:
 
 def friction_rows() -> None:
     sim = SimConfig()
-    print("pad on a ramp (defaults: 3 iterations, stiffness 0.5, damping 0.5)")
+    t = TissueConfig()
+    damping = sim.damping if sim.damping is not None else (COMPLIANT_DAMPING if t.material == "compliant" else STEP_DAMPING)
+    print(f"pad on a ramp (defaults: {sim.iterations} iterations, dt 1/{round(1 / sim.dt)} s, {t.material} material, "
+          f"shear modulus {t.modulus:g} Pa, damping {damping:g} /s)")
     for mu_s in (0.3, 0.6, 0.9):
         tissue = TissueConfig(friction_static=mu_s, friction_dynamic=mu_s * 7.0 / 9.0)
         tan = accuracy.ramp_breakaway(tissue, sim)

@@ -24,9 +24,9 @@ from .config import SimConfig, TissueConfig
 from .scene import GraspScene
 from .tissue.builder import build_free_block
 from .tissue.collision import SHAPE_CODES
-from .tissue.model import TissueModel
 from .tissue.compliant import substeps_for
-from .tissue.rigid import Colliders, empty_colliders
+from .tissue.model import TissueModel
+from .tissue.rigid import Colliders
 from .tissue.rotation import quat_to_matrix
 from .tissue.solver import TissueSolver
 from .tissue.state import TissueState, state_at_rest
