@@ -1,12 +1,15 @@
 """Seeded trajectories of every registered id (and of the finger kinds reached only through
 kwargs), recorded through the public API alone: ``gym.make``, ``reset``, ``step`` and the scripted
-policy. ``tests/data/trajectories.npz`` holds them as recorded before issue 18's restructuring;
-``tests/test_trajectories.py`` replays them and asserts bit-identical observations, rewards and
-flags, so a refactor that changes behaviour cannot land quietly.
+policy. ``tests/data/trajectories.npz`` holds the v1/v2 ids as recorded before issue 18's
+restructuring, ``tests/data/trajectories_v3.npz`` the v3 ids as 0.5.0 shipped them (recorded
+before issue 20's speed work); ``tests/test_trajectories.py`` replays them and asserts
+bit-identical observations, rewards and flags, so a refactor or a speed-up that changes behaviour
+cannot land quietly.
 
-Record again (only when behaviour is meant to change, with the ids moving version):
+Record again (only when behaviour is meant to change, with the ids moving version, or the change
+named and measured):
 
-    python -m tests.trajectories
+    python -m tests.trajectories [--set v1v2 | v3]
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import gymnasium as gym
 import numpy as np
 
 DATA = Path(__file__).parent / "data" / "trajectories.npz"
+DATA_V3 = Path(__file__).parent / "data" / "trajectories_v3.npz"
 
 INFO_FLAGS = ("is_success", "held", "carrying", "diverged", "action_clipped")
 """Boolean info entries recorded per step."""
@@ -42,6 +46,19 @@ CASES: tuple[tuple[str, str, dict, str, int], ...] = (
      {"friction_range": 0.3, "cylinder_mass_range": 0.5, "cylinder_radius_range": 0.005}, "random", 60),
 )  # fmt: skip
 
+V3_IDS = ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspSparse-v3", "SoftGraspGoal-v3", "SoftGraspEasy-v3",
+          "SoftGraspEasyRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspEasyRigidTorsion-v3")
+V3_CASES: tuple[tuple[str, str, dict, str, int], ...] = (
+    *((f"{env_id}/random", env_id, {}, "random", 130) for env_id in V3_IDS),
+    *((f"{env_id}/scripted", env_id, {}, "scripted", 100) for env_id in V3_IDS),  # through the carry (3.5-5 s)
+    ("v3-consistent/scripted", "SoftGrasp-v3", {"sim": "consistent"}, "scripted", 100),
+    ("v3-per-step/random", "SoftGrasp-v3", {"tissue_material": "per_step"}, "random", 60),
+    ("v3-dt1000/scripted", "SoftGraspEasy-v3", {"sim": "dt1000"}, "scripted", 40),
+    ("v3-dt120/scripted", "SoftGraspEasy-v3", {"sim": "dt120"}, "scripted", 60),
+)  # fmt: skip
+"""The v3 ids (issue 19's physics) and the settings a speed-up might treat differently: the
+consistent coupling, the per-step material, one world substep (1/1000 s) and four (1/120 s)."""
+
 
 def _kwargs(kwargs: dict) -> dict:
     out = dict(kwargs)
@@ -49,6 +66,10 @@ def _kwargs(kwargs: dict) -> dict:
         from softgrasp_env.config import SimConfig
 
         out["sim"] = SimConfig(coupling="consistent")
+    elif isinstance(out.get("sim"), str) and out["sim"].startswith("dt"):
+        from softgrasp_env.config import SimConfig
+
+        out["sim"] = SimConfig(dt=1.0 / int(out["sim"][2:]))
     return out
 
 
@@ -115,17 +136,25 @@ def fingerprint() -> str:
             f"numba {numba.__version__} pybullet {pybullet.getAPIVersion()}")  # fmt: skip
 
 
-def main() -> None:
+SETS = {"v1v2": (CASES, DATA), "v3": (V3_CASES, DATA_V3)}
+
+
+def main(argv: list[str] | None = None) -> None:
+    import argparse
+
     import softgrasp_env  # noqa: F401  (registers the ids)
 
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--set", choices=sorted(SETS), default="v1v2")
+    cases, path = SETS[parser.parse_args(argv).set]
     out: dict[str, np.ndarray] = {"fingerprint": np.array(fingerprint())}
-    for name, env_id, kwargs, policy, steps in CASES:
+    for name, env_id, kwargs, policy, steps in cases:
         for key, arr in record(env_id, kwargs, policy, steps).items():
             out[f"{name}/{key}"] = arr
         print(f"{name}: {steps} steps")
-    DATA.parent.mkdir(parents=True, exist_ok=True)
-    np.savez_compressed(DATA, **out)
-    print(f"wrote {DATA} ({DATA.stat().st_size / 1024:.0f} kB) on {out['fingerprint']}")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(path, **out)
+    print(f"wrote {path} ({path.stat().st_size / 1024:.0f} kB) on {out['fingerprint']}")
 
 
 if __name__ == "__main__":
