@@ -6,6 +6,7 @@
     python train.py --env SoftGrasp-v3 --env-kwargs cylinder_mass=0.2 fingers="'segmented'"
     python train.py --resume runs/SoftGrasp-v3_sac_0 --timesteps 50000   # 50k more steps
     python train.py --env SoftGrasp-v3 --force       # start runs/SoftGrasp-v3_sac_0 anew (deletes the old run)
+    python train.py --env SoftGrasp-v3 --torch-threads 2   # the learner on 2 torch threads (default 1)
 
 Writes ``<out>/<env>_<algo>_<seed>/``: ``model.zip``, ``vecnormalize.pkl`` (observation statistics,
 except for HER), ``replay_buffer.pkl`` (off-policy algos, for --resume), ``run.json`` (the
@@ -17,7 +18,8 @@ wall time), ``logs/`` (SB3's logger: ``progress.csv`` and tensorboard events wit
 Evaluate a saved model with ``python -m agents.evaluate --policy <dir>`` (same env, same kwargs).
 An existing run directory is never overwritten: ``--resume`` continues it, ``--force`` deletes it
 and starts again. ``--algo-kwargs`` are checked against the algorithm's keywords before anything is
-written.
+written. The learner runs on one torch thread and every env process on one thread
+(``--torch-threads N`` for more: agents/threads.py says why, with the figures).
 """
 
 from __future__ import annotations
@@ -49,6 +51,7 @@ from agents.cli import kwargs_dict as _kwargs_dict
 from agents.cli import parse_kwarg
 from agents.evaluate import evaluate
 from agents.runs import CHECKPOINT_PREFIX, deterministic_policy, load_model, make_env, run_files
+from agents.threads import DEFAULT_TORCH_THREADS, set_threads, threads_error
 
 
 def _log(message: str) -> None:
@@ -231,8 +234,14 @@ def main(argv: list[str] | None = None) -> int:
                         help="start a new run even if its directory exists: the old run there is deleted first "
                              "(without --force an existing run directory is an error)")  # fmt: skip
     parser.add_argument("--no-progress", action="store_true", help="no progress bar (CI, log files)")
+    parser.add_argument("--torch-threads", type=int, default=DEFAULT_TORCH_THREADS, metavar="N",
+                        help="torch threads of the learner (default 1: measured fastest on a 2-core machine with "
+                             "another run beside it; env processes always take one)")  # fmt: skip
     parser.add_argument("--out", type=Path, default=Path("runs"))
     ns = parser.parse_args(argv)
+    problem = threads_error(ns.torch_threads)
+    if problem:
+        parser.error(f"--torch-threads: {problem}")
     env_kwargs = _kwargs_dict(parser, "--env-kwargs", ns.env_kwargs)
     algo_kwargs = _kwargs_dict(parser, "--algo-kwargs", ns.algo_kwargs)
     for name in ("timesteps", "n_envs", "eval_every", "eval_episodes", "checkpoint_every"):
@@ -309,11 +318,9 @@ def main(argv: list[str] | None = None) -> int:
 
     vec = ns.vec or ("subproc" if n_envs > 1 else "dummy")
     vec_cls = SubprocVecEnv if vec == "subproc" else DummyVecEnv
-    if vec_cls is SubprocVecEnv:
-        # One core per env process: numba and torch threads would only compete with the other
-        # envs (the children inherit the environment; the kernels are serial anyway).
-        for name in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-            os.environ.setdefault(name, "1")
+    # The learner's torch threads as asked; one thread per env process (they inherit the
+    # environment variables set here; the kernels are serial, more would only compete).
+    threads = set_threads(ns.torch_threads)
     # "module:id": a worker process imports softgrasp_env (and with it the ids) before gym.make,
     # whatever the main module is (train.main called from a script or a test, not only train.py).
     venv = make_vec_env(f"softgrasp_env:{env_id}", n_envs=n_envs, seed=meta["seed"], vec_env_cls=vec_cls, env_kwargs=env_kwargs,
@@ -393,14 +400,15 @@ def main(argv: list[str] | None = None) -> int:
     venv.close()
     meta["num_timesteps"] = model.num_timesteps
     session = {"command": " ".join(["python", "train.py", *map(quote_arg, sys.argv[1:] if argv is None else argv)]),
-               "timesteps_trained": model.num_timesteps - start, "train_seconds": round(seconds, 1)}  # fmt: skip
+               "timesteps_trained": model.num_timesteps - start, "train_seconds": round(seconds, 1),
+               "torch_threads": threads["torch"]}  # fmt: skip
     if files is None:
         meta.update(session)
     else:
         meta["sessions"][-1].update(session)
     (run / "run.json").write_text(json.dumps(meta, indent=2))
     _log(f"trained {model.num_timesteps - start} steps in {seconds:.0f} s ({(model.num_timesteps - start) / seconds:.0f} "
-         f"steps/s, {model.num_timesteps} in all); final success {final['success_rate']:.0%}; saved to {run}")  # fmt: skip
+         f"steps/s, {threads['torch']} torch thread{'s' if threads['torch'] > 1 else ''}, {model.num_timesteps} in all); final success {final['success_rate']:.0%}; saved to {run}")  # fmt: skip
     return 0
 
 

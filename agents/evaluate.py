@@ -5,7 +5,8 @@
     python -m agents.evaluate --policy SoftGrasp-v2_sac_0            # a shipped baseline, by name (the v2 baselines)
     .venv-rllib/bin/python -m agents.evaluate --policy runs-rllib/SoftGrasp-v3_rllib-ppo/seed_0   # an RLlib trial
 
-Episodes use seeds ``seed, seed + 1, ...`` so two policies meet the same starts.
+Episodes use seeds ``seed, seed + 1, ...`` so two policies meet the same starts. A learned
+policy runs on one torch thread (``--torch-threads N`` for more; agents/threads.py).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import gymnasium as gym
 import numpy as np
 
 import softgrasp_env
+from agents.threads import DEFAULT_TORCH_THREADS, set_threads, threads_error
 
 DEFAULT_ENV = "SoftGrasp-v3"
 """The env of ``--policy scripted`` / ``random`` without ``--env``."""
@@ -146,7 +148,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--other-env", action="store_true",
                         help="allow --env to differ from the run's env (same spaces), e.g. a soft-trained policy "
                              "on SoftGraspRigid-v3")  # fmt: skip
+    parser.add_argument("--torch-threads", type=int, default=DEFAULT_TORCH_THREADS, metavar="N",
+                        help="torch threads for a learned policy (default 1; agents/threads.py says why)")
     ns = parser.parse_args(argv)
+    problem = threads_error(ns.torch_threads)
+    if problem:
+        parser.error(f"--torch-threads: {problem}")
     env = None
     try:
         if ns.policy in ("scripted", "random"):
@@ -157,6 +164,7 @@ def main(argv: list[str] | None = None) -> int:
             from agents.rllib_policy import is_rllib_run, locate
             from agents.runs import make_env, run_files
 
+            set_threads(ns.torch_threads)
             spec = resolve(ns.policy)
             # The env is re-created as the run made it: same id (unless --env says otherwise), same kwargs.
             meta = locate(spec)[0] if is_rllib_run(spec) else run_files(spec).meta

@@ -18,7 +18,7 @@ restarted (``restart_failed_env_runners``) and training goes on.
 RLlib's env runners do not read the gymnasium registry: each id is registered with
 ``ray.tune.registry.register_env`` under its own name, and the creator imports softgrasp_env in the
 worker. Each env runner is one process with one env (or ``--num-envs-per-env-runner``) and one
-numba/torch thread.
+numba/torch thread; each trial's learner ``--torch-threads`` (default 1, agents/threads.py).
 """
 
 from __future__ import annotations
@@ -34,6 +34,7 @@ from typing import Any
 import softgrasp_env
 from agents.cards import quote_arg
 from agents.cli import kwargs_dict, parse_kwarg
+from agents.threads import DEFAULT_TORCH_THREADS, child_environment, threads_error
 
 ALGOS = ("ppo", "sac")
 
@@ -61,6 +62,8 @@ def _make_env(config: dict[str, Any]):
     """RLlib's env creator, run in each env runner: one numba thread (set before numba loads, as
     train.py does for its subprocesses), the id made through gymnasium with its time limit."""
     os.environ.setdefault("NUMBA_NUM_THREADS", "1")
+    if "torch" in sys.modules:  # the env runner's own module (RLlib's torch policy): one thread
+        sys.modules["torch"].set_num_threads(1)
     import gymnasium as gym
 
     import softgrasp_env  # noqa: F401  (in the worker: registers the ids)
@@ -202,6 +205,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--num-cpus", type=int, default=None, help="CPUs of the local Ray instance (not with --address)")
     parser.add_argument("--max-concurrent-trials", type=int, default=None)
     parser.add_argument("--checkpoint-every", type=int, default=10, help="iterations between checkpoints (and one at the end)")
+    parser.add_argument("--torch-threads", type=int, default=DEFAULT_TORCH_THREADS, metavar="N",
+                        help="torch threads of each trial's learner (default 1; env runners take one; agents/threads.py)")
     parser.add_argument("--out", type=Path, default=Path("runs-rllib"))
     parser.add_argument("--name", default=None, help="the experiment's directory under --out; default <env>_rllib-<algo>")
     ns = parser.parse_args(argv)
@@ -209,6 +214,9 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--timesteps must be >= 1, got {ns.timesteps}")
     if ns.checkpoint_every < 1:
         parser.error(f"--checkpoint-every must be >= 1, got {ns.checkpoint_every}")
+    problem = threads_error(ns.torch_threads)
+    if problem:
+        parser.error(f"--torch-threads: {problem}")
     if ns.address is not None and ns.num_cpus is not None:
         parser.error("--num-cpus sizes a local Ray instance; a cluster joined with --address has its own CPUs")
     env_kwargs = kwargs_dict(parser, "--env-kwargs", ns.env_kwargs)
@@ -237,11 +245,13 @@ def _run_tune(ns, config, env_kwargs, training, grid, argv) -> int:
     import ray
     from ray import tune
 
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    # Every Ray worker of this job, on every node: the trial's learner ns.torch_threads torch
+    # threads, numba one (agents/threads.py); the env runners set one torch thread themselves.
+    runtime_env = {"env_vars": child_environment(ns.torch_threads)}
     if ns.address is not None:
-        ray.init(address=ns.address, include_dashboard=False)
+        ray.init(address=ns.address, include_dashboard=False, runtime_env=runtime_env)
     else:
-        ray.init(num_cpus=ns.num_cpus, include_dashboard=False)
+        ray.init(num_cpus=ns.num_cpus, include_dashboard=False, runtime_env=runtime_env)
     try:
         # One trial takes a CPU for its learner and one per env runner as asked; a trial that does
         # not fit would wait in Tune's queue for ever, so say it now. (An autoscaling cluster

@@ -228,6 +228,7 @@ def test_run_json_records_the_command_steps_time_and_hyperparameters(tiny_run):
     # PPO collects whole rollouts: the steps really trained are reported, not the ones asked for
     assert meta["timesteps_trained"] == meta["num_timesteps"] >= 64
     assert meta["train_seconds"] > 0
+    assert meta["torch_threads"] == 1  # the default (agents/threads.py)
     hp = meta["hyperparameters"]
     assert hp["n_steps"] == 64 and hp["batch_size"] == 64 and hp["policy_kwargs"] == {"net_arch": [64, 64]}
 
