@@ -114,6 +114,31 @@ def test_no_tearing_in_a_hundred_thousand_random_steps(stream):
     assert r["max_deviation"] <= DEFAULT_MAX_DEVIATION + 1e-9
 
 
+def test_physics_floor_prints_the_floor_the_ratios_and_a_breakdown_that_adds_up():
+    import re
+
+    out = _run_plain("physics_floor.py", "--seconds", "0.3", "--repeats", "1", "--ids",
+                     "SoftGrasp-v3,SoftGraspRigid-v3")  # fmt: skip
+    floors = [float(f.replace(",", "")) for f in re.findall(r"world step 1/(?:240|480) s: ([\d,]+) pybullet", out)]
+    assert len(floors) == 2 and min(floors) > 0, out
+    table, breakdown = out.split("where an env step goes")
+    rows = {line.split()[0]: line.split()[1:] for line in table.splitlines() if line.startswith("SoftGrasp")}
+    soft_rate, soft_ratio, soft_pb = (float(x) for x in rows["SoftGrasp-v3"][:3])
+    assert soft_rate > 0 and soft_ratio > 0, out
+    assert soft_pb == 24 and float(rows["SoftGraspRigid-v3"][2]) == 12, out  # 2 world steps per physics step
+    # the breakdown's second rows: pybullet, kernel, solver call, hand-over, env, total [us]
+    soft = [float(x) for x in breakdown.split("SoftGrasp-v3")[1].split()[:6]]
+    assert soft[1] > 0 and soft[0] > 0 and abs(sum(soft[:5]) - soft[5]) <= 3, out  # rounding of 5 figures
+    rigid = [float(x) for x in breakdown.split("SoftGraspRigid-v3")[1].split()[:6]]
+    assert rigid[1] == 0 and rigid[2] == 0, out  # no tissue
+
+
+def test_torch_threads_trains_at_each_count_alone_and_side_by_side():
+    out = _run_plain("torch_threads.py", "--env", "SoftGraspRigid-v3", "--steps", "20", "--threads", "1")
+    row = next(line.split() for line in out.splitlines() if line.strip().startswith("1 "))
+    assert float(row[1]) > 0 and float(row[2]) > 0 and float(row[4]) > 0, out
+
+
 def test_env_throughput_prints_every_id_asked_for():
     ids = "SoftGraspRigid-v3,SoftGraspRigidTorsion-v3@cylinder_mass=0.2"
     out = _run_plain("env_throughput.py", "--steps", "5", "--ids", ids)
