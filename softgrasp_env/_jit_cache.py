@@ -192,6 +192,9 @@ def ensure_compiled(config) -> None:
         scene = GraspScene(config)
         try:
             scene.world.step()
+            # the per-step queries with kernels of their own (the env calls them from its first step)
+            scene.finger_forces()
+            scene.world.tissue_deviation()
         finally:
             scene.close()
     _warmed.add(kind)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
+import numba as nb
 import numpy as np
 import pybullet as p
 from pybullet_utils.bullet_client import BulletClient
@@ -150,6 +151,7 @@ class World:
         self.solver: TissueSolver | None = None
         self.state: TissueState | None = None
         self.last_output: StepOutput | None = None
+        self._core_rigid: np.ndarray | None = None  # each tissue body's core's rigid slot
         self.refresh()
         if tissue:
             for t in tissue:
@@ -157,6 +159,7 @@ class World:
                     raise ValueError(f"tissue core_shape {t.core_shape} must be a shape on a rigid slot")
             model = concatenate([with_core_shapes(t.model, np.array([t.core_shape])) for t in tissue])
             self.model = model
+            self._core_rigid = np.array([self.shapes[int(k)].rigid for k in model.body_core_shape], dtype=np.intp)
             # The compliant material needs steps short enough for itself and for its pull on the
             # cores (compliant.world_substeps): a World asked for fewer would ring or go unstable.
             core_mass = np.array([_mass(inv_m[self.shapes[t.core_shape].rigid]) for t in tissue])
@@ -220,22 +223,8 @@ class World:
         if self.state is None:
             return 0.0
         m, c = self.model, self.colliders
-        worst = 0.0
-        for b in range(m.body_count):
-            sl = m.body_slice(b)
-            r = self.shapes[int(m.body_core_shape[b])].rigid
-            x, y, z, w = c.rigid_q[r]
-            rot = np.array([
-                [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-            ])  # fmt: skip
-            rest = m.particle_rest_x[sl] @ rot.T + c.rigid_x[r]
-            d = float(np.sqrt(((self.state.particle_x[sl] - rest) ** 2).sum(axis=1)).max(initial=0.0))
-            if not np.isfinite(d):  # NaN would slip through max()
-                return float("inf")
-            worst = max(worst, d)
-        return worst
+        return _largest_deviation(self.state.particle_x, m.particle_rest_x, m.body_particle_offsets, self._core_rigid,
+                                  c.rigid_x, c.rigid_q)  # fmt: skip
 
     def is_finite(self) -> bool:
         c = self.colliders
@@ -256,3 +245,27 @@ class World:
             self.state.assign(tissue)
         self.step_count = steps
         self.refresh()
+
+
+@nb.njit(cache=True)
+def _largest_deviation(x, rest_x, offsets, core_rigid, rigid_x, rigid_q):
+    """World.tissue_deviation's loop, compiled (it runs once per env step, for the divergence
+    check): each particle's distance from its rest spot carried by its body's core; inf if any
+    is not finite (NaN would slip through a max)."""
+    worst = 0.0
+    for b in range(offsets.shape[0] - 1):
+        r = core_rigid[b]
+        qx, qy, qz, qw = rigid_q[r, 0], rigid_q[r, 1], rigid_q[r, 2], rigid_q[r, 3]
+        r00, r01, r02 = 1.0 - 2.0 * (qy * qy + qz * qz), 2.0 * (qx * qy - qz * qw), 2.0 * (qx * qz + qy * qw)
+        r10, r11, r12 = 2.0 * (qx * qy + qz * qw), 1.0 - 2.0 * (qx * qx + qz * qz), 2.0 * (qy * qz - qx * qw)
+        r20, r21, r22 = 2.0 * (qx * qz - qy * qw), 2.0 * (qy * qz + qx * qw), 1.0 - 2.0 * (qx * qx + qy * qy)
+        for i in range(offsets[b], offsets[b + 1]):
+            a0, a1, a2 = rest_x[i, 0], rest_x[i, 1], rest_x[i, 2]
+            d0 = x[i, 0] - (r00 * a0 + r01 * a1 + r02 * a2 + rigid_x[r, 0])
+            d1 = x[i, 1] - (r10 * a0 + r11 * a1 + r12 * a2 + rigid_x[r, 1])
+            d2 = x[i, 2] - (r20 * a0 + r21 * a1 + r22 * a2 + rigid_x[r, 2])
+            d = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            if not math.isfinite(d):
+                return math.inf
+            worst = max(worst, d)
+    return worst

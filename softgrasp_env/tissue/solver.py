@@ -439,12 +439,9 @@ class TissueSolver:
         m = self.model
         out = np.zeros(m.body_count)
         nc = int(self._counts[0])
-        if nc == 0:
-            return out
         sc = self._scratch
-        sel = (sc["c_shape"][:nc] == shape) & ~sc["c_inner"][:nc]
-        bodies = m.particle_body[sc["c_particle"][:nc][sel]]
-        np.add.at(out, bodies, sc["c_lambda"][:nc][sel])
+        _sum_contact_lambda(sc["c_shape"], sc["c_inner"], sc["c_particle"], sc["c_lambda"], nc, shape, m.particle_body,
+                            out)  # fmt: skip
         return out / (self.sim.dt * self.sim.dt)
 
     def penetration(self, state: TissueState, col: Colliders) -> tuple[float, float]:
@@ -456,3 +453,13 @@ class TissueSolver:
                         m.body_core_shape, col.shape_kind, col.shape_params, col.shape_rigid, col.shape_local_x,
                         col.shape_local_q, col.rigid_x, col.rigid_q, out)  # fmt: skip
         return float(out[0]), float(out[1])
+
+
+@nb.njit(cache=True)
+def _sum_contact_lambda(c_shape, c_inner, c_particle, c_lambda, nc, shape, particle_body, out):
+    """out[body] += lambda of each of the first ``nc`` contacts with ``shape`` that is not a
+    particle's contact with its own core, in contact order (the sums np.add.at made, a compiled
+    loop: it runs every physics step)."""
+    for i in range(nc):
+        if c_shape[i] == shape and not c_inner[i]:
+            out[particle_body[c_particle[i]]] += c_lambda[i]
