@@ -1,5 +1,6 @@
-"""Threads per process for training and evaluation (issue 20): one torch thread and one numba
-thread unless asked otherwise, in the learner's process and in every env process it starts.
+"""Threads per process for training and evaluation (issue 20): one torch thread unless asked
+otherwise in the learner's process, and one thread (torch, BLAS, numba) in every env process it
+starts.
 
 Why one: on this 2-core machine, SB3's SAC with torch's default of two threads, beside a second
 training process (two seeds at a time, as the baselines were trained), sampled 7 env steps/s end
@@ -40,19 +41,19 @@ def child_environment(torch_threads: int = DEFAULT_TORCH_THREADS) -> dict[str, s
 
 
 def set_threads(torch_threads: int = DEFAULT_TORCH_THREADS) -> dict[str, int]:
-    """Give this process ``torch_threads`` torch threads and one numba thread, and make the env
-    processes it starts later take one thread each; returns the counts in effect. A bad count is
-    a ValueError naming it."""
+    """Give this process ``torch_threads`` torch threads, and make the env processes it starts
+    later take one thread each; returns the count in effect. A bad count is a ValueError naming it.
+
+    numba is left alone in this process: the package's kernels are serial, so numba never starts
+    its thread pool here, and starting it (``numba.set_num_threads``) would fix its size for the
+    process (numba refuses a different NUMBA_NUM_THREADS afterwards, and with its OpenMP layer it
+    would set torch's OpenMP count too)."""
     problem = threads_error(torch_threads)
     if problem:
         raise ValueError(problem)
     for name, value in child_environment(1).items():
         os.environ[name] = value  # for processes started from here on (env subprocesses)
-    import numba
     import torch
 
-    # numba first: with its OpenMP threading layer, numba.set_num_threads sets OpenMP's count,
-    # which torch shares (measured: numba after torch left torch on one thread).
-    numba.set_num_threads(1)
     torch.set_num_threads(torch_threads)
-    return {"torch": torch.get_num_threads(), "numba": numba.get_num_threads()}
+    return {"torch": torch.get_num_threads()}

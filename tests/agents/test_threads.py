@@ -1,5 +1,6 @@
-"""One torch and numba thread per process unless asked (issue 20, item 2): the count is checked,
-applied to this process and handed to the env processes it starts, and recorded with the run."""
+"""One torch thread per process unless asked, one thread in every env process (issue 20, item
+2): the count is checked, applied to this process and handed to the env processes it starts, and
+recorded with the run."""
 
 from __future__ import annotations
 
@@ -39,10 +40,10 @@ def test_a_bad_thread_count_is_named(bad):
 def test_set_threads_applies_here_and_to_the_env_processes_started_later(restore_threads):
     assert threads_error(1) is None and threads_error(2) is None
     got = set_threads(2)
-    assert got == {"torch": 2, "numba": 1} and torch.get_num_threads() == 2
+    assert got == {"torch": 2} and torch.get_num_threads() == 2
     # env processes (SubprocVecEnv, Ray workers) start with one thread whatever the learner has
     assert all(os.environ[k] == "1" for k in CHILD_THREAD_VARIABLES)
-    assert set_threads(1) == {"torch": 1, "numba": 1}
+    assert set_threads(1) == {"torch": 1}
     assert child_environment(3) == {"OMP_NUM_THREADS": "3", "MKL_NUM_THREADS": "3", "OPENBLAS_NUM_THREADS": "3",
                                      "NUMBA_NUM_THREADS": "1"}  # fmt: skip
 
