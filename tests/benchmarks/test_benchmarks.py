@@ -139,6 +139,13 @@ def test_torch_threads_trains_at_each_count_alone_and_side_by_side():
     assert float(row[1]) > 0 and float(row[2]) > 0 and float(row[4]) > 0, out
 
 
+def test_learners_times_a_learner_on_the_env_and_on_pendulum():
+    out = _run_plain("learners.py", "--env", "SoftGraspRigid-v3", "--steps", "20", "--learners", "sac")
+    row = next(line.split() for line in out.splitlines() if line.startswith("sac "))
+    ours, pendulum, ratio = (float(x) for x in row[1:4])
+    assert ours > 0 and pendulum > 0 and abs(ratio - ours / pendulum) < 0.01, out
+
+
 def test_env_throughput_prints_every_id_asked_for():
     ids = "SoftGraspRigid-v3,SoftGraspRigidTorsion-v3@cylinder_mass=0.2"
     out = _run_plain("env_throughput.py", "--steps", "5", "--ids", ids)
