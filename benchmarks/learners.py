@@ -73,7 +73,7 @@ def worker(name: str, env_id: str, steps: int, seed: int) -> float:
 def _run(name: str, env_id: str, steps: int, seed: int) -> float:
     cmd = [sys.executable, __file__, "--worker", name, "--env", env_id, "--steps", str(steps), "--seed", str(seed)]
     env = {**os.environ, **ONE_THREAD, "PYTHONPATH": str(ROOT)}
-    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, env=env, timeout=3600)
+    proc = subprocess.run(cmd, check=False, cwd=ROOT, capture_output=True, text=True, env=env, timeout=3600)
     if proc.returncode != 0:
         raise RuntimeError(f"{name} on {env_id} failed: {proc.stderr[-1500:]}")
     line = next(ln for ln in reversed(proc.stdout.splitlines()) if ln.startswith("{"))  # pybullet prints argv[0]=
