@@ -1,6 +1,7 @@
 """Env steps/s of SB3's vectorised envs on this machine: one env in-process (DummyVecEnv), then
 1, 2, ... up to the core count in subprocesses (SubprocVecEnv, what ``train.py --n-envs N``
-uses), in one run, with the speed-up over one subprocess env; with ``--rllib`` (in the RLlib venv)
+uses), then gymnasium's own ``gym.make_vec(..., vectorization_mode="async")`` the same way, in
+one run, with the speed-up over one subprocess env; with ``--rllib`` (in the RLlib venv)
 also RLlib sampling with 1, 2, ... env runners (what ``agents.rllib_train --num-env-runners N``
 uses), and what 64 cores over several machines would give at the measured per-runner rate.
 
@@ -34,6 +35,26 @@ def measure(env_id: str, n_envs: int, vec: str, seconds: float) -> float:
     try:
         rng = np.random.default_rng(0)
         venv.reset()
+        for _ in range(20):  # warm-up
+            venv.step(rng.uniform(-1, 1, (n_envs, 4)).astype(np.float32))
+        steps, tic = 0, time.perf_counter()
+        while time.perf_counter() - tic < seconds:
+            venv.step(rng.uniform(-1, 1, (n_envs, 4)).astype(np.float32))
+            steps += n_envs
+        return steps / (time.perf_counter() - tic)
+    finally:
+        venv.close()
+
+
+def measure_gym(env_id: str, n_envs: int, mode: str, seconds: float) -> float:
+    """Env steps/s of gymnasium's own vector env: ``gym.make_vec(..., vectorization_mode=mode)``
+    ("sync": in this process, one after the other; "async": one subprocess each)."""
+    import gymnasium as gym
+
+    venv = gym.make_vec(env_id, num_envs=n_envs, vectorization_mode=mode)
+    try:
+        rng = np.random.default_rng(0)
+        venv.reset(seed=0)
         for _ in range(20):  # warm-up
             venv.step(rng.uniform(-1, 1, (n_envs, 4)).astype(np.float32))
         steps, tic = 0, time.perf_counter()
@@ -83,6 +104,12 @@ def main() -> int:
         rate = measure(ns.env, n, "subproc", ns.seconds)
         one = one or rate
         print(f"  SubprocVecEnv {n:2d} envs: {rate:7.0f} env steps/s   x{rate / one:.2f} over 1 subprocess, "
+              f"x{rate / base:.2f} over in-process", flush=True)  # fmt: skip
+    gym_one = None
+    for n in range(1, ns.max_envs + 1):
+        rate = measure_gym(ns.env, n, "async", ns.seconds)
+        gym_one = gym_one or rate
+        print(f"  gym.make_vec  {n:2d} envs (async): {rate:7.0f} env steps/s   x{rate / gym_one:.2f} over 1 subprocess, "
               f"x{rate / base:.2f} over in-process", flush=True)  # fmt: skip
     if ns.rllib:
         import ray
