@@ -33,17 +33,23 @@ def measure(env_id: str, n_envs: int, vec: str, seconds: float) -> float:
     cls = SubprocVecEnv if vec == "subproc" else DummyVecEnv
     venv = make_vec_env(env_id, n_envs=n_envs, seed=0, vec_env_cls=cls)
     try:
-        rng = np.random.default_rng(0)
         venv.reset()
-        for _ in range(20):  # warm-up
-            venv.step(rng.uniform(-1, 1, (n_envs, 4)).astype(np.float32))
-        steps, tic = 0, time.perf_counter()
-        while time.perf_counter() - tic < seconds:
-            venv.step(rng.uniform(-1, 1, (n_envs, 4)).astype(np.float32))
-            steps += n_envs
-        return steps / (time.perf_counter() - tic)
+        return _stepping_rate(venv, n_envs, seconds)
     finally:
         venv.close()
+
+
+def _stepping_rate(venv, n_envs: int, seconds: float) -> float:
+    """Env steps/s of a reset vector env (SB3's or gymnasium's: both step an (n, 4) batch) under
+    seeded random actions, after 20 warm-up steps."""
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        venv.step(rng.uniform(-1, 1, (n_envs, 4)).astype(np.float32))
+    steps, tic = 0, time.perf_counter()
+    while time.perf_counter() - tic < seconds:
+        venv.step(rng.uniform(-1, 1, (n_envs, 4)).astype(np.float32))
+        steps += n_envs
+    return steps / (time.perf_counter() - tic)
 
 
 def measure_gym(env_id: str, n_envs: int, mode: str, seconds: float) -> float:
@@ -53,15 +59,8 @@ def measure_gym(env_id: str, n_envs: int, mode: str, seconds: float) -> float:
 
     venv = gym.make_vec(env_id, num_envs=n_envs, vectorization_mode=mode)
     try:
-        rng = np.random.default_rng(0)
         venv.reset(seed=0)
-        for _ in range(20):  # warm-up
-            venv.step(rng.uniform(-1, 1, (n_envs, 4)).astype(np.float32))
-        steps, tic = 0, time.perf_counter()
-        while time.perf_counter() - tic < seconds:
-            venv.step(rng.uniform(-1, 1, (n_envs, 4)).astype(np.float32))
-            steps += n_envs
-        return steps / (time.perf_counter() - tic)
+        return _stepping_rate(venv, n_envs, seconds)
     finally:
         venv.close()
 
