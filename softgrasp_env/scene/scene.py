@@ -128,7 +128,7 @@ class GraspScene:
         """One physics step of the whole scene: ``control`` (or the last one) to the gripper, the
         finger kind's hook, the kind's extra pybullet substeps (no tissue there), then ``world.step()``
         (tissue, then pybullet)."""
-        self.gripper.apply(self.gripper.control if control is None else control, self.world.colliders.rigid_x[PALM])
+        self.gripper.apply(self.gripper.control if control is None else control, self.world.position(PALM))
         self.fingers.before_step()
         for _ in range(self.bullet_steps - 1):
             self.client.stepSimulation()

@@ -126,6 +126,7 @@ class StateReader:
         self._links = [(body, [k for k, _ in kl], [link for _, link in kl]) for body, kl in links.items()]
         self._order = np.array([k for k, _ in self._bases] + [k for _, ks, _ in self._links for k in ks], dtype=np.intp)
         self._count = len(refs)
+        self._refs = list(refs)
         self._buf = np.zeros((self._count, 13))
         self._flat = self._buf.reshape(-1)
 
@@ -146,6 +147,14 @@ class StateReader:
         # scatter for all slots: numpy slice assignments per field cost more than the reads.
         self._flat[:] = vals
         _scatter(self._buf, self._order, x, q, v, w)
+
+
+    def position(self, slot: int) -> tuple[float, float, float]:
+        """Slot ``slot``'s centre of mass [m], by itself: the value :meth:`read` gives it."""
+        r = self._refs[slot]
+        if r.link < 0:
+            return p.getBasePositionAndOrientation(r.body, self._cid)[0]
+        return p.getLinkStates(r.body, [r.link], 1, 0, self._cid)[0][0]
 
 
 @nb.njit(cache=True)

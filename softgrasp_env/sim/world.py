@@ -129,7 +129,7 @@ class World:
         self._free_base = np.array([r.free_base for r in self.rigid], dtype=np.bool_)
         self._reader = StateReader(client, self.rigid)
         self._impulses = ImpulseApplier(client, self.rigid, free=self._free_base)
-        self.colliders = Colliders(
+        self._colliders = Colliders(
             rigid_x=np.zeros((nr, 3)),
             rigid_q=np.tile([0.0, 0.0, 0.0, 1.0], (nr, 1)),
             rigid_v=np.zeros((nr, 3)),
@@ -146,7 +146,11 @@ class World:
             shape_local_x=np.array([s.local_x for s in self.shapes], dtype=np.float64).reshape(-1, 3),
             shape_local_q=np.array([s.local_q for s in self.shapes], dtype=np.float64).reshape(-1, 4),
         )
-        self._joints = _SlidingCores(client, self.rigid, self.colliders.rigid_in_solve)
+        self._joints = _SlidingCores(client, self.rigid, self._colliders.rigid_in_solve)
+        self._stale = False
+        """The rigid states in ``_colliders`` are older than pybullet's: a world without tissue reads
+        them when they are asked for (``colliders``), not after every step (issue 20: per physics
+        step only what the physics needs)."""
         self.model: TissueModel | None = None
         self.solver: TissueSolver | None = None
         self.state: TissueState | None = None
@@ -180,31 +184,53 @@ class World:
 
     def step(self) -> None:
         """Advance the world by ``sim.dt`` (in ``substeps`` world steps)."""
-        col = self.colliders
+        if self.solver is None:
+            # Rigid bodies only: nothing here needs their states between steps; ``colliders`` reads
+            # them once when asked (the same numbers the eager read after the last step gave).
+            for _ in range(self.substeps):
+                self.client.stepSimulation()
+            self._stale = True
+            self.step_count += 1
+            return
+        col = self._colliders
         for _ in range(self.substeps):
-            if self.solver is not None:
-                out = self.solver.step(self.state, col)
-                self.last_output = out
-                # A NaN impulse would poison pybullet's bodies (and its broadphase) for good: the applier
-                # hands nothing over then, and we stop here so the caller can end the episode and rebuild.
-                if not self._impulses.apply(col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w, col.rigid_inv_mass,
-                                            col.rigid_inv_inertia, out.rigid_impulse, out.rigid_angular_impulse,
-                                            self._h):  # fmt: skip
-                    raise SimulationDiverged(f"non-finite tissue impulse at step {self.step_count}")
+            out = self.solver.step(self.state, col)
+            self.last_output = out
+            # A NaN impulse would poison pybullet's bodies (and its broadphase) for good: the applier
+            # hands nothing over then, and we stop here so the caller can end the episode and rebuild.
+            if not self._impulses.apply(col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w, col.rigid_inv_mass,
+                                        col.rigid_inv_inertia, out.rigid_impulse, out.rigid_angular_impulse,
+                                        self._h):  # fmt: skip
+                raise SimulationDiverged(f"non-finite tissue impulse at step {self.step_count}")
             self.client.stepSimulation()
             self.refresh()
-            if self.solver is not None:
-                self._sync()
+            self._sync()
         self.step_count += 1
+
+    @property
+    def colliders(self) -> Colliders:
+        """The rigid bodies as the tissue sees them, read from pybullet after the last step."""
+        if self._stale:
+            self.refresh()
+        return self._colliders
 
     def refresh(self) -> None:
         """Re-read every rigid slot's pose and velocity from pybullet (after a step or a reset)."""
-        c = self.colliders
+        c = self._colliders
         self._reader.read(c.rigid_x, c.rigid_q, c.rigid_v, c.rigid_w)
         self._joints.read(c.rigid_q, c.rigid_axis, c.rigid_force)
+        self._stale = False
+
+    def position(self, slot: int) -> tuple[float, float, float] | np.ndarray:
+        """Slot ``slot``'s centre of mass now [m]: one pybullet query where the rigid states are not
+        read yet (a world without tissue between steps), else the row already read. The same
+        numbers either way (the query ``refresh`` makes for that slot)."""
+        if not self._stale:
+            return self._colliders.rigid_x[slot]
+        return self._reader.position(slot)
 
     def _sync(self) -> None:
-        m, s, c = self.model, self.state, self.colliders
+        m, s, c = self.model, self.state, self._colliders
         sync_attached(m.particle_rest_x, m.particle_rest_q, m.particle_attached, m.particle_body, m.body_core_shape,
                       c.shape_rigid, c.rigid_x, c.rigid_q, c.rigid_v, c.rigid_w, s.particle_x, s.particle_v,
                       s.particle_q, s.particle_omega)  # fmt: skip

@@ -135,6 +135,37 @@ def test_world_is_deterministic():
         b.close()
 
 
+@pytest.mark.parametrize("fingers", ["rigid", "segmented"])
+def test_a_world_without_tissue_reads_rigid_states_when_asked(fingers):
+    """Without tissue nothing needs the rigid states between physics steps: the world reads them
+    when ``colliders`` is asked (issue 20). What it reads then is exactly what the eager read after
+    every step gave: the same numbers as a fresh read, and ``position`` (the palm, every physics
+    step) the same as its row."""
+    from softgrasp_env.scene.scene import PALM
+
+    scene = GraspScene(SceneConfig(fingers=fingers))
+    try:
+        world = scene.world
+        assert world.solver is None
+        close = replace(scene.control, finger_closing=scene.config.finger_max_opening)
+        for _ in range(30):
+            scene.step(close)
+        assert world._stale  # nothing read since the last step
+        palm = np.array(world.position(PALM))
+        col = world.colliders  # read now
+        assert not world._stale
+        assert np.array_equal(palm, col.rigid_x[PALM]) and np.array_equal(np.array(world.position(PALM)), palm)
+        lazy = [a.copy() for a in (col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w)]
+        for a in (col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w):
+            a[...] = np.nan
+        world.refresh()
+        for a, b in zip(lazy, (col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w)):
+            assert np.array_equal(a, b)
+        assert np.isfinite(lazy[0]).all()
+    finally:
+        scene.close()
+
+
 def test_restore_returns_bodies_and_tissue_to_the_snapshot():
     scene = GraspScene(SceneConfig())
     try:
