@@ -40,8 +40,11 @@ ONE_THREAD = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THRE
 """Every learner on one thread (torch's and XLA's CPU pools), read when the process starts."""
 
 
-def _kwargs(name: str) -> dict:
-    common = {"gamma": 0.98, "batch_size": 256, "learning_starts": WARMUP, "train_freq": 2, "buffer_size": 300_000}
+def preset(name: str, *, learning_starts: int = WARMUP) -> dict:
+    """train.py's SAC preset (agents/baselines.py) where ``name`` takes it; CrossQ keeps sbx's own
+    network and learning rate (it has no target network: no tau)."""
+    common = {"gamma": 0.98, "batch_size": 256, "learning_starts": learning_starts, "train_freq": 2,
+              "buffer_size": 300_000}  # fmt: skip
     if name == "sbx-crossq":
         return common
     return {**common, "learning_rate": 1e-3, "tau": 0.02, "policy_kwargs": {"net_arch": [128, 128]}}
@@ -61,7 +64,7 @@ def worker(name: str, env_id: str, steps: int, seed: int) -> float:
         torch.set_num_threads(1)
     cls = getattr(importlib.import_module(module), cls_name)
     env = gym.make(env_id)
-    model = cls("MlpPolicy", env, seed=seed, verbose=0, **_kwargs(name))
+    model = cls("MlpPolicy", env, seed=seed, verbose=0, **preset(name))
     model.learn(total_timesteps=WARMUP + 50)  # the random steps and the first updates (JIT compiles)
     tic = time.perf_counter()
     model.learn(total_timesteps=steps, reset_num_timesteps=False)
