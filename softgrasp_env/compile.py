@@ -38,6 +38,7 @@ def warm(kinds: tuple[str, ...] = KINDS) -> list[Compiled]:
             try:
                 scene.world.step()
                 scene.world.penetration()
+                scene.fingers.tactile(scene.fingers.taxel_grid(2, 2))
             finally:
                 scene.close()
     return done

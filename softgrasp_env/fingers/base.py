@@ -14,7 +14,7 @@ The life of a kind inside a :class:`~softgrasp_env.scene.GraspScene`::
     kind.mount(site) -> [TissueSpec]       after: constraints, motors; the tissue it wraps the cores in
     kind.connect(world)                    the world (pybullet + tissue) exists
     every physics step: kind.before_step()
-    queries: contact_force(), penetration(), divergence(), visuals()
+    queries: contact_force(), tactile(grid), penetration(), divergence(), visuals()
 
 The base class is the bare-core behaviour (the rigid kind adds nothing to it); a kind overrides
 what it adds. Adding a kind is a module with a :class:`FingerConfig` and a :class:`FingerKind`
@@ -32,6 +32,7 @@ import pybullet as p
 from pybullet_utils.bullet_client import BulletClient
 
 from ..config import TissueConfig
+from .tactile import INNER_NORMAL, TaxelGrid, bin_contacts
 
 if TYPE_CHECKING:
     from ..sim.world import TissueSpec, World
@@ -193,6 +194,37 @@ class FingerKind:
                 for pt in contacts(s.cylinder, s.gripper, -1, link):
                     f[k] += pt[9]
         return np.array(f)
+
+    def taxel_grid(self, rows: int, cols: int) -> TaxelGrid:
+        """A ``rows`` x ``cols`` grid of taxels over each core's inner face (the whole face)."""
+        fh = self.scene_config.finger_half_extents
+        return TaxelGrid(rows, cols, float(fh[1]), float(fh[2]))
+
+    def tactile(self, grid: TaxelGrid) -> np.ndarray:
+        """The pads' taxels now, (2, rows, cols, channels) (fingers/tactile.py): here pybullet's
+        contact points of each finger's links with any other body, their normal force and both
+        lateral friction forces, binned where they touch the core's inner face; no shear (a rigid
+        pad does not deform). Kinds with tissue add its loads and its shear."""
+        s = self.site
+        out = grid.empty()
+        params = grid.params()
+        c = s.client
+        for k, links in enumerate(self.finger_links):
+            rows = [pt for link in links for pt in c.getContactPoints(bodyA=s.gripper, linkIndexA=link)
+                    if pt[2] != s.gripper]  # not the gripper's own links  # fmt: skip
+            if not rows:
+                continue
+            pos, orn = c.getLinkState(s.gripper, s.core_links[k], computeForwardKinematics=1)[:2]
+            # contactNormalOnB points from B (the other body) to A (the finger): the normal force
+            # pushes the finger along it. The lateral friction forces are not turned with the
+            # query's order (pybullet swaps positions and the normal only): they act along their
+            # directions on the body Bullet's pair holds first, the one made first (its broadphase
+            # pairs are sorted by creation), and against them on the other. Checked: the cylinder
+            # held aloft gets m g from the two fingers' friction (tests/fingers/test_tactile.py).
+            a = np.array([pt[5] + pt[7] + pt[11] + pt[13] + (pt[9], pt[10], pt[12], 1.0 if s.gripper < pt[2] else -1.0)
+                          for pt in rows])  # fmt: skip
+            bin_contacts(k, a, np.array(pos + orn), INNER_NORMAL[k], params, out)
+        return out
 
     def penetration(self) -> tuple[float, float]:
         """(deepest overlap of the gripper with the cylinder or the ground, deepest intrusion of a

@@ -20,6 +20,7 @@ from ..tissue.builder import CoreShape, build_combined_body, core_shape_from_bul
 from ..tissue.compliant import world_substeps as compliant_world_substeps
 from ..validation import check_choice
 from .base import FingerConfig, FingerKind, FingerSite, Visual
+from .tactile import TaxelGrid, face_footprints, tissue_loads, tissue_shear
 
 TISSUE_FACES: tuple[str, ...] = ("all", "contact")
 """Which faces of a core get tissue (TissueFingerConfig.faces)."""
@@ -129,10 +130,32 @@ class TissueFingers(FingerKind):
             specs.append(TissueSpec(body, site.core_shapes[k]))
         return specs
 
+    _footprint: np.ndarray | None = None
+    """Each particle's face cell (fingers.tactile.face_footprints), made at the first tactile read."""
+
     def contact_force(self) -> np.ndarray:
         """pybullet's core contacts plus the tissue's contacts with the cylinder."""
         f = super().contact_force()
         return f + self.world.solver.contact_normal_force(self.site.cylinder_shape)
+
+    def tactile(self, grid: TaxelGrid) -> np.ndarray:
+        """The bare cores' pybullet contacts (a core touches only through a crushed pad), the
+        tissue's contacts of the last world step, and its shear under each taxel
+        (fingers/tactile.py)."""
+        out = super().tactile(grid)
+        w: World = self.world
+        m, sv, col = w.model, w.solver, w.colliders
+        if self._footprint is None:
+            self._footprint = face_footprints(m.particle_rest_x, m.particle_attached, m.body_particle_offsets,
+                                              grid.half_width, grid.half_height)  # fmt: skip
+        sc, params = sv._scratch, grid.params()
+        core_rigid = col.shape_rigid[m.body_core_shape]
+        tissue_loads(int(sv._counts[0]), sc["c_particle"], sc["c_inner"], sc["c_lambda"], sc["c_normal"],
+                     sc["c_friction"], sc["c_patch"], sc["patch_slide"], sc["patch_change"], m.particle_body,
+                     m.particle_rest_x, self._footprint, col.rigid_q, core_rigid, sv.sim.dt, params, out)  # fmt: skip
+        tissue_shear(w.state.particle_x, m.particle_rest_x, self._footprint, m.particle_attached,
+                     m.body_particle_offsets, col.rigid_x, col.rigid_q, core_rigid, params, out)  # fmt: skip
+        return out
 
     def penetration(self) -> tuple[float, float]:
         """The tissue's deepest overlap with any rigid shape (and of its outer particles with their

@@ -1,0 +1,306 @@
+"""Tactile pads (issue 21): a fixed grid of taxels on each finger core's inner face, read from the
+simulation's state (no new physics).
+
+A taxel carries five channels (:data:`TAXEL_CHANNELS`), in the finger core's frame (x across the
+gap, y along the face, z up; the two cores share the gripper's yaw, so y and z mean the same
+direction on both pads):
+
+- ``pressure`` [Pa]: the normal load the pad takes from whatever touches it under the taxel, the
+  contact forces' component into the face over the taxel's area (compressive positive);
+- ``traction_y``, ``traction_z`` [Pa]: the tangential (friction) load on the pad under the taxel
+  along y and z, per area;
+- ``shear_y``, ``shear_z`` [m]: how far the tissue under the taxel has sheared, the mean
+  displacement along y and z of its free particles from the spots their core carries them to.
+  Only tissue deforms: a rigid pad reads 0 here, always.
+
+Each tissue particle stands for a cell of the face (the builder spreads them over a cell-centred
+grid): its contact's load and its displacement are spread over the taxels its cell covers, by
+area, so a grid finer or coarser than the particles reads a field whose total is the load (the
+default pad has 3 x 4 free particles on its inner face, 13 x 15 mm cells).
+
+The rigid kinds bin pybullet's contact points and forces (normal force and both lateral friction
+forces, the same law as the tissue's) onto the same grid: every signal their engine gives. The
+tissue reads its solver's contacts of the last world step (each contact binned where its
+particle sits at rest, a taxel being fixed to the core) and its particles' displacements.
+
+Rows run from the top of the face (row 0, z = +half height) down; columns from -y to +y. The grid
+covers the inner face only: a contact elsewhere (the tip, the back) is not under any taxel.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba as nb
+import numpy as np
+
+from ..validation import check_int
+
+TAXEL_CHANNELS: tuple[str, ...] = ("pressure", "traction_y", "traction_z", "shear_y", "shear_z")
+"""The channels of a taxel, in order (the last axis of a tactile reading)."""
+INNER_NORMAL = (1.0, -1.0)
+"""Sign of each core's inner face normal along its x axis (left core +x, right core -x: toward the
+other finger; fingers.tissue.CONTACT_FACES)."""
+MAX_TAXELS = 32
+"""Largest rows or columns of a grid: a pad is a few cm; finer taxels than its particles say nothing more."""
+
+
+@dataclass(frozen=True)
+class TaxelGrid:
+    """``rows`` x ``cols`` taxels over a face of half extents ``half_width`` (along the core's y)
+    and ``half_height`` (z) [m], centred on the face."""
+
+    rows: int
+    cols: int
+    half_width: float
+    half_height: float
+
+    def __post_init__(self) -> None:
+        check_int("rows", self.rows, 1, MAX_TAXELS, owner="TaxelGrid")
+        check_int("cols", self.cols, 1, MAX_TAXELS, owner="TaxelGrid")
+        for name in ("half_width", "half_height"):
+            v = getattr(self, name)
+            if not (isinstance(v, float | int) and np.isfinite(v) and v > 0.0):
+                raise ValueError(f"TaxelGrid.{name} must be a finite length > 0 [m], got {v!r}")
+
+    @property
+    def area(self) -> float:
+        """One taxel's area [m^2]."""
+        return 4.0 * self.half_width * self.half_height / (self.rows * self.cols)
+
+    @property
+    def shape(self) -> tuple[int, int, int, int]:
+        """The shape of a reading: (fingers, rows, cols, channels)."""
+        return (2, self.rows, self.cols, len(TAXEL_CHANNELS))
+
+    def empty(self) -> np.ndarray:
+        return np.zeros(self.shape)
+
+    def params(self) -> np.ndarray:
+        """(rows, cols, half_width, half_height, area) for the kernels."""
+        return np.array([self.rows, self.cols, self.half_width, self.half_height, self.area], dtype=np.float64)
+
+    def taxel(self, y: float, z: float) -> tuple[int, int] | None:
+        """(row, col) of the taxel over the face point (y, z) in the core frame, or None off the face."""
+        k = _taxel(y, z, self.params())
+        return None if k < 0 else divmod(k, self.cols)
+
+
+@nb.njit(cache=True, inline="always")
+def _taxel(y, z, grid):
+    """Flat index row * cols + col of the taxel over (y, z), or -1 off the face (a point on an
+    edge belongs to the taxel inside it)."""
+    rows, cols, hw, hh = int(grid[0]), int(grid[1]), grid[2], grid[3]
+    if not (-hw <= y <= hw and -hh <= z <= hh):
+        return -1
+    c = min(int((y + hw) / (2.0 * hw) * cols), cols - 1)
+    r = min(int((hh - z) / (2.0 * hh) * rows), rows - 1)
+    return r * cols + c
+
+
+@nb.njit(cache=True)
+def _spread(y, z, hy, hz, grid, index, weight):
+    """The taxels a footprint of half extents (hy, hz) centred on (y, z) covers, with the share of
+    its on-face area over each (summing to 1): ``index`` / ``weight`` filled, the count returned
+    (0: entirely off the face). A point (hy = hz = 0) goes whole to its taxel."""
+    if hy <= 0.0 or hz <= 0.0:
+        t = _taxel(y, z, grid)
+        if t < 0:
+            return 0
+        index[0] = t
+        weight[0] = 1.0
+        return 1
+    rows, cols, hw, hh = int(grid[0]), int(grid[1]), grid[2], grid[3]
+    y0, y1 = max(y - hy, -hw), min(y + hy, hw)
+    z0, z1 = max(z - hz, -hh), min(z + hz, hh)
+    if y1 <= y0 or z1 <= z0:
+        return 0
+    cw = 2.0 * hw / cols
+    rh = 2.0 * hh / rows
+    c0 = min(int((y0 + hw) / cw), cols - 1)
+    c1 = min(int((y1 + hw) / cw), cols - 1)
+    r0 = min(int((hh - z1) / rh), rows - 1)
+    r1 = min(int((hh - z0) / rh), rows - 1)
+    total = (y1 - y0) * (z1 - z0)
+    n = 0
+    for r in range(r0, r1 + 1):
+        top = hh - r * rh
+        oz = min(z1, top) - max(z0, top - rh)
+        if oz <= 0.0:
+            continue
+        for c in range(c0, c1 + 1):
+            left = -hw + c * cw
+            oy = min(y1, left + cw) - max(y0, left)
+            if oy <= 0.0:
+                continue
+            index[n] = r * cols + c
+            weight[n] = oy * oz / total
+            n += 1
+    return n
+
+
+@nb.njit(cache=True)
+def bin_loads(finger, points, forces, sign, grid, out):
+    """Add point loads to finger ``finger``'s taxels: ``points`` (N, 3) where each acts and
+    ``forces`` (N, 3) the force on the pad [N], both in the core's frame; ``sign`` its inner face
+    normal along x (INNER_NORMAL). Pressure is the force into the face, -F . n, per area."""
+    cols = int(grid[1])
+    area = grid[4]
+    for k in range(points.shape[0]):
+        t = _taxel(points[k, 1], points[k, 2], grid)
+        if t < 0:
+            continue
+        r, c = t // cols, t % cols
+        out[finger, r, c, 0] -= sign * forces[k, 0] / area
+        out[finger, r, c, 1] += forces[k, 1] / area
+        out[finger, r, c, 2] += forces[k, 2] / area
+
+
+@nb.njit(cache=True)
+def bin_contacts(finger, rows, core_pose, sign, grid, out):
+    """pybullet's contact points of one finger onto its taxels: ``rows`` (N, 16) per point its
+    position on the finger (3), contactNormalOnB (3), lateralFrictionDir1 (3), lateralFrictionDir2
+    (3), normal force, lateral friction 1 and 2 [N], and the sense (+1 / -1) the friction acts on
+    the finger in; ``core_pose`` the core's centre of mass and orientation (x, y, z, qx, qy, qz,
+    qw). The force on the finger, N n + sense (f1 d1 + f2 d2), into the core's frame (R^T), is
+    binned by :func:`bin_loads`."""
+    qx, qy, qz, qw = core_pose[3], core_pose[4], core_pose[5], core_pose[6]
+    r00, r01, r02 = 1.0 - 2.0 * (qy * qy + qz * qz), 2.0 * (qx * qy - qz * qw), 2.0 * (qx * qz + qy * qw)
+    r10, r11, r12 = 2.0 * (qx * qy + qz * qw), 1.0 - 2.0 * (qx * qx + qz * qz), 2.0 * (qy * qz - qx * qw)
+    r20, r21, r22 = 2.0 * (qx * qz - qy * qw), 2.0 * (qy * qz + qx * qw), 1.0 - 2.0 * (qx * qx + qy * qy)
+    n = rows.shape[0]
+    points = np.empty((n, 3))
+    forces = np.empty((n, 3))
+    for k in range(n):
+        px, py, pz = rows[k, 0] - core_pose[0], rows[k, 1] - core_pose[1], rows[k, 2] - core_pose[2]
+        points[k, 0] = r00 * px + r10 * py + r20 * pz
+        points[k, 1] = r01 * px + r11 * py + r21 * pz
+        points[k, 2] = r02 * px + r12 * py + r22 * pz
+        f = np.empty(3)
+        for a in range(3):
+            friction = rows[k, 13] * rows[k, 6 + a] + rows[k, 14] * rows[k, 9 + a]
+            f[a] = rows[k, 12] * rows[k, 3 + a] + rows[k, 15] * friction
+        forces[k, 0] = r00 * f[0] + r10 * f[1] + r20 * f[2]
+        forces[k, 1] = r01 * f[0] + r11 * f[1] + r21 * f[2]
+        forces[k, 2] = r02 * f[0] + r12 * f[1] + r22 * f[2]
+    bin_loads(finger, points, forces, sign, grid, out)
+
+
+@nb.njit(cache=True, inline="always")
+def _core_rotation(rig_q, r):
+    qx, qy, qz, qw = rig_q[r, 0], rig_q[r, 1], rig_q[r, 2], rig_q[r, 3]
+    return (1.0 - 2.0 * (qy * qy + qz * qz), 2.0 * (qx * qy - qz * qw), 2.0 * (qx * qz + qy * qw),
+            2.0 * (qx * qy + qz * qw), 1.0 - 2.0 * (qx * qx + qz * qz), 2.0 * (qy * qz - qx * qw),
+            2.0 * (qx * qz - qy * qw), 2.0 * (qy * qz + qx * qw), 1.0 - 2.0 * (qx * qx + qy * qy))  # fmt: skip
+
+
+@nb.njit(cache=True)
+def tissue_loads(nc, c_particle, c_inner, c_lambda, c_normal, c_friction, c_patch, patch_slide, patch_change, p_body,
+                 rest_x, footprint, rig_q, core_rigid, dt, grid, out):  # fmt: skip
+    """The tissue's contacts of its last step on each body's (finger's) taxels: the force the
+    shape put on the particle, (lambda n + f) / dt^2 (Mueller et al. 2020 eq. 6: the multipliers
+    are positional impulses), f the friction's positional impulse (friction.friction_patches). A
+    sliding patch takes as much friction again in its velocity pass (kinetic friction is half on
+    positions, half on velocities), so its contacts' friction counts twice. A contact's load is
+    spread over the taxels under its particle's footprint at rest (``rest_x`` and ``footprint``,
+    the half extents of the face cell the particle stands for: a taxel is fixed to the core),
+    turned into the core's frame by its orientation ``rig_q[core_rigid[body]]``. A particle's
+    contact with its own core (inner) is internal, not a load on the pad."""
+    cols = int(grid[1])
+    area = grid[4]
+    inv = 1.0 / (dt * dt)
+    index = np.empty(int(grid[0]) * cols, dtype=np.int64)
+    weight = np.empty(int(grid[0]) * cols)
+    for c in range(nc):
+        lam = c_lambda[c]
+        if c_inner[c] or lam <= 0.0:
+            continue
+        i = c_particle[c]
+        b = p_body[i]
+        if b > 1:
+            continue
+        n = _spread(rest_x[i, 1], rest_x[i, 2], footprint[i, 0], footprint[i, 1], grid, index, weight)
+        if n == 0:
+            continue
+        k = 1.0
+        pt = c_patch[c]
+        if pt >= 0 and patch_slide[pt] and not patch_change[pt]:
+            k = 2.0
+        fx = (lam * c_normal[c, 0] + k * c_friction[c, 0]) * inv
+        fy = (lam * c_normal[c, 1] + k * c_friction[c, 1]) * inv
+        fz = (lam * c_normal[c, 2] + k * c_friction[c, 2]) * inv
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = _core_rotation(rig_q, core_rigid[b])
+        lx = r00 * fx + r10 * fy + r20 * fz  # R^T f: into the core's frame
+        ly = r01 * fx + r11 * fy + r21 * fz
+        lz = r02 * fx + r12 * fy + r22 * fz
+        sign = 1.0 if b == 0 else -1.0
+        for e in range(n):
+            row, col = index[e] // cols, index[e] % cols
+            w = weight[e] / area
+            out[b, row, col, 0] -= sign * lx * w
+            out[b, row, col, 1] += ly * w
+            out[b, row, col, 2] += lz * w
+
+
+@nb.njit(cache=True)
+def tissue_shear(x, rest_x, footprint, attached, offsets, rig_x, rig_q, core_rigid, grid, out):
+    """Each taxel's shear displacement along y and z [m]: over the free particles of the pad's
+    inner face (rest x beyond the core's centre plane, toward the other finger) whose footprints
+    cover it, the footprint-weighted mean of their displacement from the spot their core carries
+    them to, in the core's frame."""
+    cols = int(grid[1])
+    counts = np.zeros((2, out.shape[1], out.shape[2]))
+    index = np.empty(int(grid[0]) * cols, dtype=np.int64)
+    weight = np.empty(int(grid[0]) * cols)
+    for b in range(min(offsets.shape[0] - 1, 2)):
+        sign = 1.0 if b == 0 else -1.0
+        r = core_rigid[b]
+        _, r01, r02, _, r11, r12, _, r21, r22 = _core_rotation(rig_q, r)  # y and z rows of R^T
+        for i in range(offsets[b], offsets[b + 1]):
+            if attached[i] or sign * rest_x[i, 0] <= 0.0:
+                continue
+            n = _spread(rest_x[i, 1], rest_x[i, 2], footprint[i, 0], footprint[i, 1], grid, index, weight)
+            if n == 0:
+                continue
+            dx = x[i, 0] - rig_x[r, 0]
+            dy = x[i, 1] - rig_x[r, 1]
+            dz = x[i, 2] - rig_x[r, 2]
+            ly = r01 * dx + r11 * dy + r21 * dz - rest_x[i, 1]
+            lz = r02 * dx + r12 * dy + r22 * dz - rest_x[i, 2]
+            for e in range(n):
+                row, col = index[e] // cols, index[e] % cols
+                out[b, row, col, 3] += weight[e] * ly
+                out[b, row, col, 4] += weight[e] * lz
+                counts[b, row, col] += weight[e]
+    for b in range(2):
+        for row in range(out.shape[1]):
+            for col in range(out.shape[2]):
+                if counts[b, row, col] > 0.0:
+                    out[b, row, col, 3] /= counts[b, row, col]
+                    out[b, row, col, 4] /= counts[b, row, col]
+
+
+def face_footprints(rest_x: np.ndarray, attached: np.ndarray, offsets: np.ndarray, half_width: float,
+                    half_height: float) -> np.ndarray:  # fmt: skip
+    """(N, 2) half extents along y and z of the face cell each particle stands for: the builder
+    spreads a face's points over a cell-centred grid (tissue.builder.sample_surface), n_y x n_z
+    cells over the inner face, so each inner-face particle (and its attached partner) stands for a
+    cell of half extents (half_width / n_y, half_height / n_z); 0 for the rest (the tip's, the
+    back's). n_y, n_z are counted from each body's free inner-face particles."""
+    out = np.zeros((rest_x.shape[0], 2))
+    for b in range(min(len(offsets) - 1, 2)):
+        sign = INNER_NORMAL[b]
+        idx = np.arange(offsets[b], offsets[b + 1])
+        face = idx[(sign * rest_x[idx, 0] > 0.0) & (np.abs(rest_x[idx, 2]) < half_height)
+                   & (np.abs(rest_x[idx, 1]) < half_width)]  # fmt: skip
+        free = face[~attached[face]]
+        if free.size == 0:
+            continue
+        ny = np.unique(np.round(rest_x[free, 1], 9)).size
+        nz = np.unique(np.round(rest_x[free, 2], 9)).size
+        out[face] = (half_width / ny, half_height / nz)
+    return out
+
+
+__all__ = ["INNER_NORMAL", "MAX_TAXELS", "TAXEL_CHANNELS", "TaxelGrid", "bin_contacts", "bin_loads", "face_footprints", "tissue_loads",
+           "tissue_shear"]  # fmt: skip
