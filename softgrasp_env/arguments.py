@@ -18,7 +18,8 @@ from typing import Any
 from . import presets
 from .config import SimConfig, TissueConfig
 from .fingers import FINGERS, FemConfig, FingerConfig, TissueFingerConfig, finger_config
-from .observation import CARRY_OBS_NAMES, OBS_NAMES
+from .fingers.tactile import MAX_TAXELS, TaxelGrid
+from .observation import CARRY_OBS_NAMES, OBS_NAMES, tactile_names
 from .scene import GRIP_TOP, GripperActions, SceneConfig, Workspace, fit_error, geometry_error
 from .tasks import TASKS, CarryTest, StartRanges, Task
 from .tasks.carry import (
@@ -123,6 +124,10 @@ class EnvArguments:
     friction_range: float = _arg(0.0, "Every friction coefficient × U(1 ± range)", type_="float")
     cylinder_radius_range: float = _arg(0.0, "Cylinder radius ± U(range) [m]", type_="float")
     cylinder_mass_range: float = _arg(0.0, "Cylinder mass × U(1 ± range)", type_="float")
+    tactile: tuple[int, int] | None = _arg(None, "(rows, cols): the observation ends with each pad's taxels on a "
+        "rows x cols grid over the core's inner face, five per taxel: pressure and traction along y, z [Pa] and the "
+        "tissue's shear along y, z [m] (0 for rigid pads); `softgrasp_env.observation.tactile_view` reshapes them. "
+        "None: no tactile entries", type_="(int, int)")
     render_width: int = _arg(480, "Width of an rgb_array frame [px]", type_="int")
     render_height: int = _arg(360, "Height of an rgb_array frame [px]", type_="int")
     render_camera: str = _arg("follow", "'follow' (frame the gripper and the cylinder wherever they are) or "
@@ -145,6 +150,8 @@ class EnvArguments:
     workspace: Workspace = field(init=False, repr=False, compare=False)
     obs_names: tuple[str, ...] = field(init=False, repr=False, compare=False)
     """The observation's entries, in order."""
+    taxel_grid: TaxelGrid | None = field(init=False, repr=False, compare=False)
+    """The pads' taxel grid of ``tactile`` (None without)."""
 
     def __post_init__(self) -> None:
         check_choice("task", self.task, tuple(TASKS))
@@ -336,7 +343,19 @@ class EnvArguments:
             yaw=float(self.yaw_range), jaw_wedge=float(self.jaw_wedge_range), friction=float(self.friction_range),
             cylinder_radius=float(self.cylinder_radius_range), cylinder_mass=float(self.cylinder_mass_range)))  # fmt: skip
         self._set("workspace", Workspace.of(base))
-        self._set("obs_names", CARRY_OBS_NAMES if self.carry else OBS_NAMES)
+        names = CARRY_OBS_NAMES if self.carry else OBS_NAMES
+        grid = None
+        if self.tactile is not None:
+            try:
+                rows, cols = self.tactile
+            except (TypeError, ValueError):
+                raise ValueError(f"tactile must be (rows, cols) or None, got {self.tactile!r}") from None
+            grid = TaxelGrid(check_int("tactile[0] (rows)", rows, 1, MAX_TAXELS),
+                             check_int("tactile[1] (cols)", cols, 1, MAX_TAXELS), float(fh[1]), float(fh[2]))  # fmt: skip
+            object.__setattr__(self, "tactile", (grid.rows, grid.cols))
+            names = names + tactile_names(grid.rows, grid.cols)
+        self._set("taxel_grid", grid)
+        self._set("obs_names", names)
 
     def _check_range_corners(self) -> None:
         """Every corner of the randomisation ranges must be a scene that starts without overlap:

@@ -40,9 +40,9 @@ cylinder (the arm's target is kept in the workspace, the palm and a thrown cylin
 
 def observation_box(names: tuple[str, ...]) -> spaces.Box:
     """The Box of an observation of ``names``: the bounds of :data:`OBS_BOUNDS`, else infinite."""
-    group_of = {n: g for g, members in OBS_GROUPS.items() for n in members}
-    low = np.array([OBS_BOUNDS.get(group_of[n], (-np.inf, np.inf))[0] for n in names])
-    high = np.array([OBS_BOUNDS.get(group_of[n], (-np.inf, np.inf))[1] for n in names])
+    group_of = {n: g for g, members in OBS_GROUPS.items() for n in members}  # the taxels are in none
+    low = np.array([OBS_BOUNDS.get(group_of.get(n), (-np.inf, np.inf))[0] for n in names])
+    high = np.array([OBS_BOUNDS.get(group_of.get(n), (-np.inf, np.inf))[1] for n in names])
     return spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
 
 
@@ -350,7 +350,7 @@ class SoftGraspEnv(gym.Env):
         return False
 
     def _read(self) -> Reading:
-        return read(self.scene, self._forces)
+        return read(self.scene, self._forces, self.args.taxel_grid)
 
     def _info(self, reading: Reading, outcome: Outcome | None, *, clipped: bool) -> dict[str, Any]:
         """``outcome`` None: the step diverged (nothing held, no reward, the last finite reading)."""
@@ -429,7 +429,7 @@ class SoftGraspGoalEnv(SoftGraspEnv):
         self._init_kwargs = {"render_mode": render_mode, **self._goal_kwargs, **kwargs}
         box = spaces.Box(-np.inf, np.inf, shape=(3,), dtype=np.float32)
         self.observation_space = spaces.Dict({
-            "observation": observation_box(OBS_NAMES),
+            "observation": observation_box(self.obs_names),
             "achieved_goal": box,
             "desired_goal": box,
         })  # fmt: skip

@@ -13,6 +13,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .fingers.tactile import TAXEL_CHANNELS, TaxelGrid
+
 if TYPE_CHECKING:
     from .scene import GraspScene
 
@@ -37,6 +39,31 @@ CARRY_OBS_NAMES: tuple[str, ...] = OBS_NAMES + ("time",)
 """With the carry test (``carry=True``, the v2 ids) the observation ends with the time since
 reset [s]: the carry comes at a fixed time, and a policy that cannot see the clock would face a
 task that is not Markov."""
+
+
+TACTILE_PREFIX = "tactile_"
+"""Every tactile entry's name starts with it (``tactile=(rows, cols)``: :func:`tactile_names`)."""
+
+
+def tactile_names(rows: int, cols: int) -> tuple[str, ...]:
+    """The names of a tactile observation's entries, ``tactile_<left|right>_r<row>_c<col>_<channel>``,
+    in the order of the reading's (2, rows, cols, channels) array flattened (C order):
+    fingers/tactile.py says what each channel is."""
+    return tuple(f"{TACTILE_PREFIX}{side}_r{r}_c{c}_{ch}" for side in ("left", "right") for r in range(rows)
+                 for c in range(cols) for ch in TAXEL_CHANNELS)  # fmt: skip
+
+
+def tactile_view(obs: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """The tactile part of an observation ``obs`` of ``names`` (``env.obs_names``; the last axis
+    of a batch of observations) as its (..., 2, rows, cols, channels) grid."""
+    start = next((k for k, n in enumerate(names) if n.startswith(TACTILE_PREFIX)), None)
+    if start is None:
+        raise ValueError("the observation has no tactile entries (make the env with tactile=(rows, cols))")
+    last = names[-1].split("_")  # tactile_right_r<R-1>_c<C-1>_<channel...>
+    rows, cols = int(last[2][1:]) + 1, int(last[3][1:]) + 1
+    obs = np.asarray(obs)
+    return obs[..., start : start + 2 * rows * cols * len(TAXEL_CHANNELS)].reshape(
+        (*obs.shape[:-1], 2, rows, cols, len(TAXEL_CHANNELS)))  # fmt: skip
 
 
 def obs_slice(names: tuple[str, ...], group: str) -> slice:
@@ -75,6 +102,9 @@ class Reading:
     """Time since reset [s]."""
     cylinder_x: np.ndarray
     """(3,) the cylinder centre [m] (not observed as such: the workspace check reads it)."""
+    tactile: np.ndarray | None = None
+    """(2, rows, cols, channels) the pads' taxels (fingers/tactile.py), when the env reads them
+    (``tactile=(rows, cols)``)."""
 
     @property
     def tilt(self) -> float:
@@ -84,11 +114,15 @@ class Reading:
     def vector(self, names: tuple[str, ...]) -> np.ndarray:
         """The observation of ``names`` (whole groups of OBS_GROUPS, in their order), float64."""
         groups = [g for g, members in OBS_GROUPS.items() if members[0] in names]
-        return np.concatenate([np.atleast_1d(np.asarray(getattr(self, g), dtype=np.float64)) for g in groups])
+        parts = [np.atleast_1d(np.asarray(getattr(self, g), dtype=np.float64)) for g in groups]
+        if names and names[-1].startswith(TACTILE_PREFIX):  # the taxels come last
+            parts.append(self.tactile.ravel())
+        return np.concatenate(parts)
 
 
-def read(scene: GraspScene, force: np.ndarray) -> Reading:
-    """A :class:`Reading` of ``scene`` now; ``force`` is the env step's mean finger force."""
+def read(scene: GraspScene, force: np.ndarray, grid: TaxelGrid | None = None) -> Reading:
+    """A :class:`Reading` of ``scene`` now; ``force`` is the env step's mean finger force; with a
+    ``grid``, the pads' taxels on it too."""
     grip = scene.grip_point()
     palm_x, palm_q, palm_v, _ = scene.palm_state()
     cyl_x, cyl_q, cyl_v, cyl_w = scene.cylinder_state()
@@ -100,7 +134,9 @@ def read(scene: GraspScene, force: np.ndarray) -> Reading:
     return Reading(grip=grip, grip_v=palm_v.copy(), finger_gap=gap, cyl_rel=cyl_x - grip, cyl_axis=axis,
                    cyl_v=cyl_v.copy(), cyl_w=cyl_w.copy(), force=np.array(force, dtype=np.float64),
                    lift=float(cyl_x[2] - scene.cylinder_rest_z), gripper_yaw=yaw,
-                   time=scene.steps * scene.config.sim.dt, cylinder_x=cyl_x.copy())  # fmt: skip
+                   time=scene.steps * scene.config.sim.dt, cylinder_x=cyl_x.copy(),
+                   tactile=None if grid is None else scene.fingers.tactile(grid))  # fmt: skip
 
 
-__all__ = ["CARRY_OBS_NAMES", "OBS_GROUPS", "OBS_NAMES", "Reading", "obs_slice", "read"]
+__all__ = ["CARRY_OBS_NAMES", "OBS_GROUPS", "OBS_NAMES", "TACTILE_PREFIX", "Reading", "obs_slice", "read",
+           "tactile_names", "tactile_view"]  # fmt: skip

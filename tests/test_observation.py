@@ -33,3 +33,42 @@ def test_every_entry_is_the_reading_of_its_name(env_id, make_env, scripted):
         want = np.atleast_1d(np.asarray(getattr(reading, group), dtype=np.float64)).astype(np.float32)
         np.testing.assert_array_equal(vec[obs_slice(names, group)], want, err_msg=group)
     np.testing.assert_allclose(reading.cyl_rel + reading.grip, reading.cylinder_x, rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("fingers", ["tissue", "rigid"])
+def test_tactile_entries_are_the_pads_taxels(fingers, make_env):
+    """``tactile=(rows, cols)`` appends the pads' taxels (fingers/tactile.py) after every other
+    entry, named by finger, row, column and channel; ``tactile_view`` gives them back as the grid;
+    the env passes gymnasium's checker; seeded episodes reproduce them exactly."""
+    from gymnasium.utils.env_checker import check_env
+
+    from softgrasp_env.fingers.tactile import TAXEL_CHANNELS
+    from softgrasp_env.observation import tactile_names, tactile_view
+    from softgrasp_env.policies import ScriptedGraspPolicy
+
+    def run(env):
+        policy = ScriptedGraspPolicy.for_env(env)
+        obs, _ = env.reset(seed=3)
+        for _ in range(50):
+            obs, *_ = env.step(policy(obs))
+        return obs
+
+    env = make_env("SoftGrasp-v3", fingers=fingers, tactile=(4, 3))
+    u = env.unwrapped
+    base = make_env("SoftGrasp-v3", fingers=fingers)
+    assert u.obs_names == base.unwrapped.obs_names + tactile_names(4, 3)
+    assert u.obs_names[-1] == f"tactile_right_r3_c2_{TAXEL_CHANNELS[-1]}" and env.observation_space.shape == (144,)
+    obs = run(env)
+    grid = tactile_view(obs, u.obs_names)
+    assert grid.shape == (2, 4, 3, len(TAXEL_CHANNELS))
+    np.testing.assert_array_equal(grid, u._last.tactile.astype(np.float32))
+    np.testing.assert_array_equal(obs[: len(base.unwrapped.obs_names)], run(base))  # the rest as without taxels
+    assert (grid[..., 0].sum(axis=(1, 2)) * u.args.taxel_grid.area > 1.0).all()  # the grasp presses both pads
+    np.testing.assert_array_equal(run(env), obs)  # seeded: the same again
+    check_env(u, skip_render_check=True)
+
+
+@pytest.mark.parametrize("bad", [(0, 3), (4, 33), (4,), 5, (2.0, 3), "4x3"])
+def test_tactile_refuses_a_bad_grid(bad, make_env):
+    with pytest.raises(ValueError, match="tactile"):
+        make_env("SoftGrasp-v3", tactile=bad)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..fingers.tactile import TAXEL_CHANNELS
 from ..observation import CARRY_OBS_NAMES, OBS_NAMES
 from ..validation import check_choice
 
@@ -21,6 +22,15 @@ _I = {name: k for k, name in enumerate(OBS_NAMES)}
 _SIZES = (len(OBS_NAMES), len(CARRY_OBS_NAMES))
 """Without and with the carry test's clock (the v1 and v2 ids); the policy does not read the clock:
 it holds on from the grasp to the episode's end either way."""
+_PER_TAXEL = 2 * len(TAXEL_CHANNELS)
+"""An env made with ``tactile=(rows, cols)`` appends 2 x rows x cols x channels entries, which this
+policy does not read."""
+
+
+def _valid(n: int) -> bool:
+    """Whether ``n`` is an observation length of a SoftGrasp env: with or without the clock, with or
+    without taxels."""
+    return any(n == base or (n > base and (n - base) % _PER_TAXEL == 0) for base in _SIZES)
 
 
 class ScriptedGraspPolicy:
@@ -71,16 +81,18 @@ class ScriptedGraspPolicy:
         obs = np.asarray(obs, dtype=np.float64)
         if obs.ndim == 1:
             return self(obs), state
-        if obs.ndim != 2 or obs.shape[1] not in _SIZES:
-            raise ValueError(f"observation must have shape (n,) or (n_envs, n) with n in {_SIZES}, got {obs.shape}")
+        if obs.ndim != 2 or not _valid(obs.shape[1]):
+            raise ValueError(f"observation must have shape (n,) or (n_envs, n) with n in {_SIZES} (plus taxels), "
+                             f"got {obs.shape}")  # fmt: skip
         return np.stack([self(o) for o in obs]), state
 
     def __call__(self, obs) -> np.ndarray:
         if isinstance(obs, dict):
             obs = obs["observation"]
         obs = np.asarray(obs, dtype=np.float64)
-        if obs.ndim != 1 or obs.shape[0] not in _SIZES:
-            raise ValueError(f"observation must have shape (n,) with n in {_SIZES}, got {obs.shape} (batches: use predict)")
+        if obs.ndim != 1 or not _valid(obs.shape[0]):
+            raise ValueError(f"observation must have shape (n,) with n in {_SIZES} (plus taxels), got {obs.shape} "
+                             "(batches: use predict)")  # fmt: skip
         rel = obs[_I["cyl_rel_x"] : _I["cyl_rel_z"] + 1]
         forces = obs[[_I["force_left"], _I["force_right"]]]
         lift = obs[_I["lift"]]
