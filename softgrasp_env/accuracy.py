@@ -234,6 +234,69 @@ def run_grasp(
     )
 
 
+@dataclass
+class ShearRecord:
+    """What :func:`shear_under_load` measured, one row per sample (lengths in m, forces in N)."""
+
+    load: np.ndarray
+    """(S,) the tangential load the two pads carry: the cylinder's weight plus the pull [N]."""
+    traction: np.ndarray
+    """(S,) the same read off the taxels: minus the pads' vertical traction, summed over both [N]."""
+    shear: np.ndarray
+    """(S,) the pads' mean downward shear over their loaded taxels (pressure-weighted), mean of the
+    two pads [m]."""
+    slide: np.ndarray
+    """(S,) how far the cylinder has slid down in the grip since the pull began [m]."""
+    slip_load: float
+    """The load at which it first slid more than ``slip`` (inf if it never did) [N]."""
+
+
+def shear_under_load(scene: GraspScene, *, rate: float = 2.0, slip: float = 1e-3, max_load: float = 12.0,
+                     every: int = 4, rows: int = 4, cols: int = 3) -> ShearRecord:  # fmt: skip
+    """The scripted grasp (a short hold), then the cylinder made heavier at ``rate`` [N/s of
+    weight] until it slips ``slip`` on the pads (or its weight reaches ``max_load``): how the pads
+    shear under a tangential load up to slip (issue 21, item 4), read through the taxels
+    (fingers/tactile.py) every ``every`` physics steps. Slip is the cylinder's slide in the grip
+    less the pads' own shear (an elastic pad carries the cylinder down with its surface)."""
+    plan = GraspPlan(hold=0.5)
+    run_grasp(scene, plan)
+    kind = scene.fingers
+    grid = kind.taxel_grid(rows, cols)
+    g = scene.config.sim.gravity
+    m0 = scene.config.cylinder_mass
+    control = scene.control
+    rel0 = _relative_pose(scene)[0]
+    dt = scene.config.sim.dt
+    out: dict[str, list[float]] = {"load": [], "traction": [], "shear": [], "slide": []}
+    slip_load = math.inf
+    shear0 = None
+    k = 0
+    while True:
+        load = m0 * g + rate * k * dt
+        if load > max_load:
+            break
+        scene.set_cylinder_mass(load / g)
+        scene.step(control)
+        k += 1
+        if k % every:
+            continue
+        slide = float(rel0[2] - _relative_pose(scene)[0][2])
+        tac = kind.tactile(grid)
+        pressure = tac[..., 0]
+        shear = [float(-(pressure[f] * tac[f, ..., 4]).sum() / pressure[f].sum()) if pressure[f].sum() > 0 else 0.0
+                 for f in range(2)]  # fmt: skip
+        out["load"].append(load)
+        out["traction"].append(float(-tac[..., 2].sum() * grid.area))
+        out["shear"].append(0.5 * (shear[0] + shear[1]))
+        out["slide"].append(slide)
+        if shear0 is None:
+            shear0 = out["shear"][0]
+        if slide - (out["shear"][-1] - shear0) > slip:
+            slip_load = load
+            break
+    return ShearRecord(**{key: np.array(v) for key, v in out.items()}, slip_load=slip_load)
+
+
 def pose_error(trace: np.ndarray, reference: np.ndarray) -> tuple[float, float]:
     """RMS difference of two runs' cylinder poses over time: (position [m], orientation [rad]),
     ``reference`` interpolated (positions linearly, orientations by nearest sample) at ``trace``'s

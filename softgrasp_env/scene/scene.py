@@ -177,6 +177,18 @@ class GraspScene:
         col = self.world.colliders
         return col.rigid_x[CYLINDER], col.rigid_q[CYLINDER], col.rigid_v[CYLINDER], col.rigid_w[CYLINDER]
 
+    def set_cylinder_mass(self, mass: float) -> None:
+        """Make the cylinder ``mass`` [kg] from the next step on, its inertia scaled with it (a
+        load that grows while it is held: accuracy.shear_under_load). pybullet and the tissue's
+        view of it change together, so the tissue predicts the cylinder it will meet."""
+        if not (math.isfinite(mass) and mass > 0.0):
+            raise ValueError(f"cylinder mass must be a finite mass > 0 kg, got {mass!r}")
+        info = self.client.getDynamicsInfo(self.cylinder, -1)
+        scale = mass / info[0]
+        inertia = [float(v) * scale for v in info[2]]
+        self.client.changeDynamics(self.cylinder, -1, mass=float(mass), localInertiaDiagonal=inertia)
+        self.world.set_mass_properties(CYLINDER)
+
     def palm_position(self) -> np.ndarray:
         return np.asarray(self.client.getBasePositionAndOrientation(self.gripper.body)[0])
 

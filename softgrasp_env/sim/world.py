@@ -229,6 +229,12 @@ class World:
             return self._colliders.rigid_x[slot]
         return self._reader.position(slot)
 
+    def set_mass_properties(self, slot: int) -> None:
+        """Read slot ``slot``'s mass and inertia from pybullet again, after a changeDynamics."""
+        inv_m, inv_i = read_mass_properties(self.client, [self.rigid[slot]])
+        self._colliders.rigid_inv_mass[slot] = inv_m[0]
+        self._colliders.rigid_inv_inertia[slot] = inv_i[0]
+
     def _sync(self) -> None:
         m, s, c = self.model, self.state, self._colliders
         sync_attached(m.particle_rest_x, m.particle_rest_q, m.particle_attached, m.particle_body, m.body_core_shape,
