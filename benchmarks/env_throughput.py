@@ -7,7 +7,7 @@ steps at the defaults.
 An id may carry ``gym.make`` keyword arguments after ``@`` (values read as Python literals, else
 as strings), so a setting is timed beside the default in the same run, e.g.
 ``--ids SoftGrasp-v3,SoftGrasp-v3@tissue_material=per_step`` (issue 19's cost of the compliant
-material).
+material), ``--ids SoftGrasp-v3,"SoftGrasp-v3@tactile=(4,3)"`` (the taxels' cost).
 
 Prints a table; the machine is shared, so each figure is the best of three runs. Episode resets
 are inside the timed loop, as in training.
@@ -23,6 +23,20 @@ import gymnasium as gym
 
 import softgrasp_env
 from agents.scripted import ScriptedGraspPolicy
+
+
+def split_specs(text: str) -> list[str]:
+    """The comma-separated specs of ``--ids``; a comma inside brackets belongs to a value
+    (``SoftGrasp-v3@tactile=(4,3)``)."""
+    specs, depth, start = [], 0, 0
+    for k, ch in enumerate(text):
+        depth += ch in "([{"
+        depth -= ch in ")]}"
+        if ch == "," and depth == 0:
+            specs.append(text[start:k])
+            start = k + 1
+    specs.append(text[start:])
+    return [s for s in specs if s]
 
 
 def parse_spec(spec: str) -> tuple[str, dict]:
@@ -64,7 +78,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--steps", type=int, default=300, help="timed env steps per run")
     parser.add_argument("--ids", default="", help="comma-separated ids (default: every registered one)")
     args = parser.parse_args(argv)
-    specs = args.ids.split(",") if args.ids else softgrasp_env.ENV_IDS
+    specs = split_specs(args.ids) if args.ids else softgrasp_env.ENV_IDS
     try:
         runs = [(spec, *parse_spec(spec)) for spec in specs]
     except ValueError as err:

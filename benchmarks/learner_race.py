@@ -7,7 +7,7 @@ budget, seeds side by side, success of the deterministic policy sampled at fixed
 
 Every run is set up as train.py sets up its runs (one env, SB3's Monitor, observations normalised
 by VecNormalize, the SAC preset of agents/baselines.py where the learner takes it: learners.py's
-``preset``) and runs in its own process pinned to one core (``taskset``), so that no learner gets
+``preset``) and runs in its own process pinned to one core (``os.sched_setaffinity``), so that no learner gets
 more of the machine than another (JAX's CPU pools ignore a one-thread request; the pin holds them),
 two at a time on this 2-core machine. The clock is the process's CPU time (all its threads): on its
 own core that is its wall-clock time, and a third process sharing the core for a while (a test run
@@ -120,9 +120,8 @@ def _versions() -> dict[str, str]:
 
 
 def _launch(name: str, seed: int, core: int, ns: argparse.Namespace, out: Path) -> subprocess.Popen:
-    cmd = ["taskset", "-c", str(core), sys.executable, __file__, "--worker", name, "--env", ns.env,
-           "--seeds", str(seed), "--minutes", str(ns.minutes), "--every", str(ns.every), "--episodes",
-           str(ns.episodes), "--out", str(out)]  # fmt: skip
+    cmd = [sys.executable, __file__, "--worker", name, "--core", str(core), "--env", ns.env, "--seeds", str(seed),
+           "--minutes", str(ns.minutes), "--every", str(ns.every), "--episodes", str(ns.episodes), "--out", str(out)]  # fmt: skip
     env = {**os.environ, **ONE_THREAD, "PYTHONPATH": str(ROOT)}
     log = open(out.with_suffix(".log"), "w")  # noqa: SIM115 (closed with the process)
     return subprocess.Popen(cmd, cwd=ROOT, stdout=log, stderr=subprocess.STDOUT, env=env)
@@ -200,11 +199,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=ROOT / "runs" / "race")
     parser.add_argument("--report", action="store_true", help="only print the table of the runs in --out")
     parser.add_argument("--worker", default=None, help=argparse.SUPPRESS)
+    parser.add_argument("--core", type=int, default=0, help=argparse.SUPPRESS)
     ns = parser.parse_args(argv)
     if ns.minutes <= 0 or ns.every <= 0 or ns.episodes < 1 or ns.parallel < 1:
         parser.error("--minutes and --every must be > 0, --episodes and --parallel >= 1")
     seeds = [int(s) for s in ns.seeds.split(",")]
     if ns.worker:
+        # pinned before torch or JAX starts a thread: every thread it makes inherits the one core
+        os.sched_setaffinity(0, {ns.core})
         worker(ns.worker, ns.env, seeds[0], ns.minutes, ns.every, ns.episodes, ns.out)
         return 0
     names = ns.learners.split(",")

@@ -155,6 +155,40 @@ def test_env_throughput_prints_every_id_asked_for():
     assert all(float(x) > 0 for r in rows for x in r[1:]), out
 
 
+def test_env_throughput_reads_a_comma_inside_a_value():
+    from benchmarks.env_throughput import parse_spec, split_specs
+
+    specs = split_specs("SoftGrasp-v3,SoftGrasp-v3@tactile=(4,3),SoftGraspRigid-v3@carry_frequency=[1.5, 2.0]")
+    assert [parse_spec(s) for s in specs] == [("SoftGrasp-v3", {}), ("SoftGrasp-v3", {"tactile": (4, 3)}),
+                                              ("SoftGraspRigid-v3", {"carry_frequency": [1.5, 2.0]})]  # fmt: skip
+
+
+def test_learner_race_writes_each_runs_curve_and_the_table(tmp_path):
+    """Two learners for a few seconds of one core each, side by side: every run's evaluations on
+    the training clock, the steps it reached, and the table over them."""
+    out = run("learner_race.py", "--env", "SoftGraspRigid-v3", "--learners", "sac", "--seeds", "0,1", "--minutes",
+              "0.1", "--every", "3", "--episodes", "1", out=tmp_path)  # fmt: skip
+    import json
+
+    for seed in (0, 1):
+        result = json.loads((tmp_path / f"sac_{seed}.json").read_text())
+        curve = result["curve"]
+        assert result["threads"]["torch"] == 1 and len(curve) >= 2, result
+        assert [r["train_seconds"] for r in curve] == sorted(r["train_seconds"] for r in curve)
+        assert curve[-1]["train_seconds"] >= 6.0 and curve[-1]["timesteps"] > curve[0]["timesteps"] > 0
+    assert "sac 0" in out and "sac 1" in out and "mean over seeds" in out, out
+
+
+def test_incipient_slip_compares_the_pads_with_coulomb(tmp_path):
+    out = _run_plain("incipient_slip.py", "--fingers", "tissue,rigid", "--plot", str(tmp_path / "slip.png"))
+    rows = {line.split()[0]: line.split() for line in out.splitlines() if line.startswith(("tissue ", "rigid "))}
+    assert set(rows) == {"tissue", "rigid"}, out
+    for kind, row in rows.items():
+        assert abs(float(row[2].rstrip("%"))) < (4.0 if kind == "tissue" else 7.0), out  # slip load vs Coulomb
+    assert 0.9 < float(rows["tissue"][-1]) < 1.1, out  # the shear stays linear up to slip
+    assert (tmp_path / "slip.png").stat().st_size > 10_000
+
+
 def test_env_throughput_names_a_malformed_keyword_argument():
     from benchmarks.env_throughput import parse_spec
 
