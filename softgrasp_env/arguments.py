@@ -21,6 +21,7 @@ from .fingers import FINGERS, FemConfig, FingerConfig, TissueFingerConfig, finge
 from .fingers.tactile import MAX_TAXELS, TaxelGrid
 from .observation import CARRY_OBS_NAMES, OBS_NAMES, tactile_names
 from .scene import GRIP_TOP, GripperActions, SceneConfig, Workspace, fit_error, geometry_error
+from .scene.gripper import FINGER_ACTIONS
 from .tasks import TASKS, CarryTest, StartRanges, Task
 from .tasks.carry import (
     CARRY_ACCELERATION_RANGE,
@@ -124,6 +125,10 @@ class EnvArguments:
     friction_range: float = _arg(0.0, "Every friction coefficient × U(1 ± range)", type_="float")
     cylinder_radius_range: float = _arg(0.0, "Cylinder radius ± U(range) [m]", type_="float")
     cylinder_mass_range: float = _arg(0.0, "Cylinder mass × U(1 ± range)", type_="float")
+    finger_action: str = _arg("position", "What the action's last entry commands: 'position', the fingers' "
+        "closing travel (-1 fully open, +1 the faces meeting) with the motors squeezing at most finger_force; 'force', "
+        "the squeeze itself, 0 N at -1 to finger_force at +1, the fingers closing until they meet resistance (they "
+        "never open: for a start with the cylinder between them)", type_="str")
     tactile: tuple[int, int] | None = _arg(None, "(rows, cols): the observation ends with each pad's taxels on a "
         "rows x cols grid over the core's inner face, five per taxel: pressure and traction along y, z [Pa] and the "
         "tissue's shear along y, z [m] (0 for rigid pads); `softgrasp_env.observation.tactile_view` reshapes them. "
@@ -184,6 +189,7 @@ class EnvArguments:
         check_choice("reward_type", self.reward_type, ("dense", "sparse"))
         check_range("control_frequency", self.control_frequency, 0.5, 240.0)
         check_choice("arm", self.arm, ("smooth", "jump"))
+        check_choice("finger_action", self.finger_action, FINGER_ACTIONS)
         check_range("gripper_speed", self.gripper_speed, 0.0, 2.0, lo_open=True)
         check_range("arm_acceleration", self.arm_acceleration, 0.0, 50.0, lo_open=True)
         check_range("success_height", self.success_height, 0.0, 0.15, lo_open=True)
@@ -404,7 +410,8 @@ class EnvArguments:
 
     def make_actions(self) -> GripperActions:
         return GripperActions.of(self.arm, self.gripper_speed, self.control_frequency, self.workspace,
-                                 self.scene.finger_travel)  # fmt: skip
+                                 self.scene.finger_travel, finger=self.finger_action,
+                                 max_force=self.scene.finger_force)  # fmt: skip
 
     # --- construction from gym.make's kwargs -----------------------------------------------------
 

@@ -57,6 +57,9 @@ class GripperControl:
     """(3,) where the arm takes the palm's centre [m, world frame]; None: velocity mode."""
     finger_closing: float
     """Target travel of each finger from fully open [m] (the motors' force limit sets the squeeze)."""
+    finger_force: float | None = None
+    """The finger motors' force limit for this control [N], what they squeeze with once the fingers
+    meet resistance; None: the scene's ``finger_force``."""
     palm_velocity: np.ndarray | None = None
     """(3,) [m/s]: in position mode the target's own velocity when it moves along a smooth path (so
     the arm follows it without lag; None: a target at rest); in velocity mode the commanded
@@ -236,8 +239,8 @@ class Gripper:
             return
         elif control.palm_target is not None and control.palm_target is not last.palm_target:
             self._set_palm_target(control.palm_target)  # (setting an equal target again changes nothing)
-        if control.finger_closing != last.finger_closing:
-            self._set_finger_closing(control.finger_closing)
+        if control.finger_closing != last.finger_closing or control.finger_force != last.finger_force:
+            self._set_finger_closing(control.finger_closing, control.finger_force)
         self.control = control
 
     @property
@@ -251,11 +254,12 @@ class Gripper:
                                      jointChildFrameOrientation=self._orientation,
                                      maxForce=self.config.arm_force)  # fmt: skip
 
-    def _set_finger_closing(self, closing: float) -> None:
+    def _set_finger_closing(self, closing: float, force: float | None = None) -> None:
         cfg = self.config
+        force = cfg.finger_force if force is None else float(force)
         for j in self.core_links:
             self.client.setJointMotorControl2(self.body, j, p.POSITION_CONTROL, targetPosition=float(closing),
-                                              force=cfg.finger_force, maxVelocity=cfg.finger_speed)  # fmt: skip
+                                              force=force, maxVelocity=cfg.finger_speed)  # fmt: skip
 
     def finger_closing(self) -> np.ndarray:
         """Travel of each finger from fully open [m]."""
@@ -298,30 +302,54 @@ class PalmReadout(Protocol):
     def palm_state(self) -> tuple[np.ndarray, ...]: ...
 
 
+FINGER_ACTIONS = ("position", "force")
+"""What the action's last entry commands (GripperActions): the fingers' closing travel, the motors
+squeezing with the scene's finger_force at most; or the squeeze force itself."""
+
+
 class GripperActions:
     """The env's action, ``Box(-1, 1, (4,))``, as a gripper control: x, y, z move the grip point,
-    kept in the workspace; the last entry is the finger closing (-1 fully open, +1 the faces
-    meeting). What x, y, z mean depends on the arm (``SceneConfig.arm``), see :meth:`of`."""
+    kept in the workspace; the last entry commands the fingers. What x, y, z mean depends on the
+    arm (``SceneConfig.arm``), see :meth:`of`. The last entry: with ``finger="position"`` the
+    closing travel (-1 fully open, +1 the faces meeting), the motors limited to the scene's
+    ``finger_force``; with ``finger="force"`` the squeeze, 0 at -1 to ``max_force`` at +1, the
+    motors driving the fingers closed with that force (they close until they meet resistance and
+    never open: the grip-force task starts with the cylinder between them)."""
 
     space = spaces.Box(-1.0, 1.0, shape=(4,), dtype=np.float32)
 
-    def __init__(self, speed: float, control_frequency: float, workspace: Workspace, finger_max_opening: float) -> None:
+    def __init__(self, speed: float, control_frequency: float, workspace: Workspace, finger_max_opening: float, *,
+                 finger: str = "position", max_force: float | None = None) -> None:  # fmt: skip
         self.speed = float(speed)
         self.control_frequency = float(control_frequency)
         self.workspace = workspace
         self.finger_max_opening = float(finger_max_opening)
+        if finger not in FINGER_ACTIONS:
+            raise ValueError(f"finger must be one of {FINGER_ACTIONS}, got {finger!r}")
+        if finger == "force" and not (max_force is not None and math.isfinite(max_force) and max_force > 0.0):
+            raise ValueError(f"finger='force' needs max_force > 0 [N], got {max_force!r}")
+        self.finger = finger
+        self.max_force = None if max_force is None else float(max_force)
 
     @staticmethod
-    def of(arm: str, speed: float, control_frequency: float, workspace: Workspace,
-           finger_max_opening: float) -> GripperActions:  # fmt: skip
+    def of(arm: str, speed: float, control_frequency: float, workspace: Workspace, finger_max_opening: float, *,
+           finger: str = "position", max_force: float | None = None) -> GripperActions:  # fmt: skip
         """The actions for ``arm``: :class:`VelocityActions` for the smooth arm, :class:`TargetActions`
         for the jump arm."""
         kind = {"smooth": VelocityActions, "jump": TargetActions}[arm]
-        return kind(speed, control_frequency, workspace, finger_max_opening)
+        return kind(speed, control_frequency, workspace, finger_max_opening, finger=finger, max_force=max_force)
 
     def closing(self, action: np.ndarray) -> float:
-        """The finger closing for ``action``'s last entry [m]."""
+        """The finger closing for ``action``'s last entry [m] (fully closed when it sets the force)."""
+        if self.finger == "force":
+            return self.finger_max_opening
         return 0.5 * (float(action[3]) + 1.0) * self.finger_max_opening
+
+    def squeeze(self, action: np.ndarray) -> float | None:
+        """The motors' force limit for ``action``'s last entry [N] (None: the scene's)."""
+        if self.finger == "force":
+            return 0.5 * (float(action[3]) + 1.0) * self.max_force
+        return None
 
     def control(self, action: np.ndarray, scene: PalmReadout) -> GripperControl:
         """The control for ``action`` (clipped to [-1, 1] already) in ``scene``'s state now."""
@@ -335,7 +363,7 @@ class VelocityActions(GripperActions):
 
     def control(self, action: np.ndarray, scene: PalmReadout) -> GripperControl:
         ws, g2p = self.workspace, scene.grip_to_palm()
-        return GripperControl(None, self.closing(action), palm_velocity=action[:3] * self.speed,
+        return GripperControl(None, self.closing(action), self.squeeze(action), palm_velocity=action[:3] * self.speed,
                               palm_box=(ws.low + g2p, ws.high + g2p))  # fmt: skip
 
 
@@ -349,8 +377,8 @@ class TargetActions(GripperActions):
         step = self.speed / self.control_frequency  # as v1/v2 computed it, to the bit
         target_grip = ws.clip((scene.palm_target - g2p) + action[:3] * step)
         target = np.clip(target_grip + g2p, palm - MAX_LEAD, palm + MAX_LEAD)
-        return GripperControl(target, self.closing(action))
+        return GripperControl(target, self.closing(action), self.squeeze(action))
 
 
-__all__ = ["GRIP_TOP", "Gripper", "GripperActions", "GripperControl", "PalmPath", "TargetActions", "VelocityActions",
+__all__ = ["FINGER_ACTIONS", "GRIP_TOP", "Gripper", "GripperActions", "GripperControl", "PalmPath", "TargetActions", "VelocityActions",
            "Workspace"]

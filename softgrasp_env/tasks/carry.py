@@ -197,7 +197,7 @@ class CarryTest(TaskWrapper):
 
     def steer(self, scene: GraspScene, control: GripperControl) -> GripperControl:
         """During the carry the palm follows the sway about where the arm had it when the carry
-        began; the finger command is the policy's."""
+        began; the finger command (closing and force) is the policy's."""
         n = scene.steps + 1  # the physics step about to run
         if n < self._first or n > self._last:
             return control
@@ -210,7 +210,8 @@ class CarryTest(TaskWrapper):
                 self._anchor = np.asarray(control.palm_target, dtype=np.float64).copy()
             target = self._anchor + across * (self.amplitude * math.sin(omega * t))
             grip_to_palm = scene.grip_to_palm()
-            return GripperControl(self.workspace.clip(target - grip_to_palm) + grip_to_palm, control.finger_closing)
+            return GripperControl(self.workspace.clip(target - grip_to_palm) + grip_to_palm, control.finger_closing,
+                                  control.finger_force)  # fmt: skip
         if self._anchor is None:  # where the arm has the palm when the carry begins
             self._anchor = scene.palm_setpoint
         c, s = math.cos(self.angle), math.sin(self.angle)
@@ -221,7 +222,8 @@ class CarryTest(TaskWrapper):
         target = self._anchor + direction * (self.amplitude * ramp * sin)
         velocity = direction * (self.amplitude * (ramp_rate * sin + ramp * omega * cos))  # the sway's own: no lag
         # the policy's control keeps the workspace (palm_box): the arm brakes before its walls
-        return GripperControl(target, control.finger_closing, palm_velocity=velocity, palm_box=control.palm_box)
+        return GripperControl(target, control.finger_closing, control.finger_force, palm_velocity=velocity,
+                              palm_box=control.palm_box)  # fmt: skip
 
     def evaluate(self, reading: Reading, scene: GraspScene) -> Outcome:
         out = self.task.evaluate(reading, scene)

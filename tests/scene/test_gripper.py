@@ -166,3 +166,47 @@ def test_the_palm_itself_stays_under_the_acceleration_limit_under_bang_bang_acti
         assert peak <= 2.0, f"peak palm acceleration {peak:.2f} m/s^2 at dt {dt:g}"
     finally:
         sc.close()
+
+
+@pytest.mark.parametrize("fingers", ["tissue", "rigid"])
+def test_force_actions_squeeze_with_the_commanded_force(fingers):
+    """``finger_action="force"``: the last action entry sets the squeeze, 0 to finger_force. Held
+    aloft, the pads press with the commanded force (the taxels' pressure, within 0.5 %; measured
+    0.1 %), through the carry's own controls too; at -1 the fingers do not squeeze at all."""
+    import gymnasium as gym
+
+    import softgrasp_env  # noqa: F401
+    from softgrasp_env.policies import ScriptedGraspPolicy
+
+    for squeeze in (1.5, 2.5):
+        env = gym.make("SoftGraspEasy-v3", fingers=fingers, finger_action="force", tactile=(2, 2), carry=True)
+        try:
+            u = env.unwrapped
+            policy = ScriptedGraspPolicy.for_env(env)
+            obs, _ = env.reset(seed=0)
+            a3 = 2.0 * squeeze / u.args.finger_force - 1.0
+            carried = 0
+            for _ in range(100):  # the episode, its carry included
+                action = policy(obs)
+                action[3] = a3 if action[3] > 0 else -1.0
+                obs, _, terminated, truncated, info = env.step(action)
+                if u.task.carrying(u.scene.steps):
+                    carried += 1
+                    assert u.scene.control.finger_force == pytest.approx(squeeze)
+            assert carried >= 20 and info["held"] and info["lift_height"] > 0.04
+            grid = u.args.taxel_grid
+            pressed = u._last.tactile[..., 0].sum(axis=(1, 2)) * grid.area
+            np.testing.assert_allclose(pressed, squeeze, rtol=5e-3)
+        finally:
+            env.close()
+    env = gym.make("SoftGraspEasy-v3", fingers=fingers, finger_action="force")
+    try:
+        env.reset(seed=0)
+        for _ in range(20):
+            obs, *_ = env.step(np.array([0.0, 0.0, 0.0, -1.0], dtype=np.float32))
+        assert env.unwrapped.scene.control.finger_force == 0.0
+        assert np.all(env.unwrapped._last.force == 0.0)
+    finally:
+        env.close()
+    with pytest.raises(ValueError, match="finger_action"):
+        gym.make("SoftGraspEasy-v3", finger_action="torque")
