@@ -189,7 +189,7 @@ def test_force_actions_squeeze_with_the_commanded_force(fingers):
             for _ in range(100):  # the episode, its carry included
                 action = policy(obs)
                 action[3] = a3 if action[3] > 0 else -1.0
-                obs, _, terminated, truncated, info = env.step(action)
+                obs, _, _, _, info = env.step(action)
                 if u.task.carrying(u.scene.steps):
                     carried += 1
                     assert u.scene.control.finger_force == pytest.approx(squeeze)
