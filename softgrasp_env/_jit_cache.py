@@ -195,7 +195,8 @@ def ensure_compiled(config) -> None:
             # the per-step queries with kernels of their own (the env calls them from its first step)
             scene.finger_forces()
             scene.world.tissue_deviation()
-            scene.fingers.tactile(scene.fingers.taxel_grid(2, 2))
+            if scene.fingers.no_tactile is None:
+                scene.fingers.tactile(scene.fingers.taxel_grid(2, 2))
         finally:
             scene.close()
     _warmed.add(kind)

@@ -356,6 +356,9 @@ class EnvArguments:
                 rows, cols = self.tactile
             except (TypeError, ValueError):
                 raise ValueError(f"tactile must be (rows, cols) or None, got {self.tactile!r}") from None
+            reason = FINGERS[self.fingers.kind].no_tactile
+            if reason is not None:
+                raise ValueError(f"tactile={self.tactile!r} with fingers={self.fingers.kind!r}: {reason}")
             grid = TaxelGrid(check_int("tactile[0] (rows)", rows, 1, MAX_TAXELS),
                              check_int("tactile[1] (cols)", cols, 1, MAX_TAXELS), float(fh[1]), float(fh[2]))  # fmt: skip
             object.__setattr__(self, "tactile", (grid.rows, grid.cols))

@@ -38,7 +38,8 @@ def warm(kinds: tuple[str, ...] = KINDS) -> list[Compiled]:
             try:
                 scene.world.step()
                 scene.world.penetration()
-                scene.fingers.tactile(scene.fingers.taxel_grid(2, 2))
+                if scene.fingers.no_tactile is None:
+                    scene.fingers.tactile(scene.fingers.taxel_grid(2, 2))
             finally:
                 scene.close()
     return done

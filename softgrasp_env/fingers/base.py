@@ -117,6 +117,9 @@ class FingerKind:
     """True if the kind wraps its cores in oriented-particle tissue (the env's ``soft``)."""
     description: ClassVar[str] = ""
     """One line for tables and help texts."""
+    no_tactile: ClassVar[str | None] = None
+    """Why the kind cannot give a tactile reading (``tactile`` raises, ``gym.make(..., tactile=...)``
+    refuses it), or None when it can."""
 
     def __init__(self, scene_config) -> None:
         self.scene_config = scene_config
@@ -205,6 +208,8 @@ class FingerKind:
         contact points of each finger's links with any other body, their normal force and both
         lateral friction forces, binned where they touch the core's inner face; no shear (a rigid
         pad does not deform). Kinds with tissue add its loads and its shear."""
+        if self.no_tactile is not None:
+            raise NotImplementedError(f"fingers={self.name!r} give no tactile reading: {self.no_tactile}")
         s = self.site
         out = grid.empty()
         params = grid.params()

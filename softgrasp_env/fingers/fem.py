@@ -313,6 +313,8 @@ class FemFingers(FingerKind):
     name = "fem"
     config_type = FemConfig
     description = "pybullet's FEM soft pads on each core (fully deformable fingers)"
+    no_tactile = ("pybullet reports no contact points of its FEM pads' nodes (their contact force reads low too), "
+                  "so there is nothing to bin onto taxels")
     reset_flags = p.RESET_USE_DEFORMABLE_WORLD
 
     def __init__(self, scene_config) -> None:

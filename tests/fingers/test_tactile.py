@@ -171,3 +171,18 @@ def test_shear_grows_with_the_load_up_to_slip(fingers):
     assert 1.1 < compliance / layer < 1.6
     linear = (rec.shear[before][-1] - rec.shear[0]) / (compliance * (rec.load[before][-1] - rec.load[0]))
     assert linear == pytest.approx(1.0, abs=0.05)
+
+
+def test_the_fem_pads_have_no_tactile_reading_and_say_so():
+    """pybullet reports no contact points of its FEM pads' nodes: the kind refuses rather than read
+    zeros."""
+    with pytest.raises(ValueError, match="fingers='fem'.*no contact points"):
+        gym.make("SoftGraspEasy-v3", fingers="fem", tactile=(4, 3))
+    env = gym.make("SoftGraspEasy-v3", fingers="fem")
+    try:
+        env.reset(seed=0)
+        kind = env.unwrapped.scene.fingers
+        with pytest.raises(NotImplementedError, match="no tactile reading"):
+            kind.tactile(kind.taxel_grid(2, 2))
+    finally:
+        env.close()
