@@ -199,14 +199,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=ROOT / "runs" / "race")
     parser.add_argument("--report", action="store_true", help="only print the table of the runs in --out")
     parser.add_argument("--worker", default=None, help=argparse.SUPPRESS)
-    parser.add_argument("--core", type=int, default=0, help=argparse.SUPPRESS)
+    parser.add_argument("--core", type=int, default=None, help=argparse.SUPPRESS)
     ns = parser.parse_args(argv)
     if ns.minutes <= 0 or ns.every <= 0 or ns.episodes < 1 or ns.parallel < 1:
         parser.error("--minutes and --every must be > 0, --episodes and --parallel >= 1")
     seeds = [int(s) for s in ns.seeds.split(",")]
     if ns.worker:
         # pinned before torch or JAX starts a thread: every thread it makes inherits the one core
-        os.sched_setaffinity(0, {ns.core})
+        if ns.core is not None:
+            os.sched_setaffinity(0, {ns.core})
         worker(ns.worker, ns.env, seeds[0], ns.minutes, ns.every, ns.episodes, ns.out)
         return 0
     names = ns.learners.split(",")
