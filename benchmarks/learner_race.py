@@ -133,9 +133,18 @@ def _at(curve: list[dict], seconds: float) -> dict | None:
     return before[-1] if before else None
 
 
+TARGET = 0.9
+"""The success rate whose first evaluation the table times."""
+
+
+def first_at(curve: list[dict], target: float = TARGET) -> dict | None:
+    """The first evaluation with success >= ``target`` (None: none reached it)."""
+    return next((r for r in curve if r["success_rate"] >= target), None)
+
+
 def report(results: list[dict], minutes: float) -> None:
     quarters = [minutes * 60 * k / 4 for k in (1, 2, 3, 4)]
-    head = "".join(f"{f'{q / 60:.3g} min':>16}" for q in quarters)
+    head = "".join(f"{f'{q / 60:.3g} min':>16}" for q in quarters) + f"{f'first >= {TARGET:.0%}':>22}"
     print(f"success of the deterministic policy (steps reached) at each quarter of the budget\n{'run':<18}{head}")
     by_learner: dict[str, list[dict]] = {}
     for r in results:
@@ -144,6 +153,9 @@ def report(results: list[dict], minutes: float) -> None:
         for q in quarters:
             row = _at(r["curve"], q)
             cells.append(f"{'-':>16}" if row is None else f"{row['success_rate']:>6.0%} ({row['timesteps']:>6d})")
+        hit = first_at(r["curve"])
+        cells.append(f"{'not reached':>22}" if hit is None else
+                     f"{hit['train_seconds'] / 60:>9.1f} min ({hit['timesteps']:>6d})")  # fmt: skip
         print(f"{r['learner'] + ' ' + str(r['seed']):<18}{''.join(cells)}")
     print(f"\n{'mean over seeds':<18}{head}")
     for name, runs in by_learner.items():
@@ -157,6 +169,12 @@ def report(results: list[dict], minutes: float) -> None:
             s = sum(x["success_rate"] for x in rows) / len(rows)
             n = sum(x["timesteps"] for x in rows) / len(rows)
             cells.append(f"{s:>6.0%} ({n:>6.0f})")
+        hits = [first_at(r["curve"]) for r in runs]
+        if all(h is not None for h in hits):
+            cells.append(f"{sum(h['train_seconds'] for h in hits) / 60 / len(hits):>9.1f} min "
+                         f"({sum(h['timesteps'] for h in hits) / len(hits):>6.0f})")  # fmt: skip
+        else:
+            cells.append(f"{f'{sum(h is not None for h in hits)} of {len(hits)} reached':>22}")
         print(f"{name:<18}{''.join(cells)}")
 
 
