@@ -10,8 +10,8 @@ model for ``--steps`` env steps after ``WARMUP`` random ones (not timed), with t
 preset where the learner takes it (network 128 x 128, batch 256, gamma 0.98, tau 0.02, one
 gradient step per two env steps; CrossQ keeps its own network and no target network, as sbx
 defines it). Learners whose package is not installed are skipped with a line saying so
-(``pip install sb3-contrib sbx-rl``). Success against wall-clock time is the long half of the item
-(several hours per learner and seed on this machine) and is not measured here.
+(``pip install sb3-contrib sbx-rl``). Success against wall-clock time, the other half of the item,
+is ``benchmarks/learner_race.py``.
 """
 
 from __future__ import annotations
