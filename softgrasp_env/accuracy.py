@@ -249,6 +249,8 @@ class ShearRecord:
     """(S,) how far the cylinder has slid down in the grip since the pull began [m]."""
     slip_load: float
     """The load at which it first slid more than ``slip`` (inf if it never did) [N]."""
+    fields: np.ndarray
+    """(S, 2, rows, cols, channels) the taxels at each sample (fingers/tactile.py)."""
 
 
 def shear_under_load(scene: GraspScene, *, rate: float = 2.0, slip: float = 1e-3, max_load: float = 12.0,
@@ -267,7 +269,7 @@ def shear_under_load(scene: GraspScene, *, rate: float = 2.0, slip: float = 1e-3
     control = scene.control
     rel0 = _relative_pose(scene)[0]
     dt = scene.config.sim.dt
-    out: dict[str, list[float]] = {"load": [], "traction": [], "shear": [], "slide": []}
+    out: dict[str, list] = {"load": [], "traction": [], "shear": [], "slide": [], "fields": []}
     slip_load = math.inf
     shear0 = None
     k = 0
@@ -289,6 +291,7 @@ def shear_under_load(scene: GraspScene, *, rate: float = 2.0, slip: float = 1e-3
         out["traction"].append(float(-tac[..., 2].sum() * grid.area))
         out["shear"].append(0.5 * (shear[0] + shear[1]))
         out["slide"].append(slide)
+        out["fields"].append(tac)
         if shear0 is None:
             shear0 = out["shear"][0]
         if slide - (out["shear"][-1] - shear0) > slip:

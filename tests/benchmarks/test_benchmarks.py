@@ -189,6 +189,18 @@ def test_incipient_slip_compares_the_pads_with_coulomb(tmp_path):
     assert (tmp_path / "slip.png").stat().st_size > 10_000
 
 
+def test_taxel_field_pictures_the_hold_and_the_slip(tmp_path):
+    out = _run_plain("taxel_field.py", "--rows", "4", "--cols", "3", "--plot", str(tmp_path / "field.png"))
+    import re
+
+    rows = re.findall(r"load ([\d.]+) N: pressure x area \[([\d.]+) +([\d.]+) *\] N", out)
+    assert len(rows) == 3, out
+    loads = [float(r[0]) for r in rows]
+    assert loads[0] < loads[1] < loads[2], out
+    assert all(abs(float(x) - 3.0) < 0.1 for r in rows for x in r[1:]), out  # the squeeze, at every moment
+    assert (tmp_path / "field.png").stat().st_size > 10_000
+
+
 def test_env_throughput_names_a_malformed_keyword_argument():
     from benchmarks.env_throughput import parse_spec
 
