@@ -98,18 +98,15 @@ def main() -> int:
     print(f"{ns.env}, random actions, {ns.seconds:g} s per configuration, {os.cpu_count()} cores")
     base = measure(ns.env, 1, "dummy", ns.seconds)
     print(f"  DummyVecEnv    1 env : {base:7.0f} env steps/s", flush=True)
-    one = None
-    for n in range(1, ns.max_envs + 1):
-        rate = measure(ns.env, n, "subproc", ns.seconds)
-        one = one or rate
-        print(f"  SubprocVecEnv {n:2d} envs: {rate:7.0f} env steps/s   x{rate / one:.2f} over 1 subprocess, "
-              f"x{rate / base:.2f} over in-process", flush=True)  # fmt: skip
-    gym_one = None
-    for n in range(1, ns.max_envs + 1):
-        rate = measure_gym(ns.env, n, "async", ns.seconds)
-        gym_one = gym_one or rate
-        print(f"  gym.make_vec  {n:2d} envs (async): {rate:7.0f} env steps/s   x{rate / gym_one:.2f} over 1 subprocess, "
-              f"x{rate / base:.2f} over in-process", flush=True)  # fmt: skip
+    runners = (("SubprocVecEnv", "", lambda n: measure(ns.env, n, "subproc", ns.seconds)),
+               ("gym.make_vec ", " (async)", lambda n: measure_gym(ns.env, n, "async", ns.seconds)))  # fmt: skip
+    for label, note, run in runners:
+        one = None
+        for n in range(1, ns.max_envs + 1):
+            rate = run(n)
+            one = one or rate
+            print(f"  {label} {n:2d} envs{note}: {rate:7.0f} env steps/s   x{rate / one:.2f} over 1 subprocess, "
+                  f"x{rate / base:.2f} over in-process", flush=True)  # fmt: skip
     if ns.rllib:
         import ray
 

@@ -81,7 +81,7 @@ class SoftGraspEnv(gym.Env):
     | index | meaning | scaling |
     |---|---|---|
     | 0, 1, 2 | palm velocity x, y, z (world frame; ignored during the carry test) | ``a * gripper_speed`` m/s (0.15 at full action; the vector capped at that speed), reached with the arm's acceleration limit ``arm_acceleration`` |
-    | 3 | finger closing | target travel ``(a + 1) / 2 * travel`` from fully open: -1 fully open, +1 closed to the stop, where the pads meet (v1/v2: the cores' faces, ``finger_max_opening``); the force limit sets the squeeze |
+    | 3 | finger closing | target travel ``(a + 1) / 2 * travel`` from fully open: -1 fully open, +1 closed to the stop, where the pads meet (v1/v2: the cores' faces, ``finger_max_opening``); the force limit sets the squeeze. With ``finger_action="force"``: the squeeze itself, ``(a + 1) / 2 * finger_force`` N, the fingers closing until they meet resistance (they never open) |
 
     The arm brakes before the workspace's walls (x, y within ±15 cm of the origin, fingertip
     height between just above the ground and 20 cm) and waits for a palm that is blocked 2 cm
@@ -113,6 +113,7 @@ class SoftGraspEnv(gym.Env):
     | 21 | lift | cylinder centre above its resting height [m] |
     | 22 | gripper_yaw | palm yaw (the misalignment the agent cannot command) [rad] |
     | 23 | time | time since reset [s] (only with the carry test, which starts at a fixed time) |
+    | then | tactile_<left/right>_r<row>_c<col>_<channel> | only with ``tactile=(rows, cols)``: each pad's taxels over its core's inner face, row 0 at the top, columns from -y to +y, five channels per taxel - pressure, traction_y, traction_z [Pa] and the tissue's shear_y, shear_z [m] (0 for rigid pads; core frame); ``softgrasp_env.observation.tactile_view`` gives the (2, rows, cols, 5) grid; unbounded |
 
     The forces are reported, not capped: the arm (40 N; 200 N on v1/v2) can press a finger onto
     the cylinder far harder than the motors squeeze.

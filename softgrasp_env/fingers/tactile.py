@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
+from ..tissue.rotation import qmat
 from ..validation import check_int
 
 TAXEL_CHANNELS: tuple[str, ...] = ("pressure", "traction_y", "traction_z", "shear_y", "shear_z")
@@ -164,10 +165,7 @@ def bin_contacts(finger, rows, core_pose, sign, grid, out):
     the finger in; ``core_pose`` the core's centre of mass and orientation (x, y, z, qx, qy, qz,
     qw). The force on the finger, N n + sense (f1 d1 + f2 d2), into the core's frame (R^T), is
     binned by :func:`bin_loads`."""
-    qx, qy, qz, qw = core_pose[3], core_pose[4], core_pose[5], core_pose[6]
-    r00, r01, r02 = 1.0 - 2.0 * (qy * qy + qz * qz), 2.0 * (qx * qy - qz * qw), 2.0 * (qx * qz + qy * qw)
-    r10, r11, r12 = 2.0 * (qx * qy + qz * qw), 1.0 - 2.0 * (qx * qx + qz * qz), 2.0 * (qy * qz - qx * qw)
-    r20, r21, r22 = 2.0 * (qx * qz - qy * qw), 2.0 * (qy * qz + qx * qw), 1.0 - 2.0 * (qx * qx + qy * qy)
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = qmat((core_pose[3], core_pose[4], core_pose[5], core_pose[6]))
     n = rows.shape[0]
     points = np.empty((n, 3))
     forces = np.empty((n, 3))
@@ -176,22 +174,26 @@ def bin_contacts(finger, rows, core_pose, sign, grid, out):
         points[k, 0] = r00 * px + r10 * py + r20 * pz
         points[k, 1] = r01 * px + r11 * py + r21 * pz
         points[k, 2] = r02 * px + r12 * py + r22 * pz
-        f = np.empty(3)
-        for a in range(3):
-            friction = rows[k, 13] * rows[k, 6 + a] + rows[k, 14] * rows[k, 9 + a]
-            f[a] = rows[k, 12] * rows[k, 3 + a] + rows[k, 15] * friction
-        forces[k, 0] = r00 * f[0] + r10 * f[1] + r20 * f[2]
-        forces[k, 1] = r01 * f[0] + r11 * f[1] + r21 * f[2]
-        forces[k, 2] = r02 * f[0] + r12 * f[1] + r22 * f[2]
+        sense, normal, f1, f2 = rows[k, 15], rows[k, 12], rows[k, 13], rows[k, 14]
+        fx = normal * rows[k, 3] + sense * (f1 * rows[k, 6] + f2 * rows[k, 9])
+        fy = normal * rows[k, 4] + sense * (f1 * rows[k, 7] + f2 * rows[k, 10])
+        fz = normal * rows[k, 5] + sense * (f1 * rows[k, 8] + f2 * rows[k, 11])
+        forces[k, 0] = r00 * fx + r10 * fy + r20 * fz
+        forces[k, 1] = r01 * fx + r11 * fy + r21 * fz
+        forces[k, 2] = r02 * fx + r12 * fy + r22 * fz
     bin_loads(finger, points, forces, sign, grid, out)
 
 
 @nb.njit(cache=True, inline="always")
-def _core_rotation(rig_q, r):
-    qx, qy, qz, qw = rig_q[r, 0], rig_q[r, 1], rig_q[r, 2], rig_q[r, 3]
-    return (1.0 - 2.0 * (qy * qy + qz * qz), 2.0 * (qx * qy - qz * qw), 2.0 * (qx * qz + qy * qw),
-            2.0 * (qx * qy + qz * qw), 1.0 - 2.0 * (qx * qx + qz * qz), 2.0 * (qy * qz - qx * qw),
-            2.0 * (qx * qz - qy * qw), 2.0 * (qy * qz + qx * qw), 1.0 - 2.0 * (qx * qx + qy * qy))  # fmt: skip
+def _core_rotations(rig_q, core_rigid):
+    """(2, 9) each finger core's rotation matrix, row-major (rotation.qmat)."""
+    out = np.empty((2, 9))
+    for b in range(min(core_rigid.shape[0], 2)):
+        r = core_rigid[b]
+        m = qmat((rig_q[r, 0], rig_q[r, 1], rig_q[r, 2], rig_q[r, 3]))
+        for a in range(9):
+            out[b, a] = m[a]
+    return out
 
 
 @nb.njit(cache=True)
@@ -211,6 +213,7 @@ def tissue_loads(nc, c_particle, c_inner, c_lambda, c_normal, c_friction, c_patc
     inv = 1.0 / (dt * dt)
     index = np.empty(int(grid[0]) * cols, dtype=np.int64)
     weight = np.empty(int(grid[0]) * cols)
+    rot = _core_rotations(rig_q, core_rigid)
     for c in range(nc):
         lam = c_lambda[c]
         if c_inner[c] or lam <= 0.0:
@@ -229,10 +232,9 @@ def tissue_loads(nc, c_particle, c_inner, c_lambda, c_normal, c_friction, c_patc
         fx = (lam * c_normal[c, 0] + k * c_friction[c, 0]) * inv
         fy = (lam * c_normal[c, 1] + k * c_friction[c, 1]) * inv
         fz = (lam * c_normal[c, 2] + k * c_friction[c, 2]) * inv
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = _core_rotation(rig_q, core_rigid[b])
-        lx = r00 * fx + r10 * fy + r20 * fz  # R^T f: into the core's frame
-        ly = r01 * fx + r11 * fy + r21 * fz
-        lz = r02 * fx + r12 * fy + r22 * fz
+        lx = rot[b, 0] * fx + rot[b, 3] * fy + rot[b, 6] * fz  # R^T f: into the core's frame
+        ly = rot[b, 1] * fx + rot[b, 4] * fy + rot[b, 7] * fz
+        lz = rot[b, 2] * fx + rot[b, 5] * fy + rot[b, 8] * fz
         sign = 1.0 if b == 0 else -1.0
         for e in range(n):
             row, col = index[e] // cols, index[e] % cols
@@ -252,10 +254,12 @@ def tissue_shear(x, rest_x, footprint, attached, offsets, rig_x, rig_q, core_rig
     counts = np.zeros((2, out.shape[1], out.shape[2]))
     index = np.empty(int(grid[0]) * cols, dtype=np.int64)
     weight = np.empty(int(grid[0]) * cols)
+    rot = _core_rotations(rig_q, core_rigid)
     for b in range(min(offsets.shape[0] - 1, 2)):
         sign = 1.0 if b == 0 else -1.0
         r = core_rigid[b]
-        _, r01, r02, _, r11, r12, _, r21, r22 = _core_rotation(rig_q, r)  # y and z rows of R^T
+        r01, r11, r21 = rot[b, 1], rot[b, 4], rot[b, 7]  # the y and z rows of R^T
+        r02, r12, r22 = rot[b, 2], rot[b, 5], rot[b, 8]
         for i in range(offsets[b], offsets[b + 1]):
             if attached[i] or sign * rest_x[i, 0] <= 0.0:
                 continue
@@ -302,5 +306,5 @@ def face_footprints(rest_x: np.ndarray, attached: np.ndarray, offsets: np.ndarra
     return out
 
 
-__all__ = ["INNER_NORMAL", "MAX_TAXELS", "TAXEL_CHANNELS", "TaxelGrid", "bin_contacts", "bin_loads", "face_footprints", "tissue_loads",
-           "tissue_shear"]  # fmt: skip
+__all__ = ["INNER_NORMAL", "MAX_TAXELS", "TAXEL_CHANNELS", "TaxelGrid", "bin_contacts", "bin_loads", "face_footprints",
+           "tissue_loads", "tissue_shear"]  # fmt: skip

@@ -148,11 +148,10 @@ class TissueFingers(FingerKind):
         if self._footprint is None:
             self._footprint = face_footprints(m.particle_rest_x, m.particle_attached, m.body_particle_offsets,
                                               grid.half_width, grid.half_height)  # fmt: skip
-        sc, params = sv._scratch, grid.params()
+        params = grid.params()
         core_rigid = col.shape_rigid[m.body_core_shape]
-        tissue_loads(int(sv._counts[0]), sc["c_particle"], sc["c_inner"], sc["c_lambda"], sc["c_normal"],
-                     sc["c_friction"], sc["c_patch"], sc["patch_slide"], sc["patch_change"], m.particle_body,
-                     m.particle_rest_x, self._footprint, col.rigid_q, core_rigid, sv.sim.dt, params, out)  # fmt: skip
+        tissue_loads(*sv.last_contacts(), m.particle_body, m.particle_rest_x, self._footprint, col.rigid_q, core_rigid,
+                     sv.sim.dt, params, out)  # fmt: skip
         tissue_shear(w.state.particle_x, m.particle_rest_x, self._footprint, m.particle_attached,
                      m.body_particle_offsets, col.rigid_x, col.rigid_q, core_rigid, params, out)  # fmt: skip
         return out

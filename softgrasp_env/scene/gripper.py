@@ -57,9 +57,6 @@ class GripperControl:
     """(3,) where the arm takes the palm's centre [m, world frame]; None: velocity mode."""
     finger_closing: float
     """Target travel of each finger from fully open [m] (the motors' force limit sets the squeeze)."""
-    finger_force: float | None = None
-    """The finger motors' force limit for this control [N], what they squeeze with once the fingers
-    meet resistance; None: the scene's ``finger_force``."""
     palm_velocity: np.ndarray | None = None
     """(3,) [m/s]: in position mode the target's own velocity when it moves along a smooth path (so
     the arm follows it without lag; None: a target at rest); in velocity mode the commanded
@@ -67,6 +64,9 @@ class GripperControl:
     palm_box: tuple[np.ndarray, np.ndarray] | None = None
     """(low, high) the palm's centre must stay within [m] (the workspace, in palm coordinates): the
     path brakes before it reaches a wall."""
+    finger_force: float | None = None
+    """The finger motors' force limit for this control [N], what they squeeze with once the fingers
+    meet resistance; None: the scene's ``finger_force``."""
 
 
 class PalmPath:
@@ -363,8 +363,8 @@ class VelocityActions(GripperActions):
 
     def control(self, action: np.ndarray, scene: PalmReadout) -> GripperControl:
         ws, g2p = self.workspace, scene.grip_to_palm()
-        return GripperControl(None, self.closing(action), self.squeeze(action), palm_velocity=action[:3] * self.speed,
-                              palm_box=(ws.low + g2p, ws.high + g2p))  # fmt: skip
+        return GripperControl(None, self.closing(action), palm_velocity=action[:3] * self.speed,
+                              palm_box=(ws.low + g2p, ws.high + g2p), finger_force=self.squeeze(action))  # fmt: skip
 
 
 class TargetActions(GripperActions):
@@ -377,8 +377,8 @@ class TargetActions(GripperActions):
         step = self.speed / self.control_frequency  # as v1/v2 computed it, to the bit
         target_grip = ws.clip((scene.palm_target - g2p) + action[:3] * step)
         target = np.clip(target_grip + g2p, palm - MAX_LEAD, palm + MAX_LEAD)
-        return GripperControl(target, self.closing(action), self.squeeze(action))
+        return GripperControl(target, self.closing(action), finger_force=self.squeeze(action))
 
 
-__all__ = ["FINGER_ACTIONS", "GRIP_TOP", "Gripper", "GripperActions", "GripperControl", "PalmPath", "TargetActions", "VelocityActions",
-           "Workspace"]
+__all__ = ["FINGER_ACTIONS", "GRIP_TOP", "Gripper", "GripperActions", "GripperControl", "PalmPath", "TargetActions",
+           "VelocityActions", "Workspace"]

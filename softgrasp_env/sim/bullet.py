@@ -148,7 +148,6 @@ class StateReader:
         self._flat[:] = vals
         _scatter(self._buf, self._order, x, q, v, w)
 
-
     def position(self, slot: int) -> tuple[float, float, float]:
         """Slot ``slot``'s centre of mass [m], by itself: the value :meth:`read` gives it."""
         r = self._refs[slot]

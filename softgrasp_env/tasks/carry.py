@@ -211,7 +211,7 @@ class CarryTest(TaskWrapper):
             target = self._anchor + across * (self.amplitude * math.sin(omega * t))
             grip_to_palm = scene.grip_to_palm()
             return GripperControl(self.workspace.clip(target - grip_to_palm) + grip_to_palm, control.finger_closing,
-                                  control.finger_force)  # fmt: skip
+                                  finger_force=control.finger_force)  # fmt: skip
         if self._anchor is None:  # where the arm has the palm when the carry begins
             self._anchor = scene.palm_setpoint
         c, s = math.cos(self.angle), math.sin(self.angle)
@@ -222,8 +222,8 @@ class CarryTest(TaskWrapper):
         target = self._anchor + direction * (self.amplitude * ramp * sin)
         velocity = direction * (self.amplitude * (ramp_rate * sin + ramp * omega * cos))  # the sway's own: no lag
         # the policy's control keeps the workspace (palm_box): the arm brakes before its walls
-        return GripperControl(target, control.finger_closing, control.finger_force, palm_velocity=velocity,
-                              palm_box=control.palm_box)  # fmt: skip
+        return GripperControl(target, control.finger_closing, palm_velocity=velocity, palm_box=control.palm_box,
+                              finger_force=control.finger_force)  # fmt: skip
 
     def evaluate(self, reading: Reading, scene: GraspScene) -> Outcome:
         out = self.task.evaluate(reading, scene)

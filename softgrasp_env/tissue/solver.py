@@ -36,6 +36,7 @@ them. Nothing here imports pybullet or gymnasium.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
@@ -82,6 +83,30 @@ class StepOutput:
     """(R, 3) the part of ``rigid_impulse`` from the core attachment (thesis 5.1.3) [N s]."""
     contact_count: int
     pair_count: int
+
+
+class LastContacts(NamedTuple):
+    """The particle-shape contacts of a step (TissueSolver.last_contacts): the first ``count`` rows
+    of each array are valid. Multipliers are positional impulses [kg m] (Mueller et al. 2020 eq. 6):
+    a force over the step is the multiplier / dt^2."""
+
+    count: int
+    particle: np.ndarray
+    """(C,) the particle of each contact."""
+    inner: np.ndarray
+    """(C,) bool: a particle's contact with its own core (internal, not a load)."""
+    normal_lambda: np.ndarray
+    """(C,) the normal multiplier, along ``normal``."""
+    normal: np.ndarray
+    """(C, 3) the contact normal, pushing the particle out of the shape."""
+    friction: np.ndarray
+    """(C, 3) the friction's positional impulse on the particle (the position half of it)."""
+    patch: np.ndarray
+    """(C,) the contact's friction patch (-1: none)."""
+    patch_slide: np.ndarray
+    """(P,) bool: the patch slides (kinetic friction, half of it applied on velocities)."""
+    patch_change: np.ndarray
+    """(P,) bool: the sliding patch stops within the step."""
 
 
 # =================================================================================================
@@ -431,6 +456,13 @@ class TissueSolver:
         # positional: StepOutput's fields in order (keywords cost ~1 us a step here)
         return StepOutput(self._rig_x, self._rig_q, self._imp_lin, self._imp_ang, self._coupling_imp, contact_count,
                           pair_count)  # fmt: skip
+
+    def last_contacts(self) -> LastContacts:
+        """The particle-shape contacts of the last step, as the solve left them (views, valid until
+        the next step): what a tactile reading bins (fingers/tactile.py)."""
+        sc = self._scratch
+        return LastContacts(int(self._counts[0]), sc["c_particle"], sc["c_inner"], sc["c_lambda"], sc["c_normal"],
+                            sc["c_friction"], sc["c_patch"], sc["patch_slide"], sc["patch_change"])  # fmt: skip
 
     def contact_normal_force(self, shape: int) -> np.ndarray:
         """Normal force each tissue body pressed on shape ``shape`` with during the last step [N],

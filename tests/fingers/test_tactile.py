@@ -47,9 +47,12 @@ def test_a_footprint_is_spread_by_area_and_keeps_its_whole_load():
 
 
 def _held(fingers: str, steps: int = 80):
-    """The easy task's scripted grasp on ``fingers``, lifted and held still (6.5 cm up from 40 env
-    steps on, measured)."""
-    env = gym.make("SoftGraspEasy-v3", fingers=fingers)
+    """The easy task's scripted grasp on ``fingers`` (``"tissue-consistent"``: the consistent
+    coupling), lifted and held still (6.5 cm up from 40 env steps on, measured)."""
+    kind, _, coupling = fingers.partition("-")
+    from softgrasp_env.config import SimConfig
+
+    env = gym.make("SoftGraspEasy-v3", fingers=kind, **({"sim": SimConfig(coupling=coupling)} if coupling else {}))
     policy = ScriptedGraspPolicy.for_env(env)
     obs, _ = env.reset(seed=0)
     for _ in range(steps):
@@ -73,7 +76,7 @@ def test_no_contact_no_load(fingers):
         env.close()
 
 
-@pytest.mark.parametrize("fingers", ["tissue", "rigid", "rigid_torsion"])
+@pytest.mark.parametrize("fingers", ["tissue", "tissue-consistent", "rigid", "rigid_torsion"])
 def test_a_held_cylinder_loads_the_pads_with_the_squeeze_and_its_weight(fingers):
     """Held aloft and still, each pad's pressure integrates to the motor's squeeze (3 N; measured
     within 0.1 %) and the two pads' vertical traction to the cylinder's weight (measured within
@@ -82,6 +85,7 @@ def test_a_held_cylinder_loads_the_pads_with_the_squeeze_and_its_weight(fingers)
     pressure also matches its contact normal force within 6 % (3.9 % measured: on the curved
     contact the normals fan out, and the load into the face counts their x parts and friction's)."""
     env = _held(fingers)
+    fingers = fingers.split("-")[0]
     try:
         u = env.unwrapped
         kind = u.scene.fingers
@@ -136,30 +140,35 @@ def test_the_rigid_reading_is_pybullets_contact_points_binned():
         env.close()
 
 
-@pytest.mark.parametrize("fingers", ["tissue", "rigid"])
-def test_shear_grows_with_the_load_up_to_slip(fingers):
-    """The held cylinder made heavier until it slips (accuracy.shear_under_load): it lets go at
-    Coulomb's 2 mu_s F (measured: tissue -1.7 %, rigid +4.4 %, pybullet's creep before its break);
-    the taxels' traction is the load all the way (gap at most 0.9 % / 0.1 %); the tissue's shear
-    grows strictly with the load and linearly (0.56 mm/N, 1.34 x two elastic layers' h / (2 G A);
-    1.01 x its small-load line at 95 % of the way to slip, where Cattaneo-Mindlin's circular contact
-    softens to 1.5 x: the patch sticks as a whole, benchmarks/incipient_slip.py), a rigid pad's not
-    at all."""
+@pytest.mark.parametrize(("fingers", "coupling", "squeeze"), [("tissue", "thesis", 2.0), ("tissue", "thesis", 3.0),
+                                                          ("tissue", "thesis", 4.0), ("tissue", "consistent", 3.0),
+                                                          ("rigid", "thesis", 2.0), ("rigid", "thesis", 4.0)])  # fmt: skip
+def test_shear_grows_with_the_load_up_to_slip(fingers, coupling, squeeze):
+    """The held cylinder made heavier until it slips (accuracy.shear_under_load), at 2, 3 and 4 N
+    per finger and both couplings, the defaults otherwise (3 iterations, mu_s = mu_k 0.9). It lets
+    go at Coulomb's 2 mu_s F (measured: tissue -0.8 / -1.7 / -3.6 %, rigid +5.7 / +3.8 %, pybullet's
+    creep before its break); the taxels' traction is the load all the way (gap at most 0.9 % tissue,
+    1.1 % rigid); the tissue's shear grows strictly with the load and linearly: 0.557-0.562 mm/N at
+    every squeeze (an elastic layer's compliance does not depend on the normal load), 1.34 x two
+    layers' h / (2 G A), and 1.008-1.015 x its small-load line at 95 % of the way to slip, where
+    Cattaneo-Mindlin's circular contact softens to 1.5 x (the patch sticks as a whole,
+    benchmarks/incipient_slip.py); a rigid pad's shear is 0."""
     from softgrasp_env.accuracy import shear_under_load
+    from softgrasp_env.config import SimConfig
     from softgrasp_env.scene import GraspScene, SceneConfig
 
-    scene = GraspScene(SceneConfig(fingers=fingers))
+    scene = GraspScene(SceneConfig(fingers=fingers, finger_force=squeeze, sim=SimConfig(coupling=coupling)))
     try:
-        rec = shear_under_load(scene)
+        bound = 2.0 * scene.config.tissue.friction_static * squeeze
+        rec = shear_under_load(scene, max_load=1.3 * bound)
         cfg = scene.config
     finally:
         scene.close()
-    bound = 2.0 * cfg.tissue.friction_static * cfg.finger_force
-    assert rec.slip_load == pytest.approx(bound, rel=0.04 if fingers == "tissue" else 0.07)
+    assert rec.slip_load == pytest.approx(bound, rel=0.06 if fingers == "tissue" else 0.08)
     span = rec.slip_load - rec.load[0]
     before = rec.load <= rec.load[0] + 0.95 * span
     assert before.sum() >= 50
-    assert np.allclose(rec.traction[before], rec.load[before], rtol=0.02 if fingers == "tissue" else 3e-3)
+    assert np.allclose(rec.traction[before], rec.load[before], rtol=0.02)
     if fingers != "tissue":
         assert np.all(rec.shear == 0.0)
         return
@@ -168,9 +177,9 @@ def test_shear_grows_with_the_load_up_to_slip(fingers):
     compliance = np.polyfit(rec.load[early], rec.shear[early], 1)[0]
     face = 4.0 * cfg.finger_half_extents[1] * cfg.finger_half_extents[2]
     layer = cfg.tissue.extrude / (2.0 * cfg.tissue.modulus * face)
-    assert 1.1 < compliance / layer < 1.6
+    assert 1.25 < compliance / layer < 1.45
     linear = (rec.shear[before][-1] - rec.shear[0]) / (compliance * (rec.load[before][-1] - rec.load[0]))
-    assert linear == pytest.approx(1.0, abs=0.05)
+    assert linear == pytest.approx(1.0, abs=0.04)
 
 
 def test_the_fem_pads_have_no_tactile_reading_and_say_so():
