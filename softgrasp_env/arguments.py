@@ -22,7 +22,7 @@ from .fingers.tactile import MAX_TAXELS, TaxelGrid
 from .observation import CARRY_OBS_NAMES, OBS_NAMES, tactile_names
 from .scene import GRIP_TOP, GripperActions, SceneConfig, Workspace, fit_error, geometry_error
 from .scene.gripper import FINGER_ACTIONS
-from .tasks import TASKS, CarryTest, StartRanges, Task
+from .tasks import TASKS, CarryTest, LeastSqueeze, StartRanges, Task
 from .tasks.carry import (
     CARRY_ACCELERATION_RANGE,
     CARRY_DURATION,
@@ -129,6 +129,13 @@ class EnvArguments:
         "closing travel (-1 fully open, +1 the faces meeting) with the motors squeezing at most finger_force; 'force', "
         "the squeeze itself, 0 N at -1 to finger_force at +1, the fingers closing until they meet resistance (they "
         "never open: for a start with the cylinder between them)", type_="str")
+    squeeze_weight: float = _arg(0.0, "The grip-force task (SoftGraspGrip-v3: 0.5): the reward charges "
+        "squeeze_weight * mean finger force / finger_force per step (info['reward_terms']['squeeze']); needs "
+        "carry=True", type_="float")
+    squeeze_factor: float | None = _arg(None, "The grip-force task (SoftGraspGrip-v3: 2): success also needs the "
+        "carry's mean squeeze at most this many times the least force that holds the cylinder through it (Coulomb, "
+        "with its measured accelerations; info['carry_squeeze'], info['least_squeeze']); needs carry=True. None: off",
+        type_="float")
     tactile: tuple[int, int] | None = _arg(None, "(rows, cols): the observation ends with each pad's taxels on a "
         "rows x cols grid over the core's inner face, five per taxel: pressure and traction along y, z [Pa] and the "
         "tissue's shear along y, z [m] (0 for rigid pads); `softgrasp_env.observation.tactile_view` reshapes them. "
@@ -205,6 +212,12 @@ class EnvArguments:
         check_range("friction_range", self.friction_range, 0.0, 0.9)
         check_range("cylinder_radius_range", self.cylinder_radius_range, 0.0, 0.02)
         check_range("cylinder_mass_range", self.cylinder_mass_range, 0.0, 0.9)
+        check_range("squeeze_weight", self.squeeze_weight, 0.0, 10.0)
+        if self.squeeze_factor is not None:
+            check_range("squeeze_factor", self.squeeze_factor, 1.0, 100.0)
+        if (self.squeeze_weight > 0.0 or self.squeeze_factor is not None) and not self.carry:
+            raise ValueError(f"squeeze_weight={self.squeeze_weight!r} / squeeze_factor={self.squeeze_factor!r} set "
+                             "the grip-force task, which judges the squeeze over the carry: give carry=True")  # fmt: skip
         check_int("render_width", self.render_width, 16, 4096)
         check_int("render_height", self.render_height, 16, 4096)
         self._check_camera()
@@ -405,11 +418,15 @@ class EnvArguments:
                            **({"approach": self.approach_range} if self.task == "reach" else {}))  # fmt: skip
         if not self.carry:
             return start
-        return CarryTest(start, dt=self.sim.dt, workspace=self.workspace, start=self.carry_start,
-                         duration=self.carry_duration, amplitude=self.carry_amplitude,
-                         frequency=self.carry_frequency, acceleration=self.carry_acceleration,
-                         direction=self.carry_direction, slide_limit=self.carry_slide_limit,
-                         arm_speed=self.gripper_speed, arm_acceleration=self.arm_acceleration)  # fmt: skip
+        carry = CarryTest(start, dt=self.sim.dt, workspace=self.workspace, start=self.carry_start,
+                          duration=self.carry_duration, amplitude=self.carry_amplitude,
+                          frequency=self.carry_frequency, acceleration=self.carry_acceleration,
+                          direction=self.carry_direction, slide_limit=self.carry_slide_limit,
+                          arm_speed=self.gripper_speed, arm_acceleration=self.arm_acceleration)  # fmt: skip
+        if self.squeeze_weight == 0.0 and self.squeeze_factor is None:
+            return carry
+        return LeastSqueeze(carry, squeeze_weight=self.squeeze_weight, squeeze_factor=self.squeeze_factor,
+                            finger_force=self.finger_force)  # fmt: skip
 
     def make_actions(self) -> GripperActions:
         return GripperActions.of(self.arm, self.gripper_speed, self.control_frequency, self.workspace,

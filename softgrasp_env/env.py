@@ -365,6 +365,8 @@ class SoftGraspEnv(gym.Env):
             "divergence": self._divergence if diverged else None,
             "action_clipped": clipped,
         }
+        if self.task.info_keys:  # the task's measurements (0 on a diverged step: infos compare by equality)
+            info.update(dict.fromkeys(self.task.info_keys, 0.0) if diverged else outcome.info)
         return info
 
     def _format_obs(self, reading: Reading):

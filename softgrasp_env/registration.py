@@ -15,6 +15,13 @@ _OLD = {"arm": "jump", "carry_frequency": 2.0, "carry_acceleration": None, "carr
 """The v1/v2 ids keep the arm, the carry test, the tissue's two-coefficient friction and its
 per-step material their results were made with (issue 19); the v3 ids take EnvArguments'
 defaults."""
+GRIP_TASK = {"finger_action": "force", "finger_force": 6.0, "cylinder_mass": 0.17, "cylinder_mass_range": 0.75,
+             "friction_range": 0.45, "squeeze_weight": 0.5, "squeeze_factor": 2.0, "tactile": (4, 4)}
+"""The grip-force task's settings (issue 21; softgrasp_env/tasks/grip.py): the squeeze as the action,
+mass 0.04-0.30 kg and mu_s 0.50-1.31 drawn per episode (the least force that holds spans 0.16-3.0
+N, 18-fold), the squeeze charged in the reward and bounded at twice the least in the success, a
+4 x 4 taxel grid on each pad. 6 N at full action: the tissue holds at 8 N without tearing (8 mm
+deviation at most, no intrusion)."""
 _ENV, _GOAL = "softgrasp_env.env:SoftGraspEnv", "softgrasp_env.env:SoftGraspGoalEnv"
 
 
@@ -31,6 +38,8 @@ _SPECS: dict[str, tuple[str, dict]] = {
     **{f"SoftGraspEasyRigid-{v}": (_ENV, _kw("rigid", v, reward_type="dense", task="easy")) for v in ("v3", "v1")},
     "SoftGraspRigidTorsion-v3": (_ENV, _kw("rigid_torsion", "v3", reward_type="dense", carry=True)),
     "SoftGraspEasyRigidTorsion-v3": (_ENV, _kw("rigid_torsion", "v3", reward_type="dense", task="easy")),
+    **{f"SoftGraspGrip{name}-v3": (_ENV, _kw(kind, "v3", reward_type="dense", task="easy", carry=True, **GRIP_TASK))
+       for name, kind in (("", "tissue"), ("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion"))},
     "SoftGrasp-v1": (_ENV, _kw("tissue", "v1", reward_type="dense", carry=False)),
     "SoftGraspRigid-v1": (_ENV, _kw("rigid", "v1", reward_type="dense", carry=False)),
     "SoftGraspSparse-v1": (_ENV, _kw("tissue", "v1", reward_type="sparse", carry=False)),
@@ -56,10 +65,12 @@ def steps_to_succeed(env: gym.Env) -> int | None:
     """The fewest env steps after which ``env`` (a SoftGrasp env, wrapped or not) can report success:
     with the carry test, the step at which the carry is over (``carry_start + carry_duration``,
     100 steps at the defaults); None without it (a lift can succeed at any step)."""
-    from .tasks import CarryTest
+    from .tasks import CarryTest, TaskWrapper
 
     base = env.unwrapped
     task, args = getattr(base, "task", None), getattr(base, "args", None)
+    if isinstance(task, TaskWrapper):  # the carry under what wraps it (the grip-force task)
+        task = task.find(CarryTest)
     if not isinstance(task, CarryTest) or args is None:
         return None
     per_step = args.substeps

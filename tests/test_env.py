@@ -29,7 +29,7 @@ _INF_BOUND = "observation space m"
 
 
 def test_ids_are_registered_with_time_limits():
-    assert len(ENV_IDS) == 17
+    assert len(ENV_IDS) == 20
     gym.register_envs(softgrasp_env)  # the documented idiom is accepted
     for env_id in ENV_IDS:
         spec = gym.spec(env_id)

@@ -35,6 +35,8 @@ class Outcome:
     """The reward's named terms (``info["reward_terms"]``)."""
     carrying: bool = False
     """The arm, not the policy, moves the palm (``info["carrying"]``)."""
+    info: Mapping[str, float] = field(default_factory=dict)
+    """Measurements the task adds to ``info`` by name (the task's ``info_keys``)."""
 
 
 class Task:
@@ -50,6 +52,8 @@ class Task:
     """The reward of a step on which the simulation diverged."""
     reset_options: tuple[str, ...] = ()
     """Keys ``reset(options=...)`` accepts (each fixes a quantity the draw would randomise)."""
+    info_keys: tuple[str, ...] = ()
+    """The entries every :class:`Outcome`'s ``info`` has (0 on a diverged step)."""
 
     def start_height(self, cylinder_height: float, finger_half_height: float, pad: float) -> float:
         """Height of the grip point above the cylinder's mid height at the start [m], for a cylinder
@@ -93,6 +97,7 @@ class TaskWrapper(Task):
         self.reward_terms = task.reward_terms
         self.diverged_reward = task.diverged_reward
         self.reset_options = task.reset_options
+        self.info_keys = task.info_keys
 
     def start_height(self, cylinder_height: float, finger_half_height: float, pad: float) -> float:
         return self.task.start_height(cylinder_height, finger_half_height, pad)
@@ -111,6 +116,15 @@ class TaskWrapper(Task):
 
     def carrying(self, steps: int) -> bool:
         return self.task.carrying(steps)
+
+    def find(self, kind: type[Task]) -> Task | None:
+        """The first task of type ``kind`` in this chain of wrappers, this one included (None)."""
+        task: Task = self
+        while not isinstance(task, kind):
+            if not isinstance(task, TaskWrapper):
+                return None
+            task = task.task
+        return task
 
     def evaluate(self, reading: Reading, scene: GraspScene) -> Outcome:
         return self.task.evaluate(reading, scene)

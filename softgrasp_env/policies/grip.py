@@ -1,0 +1,162 @@
+"""Scripted policies for the grip-force task (SoftGraspGrip-v3 and its rigid twins; issue 21).
+
+Both move the arm as :class:`~softgrasp_env.policies.ScriptedGraspPolicy` does (over the
+cylinder, down onto its centre, lift to ``lift_to``) and set the squeeze themselves:
+
+- :class:`ConstantGripPolicy`, the force-blind baseline: one squeeze throughout. It holds every
+  cylinder whose least force lies below it, and succeeds only where that least force is within
+  the task's factor of it: no constant suits an episode whose mass and friction are not observed.
+- :class:`TactileGripPolicy` reads the pads' taxels (``tactile=(rows, cols)``, on by default on the
+  grip ids): it lifts with ``start_force``, reads the cylinder's weight on the pads as their
+  traction, then lowers the squeeze until the traction departs from that weight - the pads begin
+  to slip - and holds with ``margin`` times the last squeeze that did not (Johansson & Westling
+  1984: humans grip with a safety margin over the slip force they sense). It knows nothing of the
+  episode's mass or friction: the weight it reads, the slip it feels.
+
+Both are stateful within an episode (``reset()`` between episodes; ``predict`` resets on SB3's
+``episode_start``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..observation import tactile_view
+from ..tasks.lift import MIN_GRIP_FORCE
+from ..validation import check_range
+from .scripted import ScriptedGraspPolicy
+
+
+def _env_args(env):
+    args = getattr(env.unwrapped, "args", None)
+    if args is None:
+        raise TypeError(f"needs a SoftGrasp env, got {env!r}")
+    if args.finger_action != "force":
+        raise ValueError("a grip-force policy sets the squeeze: make the env with finger_action='force' (the "
+                         f"SoftGraspGrip ids), got finger_action={args.finger_action!r}")  # fmt: skip
+    return args
+
+
+class _GripPolicy:
+    """The arm as the scripted grasp moves it, the squeeze from :meth:`squeeze` [N]."""
+
+    def __init__(self, env, *, lift_to: float = 0.065) -> None:
+        args = _env_args(env)
+        # gripped from MIN_GRIP_FORCE on: a light squeeze still holds (the grasp policy's 0.5 N would
+        # send the arm back down to the cylinder's centre while it holds it lightly)
+        self.arm = ScriptedGraspPolicy.for_env(env, lift_to=lift_to, grip_force=MIN_GRIP_FORCE)
+        self.names = env.unwrapped.obs_names
+        self.index = {n: k for k, n in enumerate(self.names)}
+        self.max_force = float(args.finger_force)
+        self.reset()
+
+    def reset(self) -> None:
+        """A new episode begins."""
+
+    def squeeze(self, obs: np.ndarray) -> float:
+        raise NotImplementedError
+
+    def __call__(self, obs) -> np.ndarray:
+        obs = np.asarray(obs, dtype=np.float64)
+        action = self.arm(obs)
+        force = min(max(self.squeeze(obs), 0.0), self.max_force)
+        action[3] = 2.0 * force / self.max_force - 1.0
+        return action
+
+    def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
+        """SB3's policy interface for one env (a leading batch axis of 1 is accepted): resets when
+        ``episode_start`` says an episode begins."""
+        obs = np.asarray(observation)
+        batched = obs.ndim == 2
+        if batched and obs.shape[0] != 1:
+            raise ValueError(f"{type(self).__name__} keeps one episode's state: one env at a time, got a batch of "
+                             f"{obs.shape[0]}")  # fmt: skip
+        if episode_start is not None and bool(np.asarray(episode_start).ravel()[0]):
+            self.reset()
+        action = self(obs[0] if batched else obs)
+        return (action[None] if batched else action), state
+
+
+class ConstantGripPolicy(_GripPolicy):
+    """The force-blind baseline: squeeze with ``force`` [N] throughout (module docstring)."""
+
+    def __init__(self, env, force: float, **kwargs) -> None:
+        self.force = check_range("force", force, 0.0, float(_env_args(env).finger_force), owner="ConstantGripPolicy")
+        super().__init__(env, **kwargs)
+
+    def squeeze(self, obs: np.ndarray) -> float:
+        return self.force
+
+
+class TactileGripPolicy(_GripPolicy):
+    """Lower the squeeze until the pads feel the cylinder slip, then hold with a margin (module
+    docstring). ``start_force`` [N] lifts any cylinder of the task; once it is up and still for
+    ``settle`` env steps, the pads' traction is its weight W. The squeeze falls by ``fast`` per step
+    to W / ``mu_min`` (no cylinder with friction at least ``mu_min`` slips above it), then by
+    ``step`` every ``1 + wait`` steps (a squeeze counts as holding once it has held that long); the
+    first step at which the traction falls below W by more than ``tolerance`` (relative) is the
+    slip - sliding, friction carries less than the weight - and the squeeze becomes ``margin``
+    times the last one that held. A rise of the traction is not slip: the pads relaxing as the
+    squeeze falls push the cylinder up for a step. At
+    ``deadline`` [s] (before the carry) the search stops where it is."""
+
+    def __init__(self, env, *, start_force: float = 4.0, fast: float = 0.8, step: float = 0.9, wait: int = 1,
+                 settle: int = 3, tolerance: float = 0.05, mu_min: float = 0.4, margin: float = 1.5,
+                 deadline: float | None = None, **kwargs) -> None:  # fmt: skip
+        args = _env_args(env)
+        if args.taxel_grid is None:
+            raise ValueError("TactileGripPolicy reads the pads' taxels: make the env with tactile=(rows, cols)")
+        self.area = args.taxel_grid.area
+        self.start_force = check_range("start_force", start_force, 0.0, args.finger_force, lo_open=True,
+                                       owner="TactileGripPolicy")  # fmt: skip
+        self.fast = check_range("fast", fast, 0.0, 1.0, lo_open=True, hi_open=True, owner="TactileGripPolicy")
+        self.step = check_range("step", step, 0.0, 1.0, lo_open=True, hi_open=True, owner="TactileGripPolicy")
+        self.wait = int(wait)
+        self.settle = int(settle)
+        self.tolerance = check_range("tolerance", tolerance, 0.0, 1.0, lo_open=True, owner="TactileGripPolicy")
+        self.mu_min = check_range("mu_min", mu_min, 0.0, 10.0, lo_open=True, owner="TactileGripPolicy")
+        self.margin = check_range("margin", margin, 1.0, 10.0, owner="TactileGripPolicy")
+        self.deadline = float(deadline) if deadline is not None else float(args.carry_start) - 0.2
+        super().__init__(env, **kwargs)
+
+    def reset(self) -> None:
+        self.force = self.start_force
+        self.phase = "lift"
+        self.still = 0
+        self.weight = np.nan
+        self.floor = np.nan
+        self.held = self.start_force
+        self.judged = 0
+
+    def traction(self, obs: np.ndarray) -> float:
+        """The pads' mean upward traction [N]: the weight they carry while the cylinder sticks."""
+        taxels = tactile_view(obs, self.names)
+        return float(-taxels[..., 2].sum(axis=(1, 2)).mean() * self.area)
+
+    def squeeze(self, obs: np.ndarray) -> float:
+        i = self.index
+        if self.phase == "lift":
+            up = obs[i["lift"]] >= self.arm.lift_to - 0.002 and abs(obs[i["cyl_vz"]]) < 0.005
+            self.still = self.still + 1 if up else 0
+            if self.still >= self.settle:
+                self.phase, self.weight = "lower", self.traction(obs)
+                self.floor = self.weight / self.mu_min
+        elif self.phase == "lower":
+            if obs[i["time"]] >= self.deadline:
+                self.phase = "hold"
+            elif self.force > self.floor:  # above W / mu_min nothing of the task slips
+                self.force = max(self.force * self.fast, self.floor * (1.0 - 1e-9))
+                self.judged, self.held = 0, self.force  # the floor holds whatever the friction
+            else:
+                self.judged += 1
+                if self.judged <= self.settle:  # the pads settle at the floor: the weight read there
+                    self.weight = self.traction(obs)
+                elif self.traction(obs) < (1.0 - self.tolerance) * self.weight:  # slipping: friction < weight
+                    self.phase, self.force = "hold", min(self.margin * self.held, self.max_force)
+                elif self.judged % (1 + self.wait) == 0:  # this squeeze held through its steps: lower it
+                    self.held = self.force
+                    self.force *= self.step
+        return self.force
+
+
+__all__ = ["ConstantGripPolicy", "TactileGripPolicy"]
