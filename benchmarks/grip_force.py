@@ -3,11 +3,13 @@ soft fingers and the rigid peers, over the same seeds.
 
     python benchmarks/grip_force.py                       # 50 seeds, every kind and policy (~15 min)
     python benchmarks/grip_force.py --seeds 20 --ids SoftGraspGripRigid-v3
+    PYTHONPATH=. python benchmarks/grip_force.py --models runs/SoftGraspGrip-v3_sac_0   # a learned policy
 
 Policies: the tactile one (softgrasp_env.policies.grip.TactileGripPolicy: lower the squeeze until
 the pads feel slip, then a margin), force-blind constant grips (ConstantGripPolicy at several
 forces), and open loop (the tactile policy's actions of the first seed, replayed on every seed).
-Per id and policy it prints the success rate, how often the cylinder was held through the carry
+``--models`` evaluates runs saved by train.py instead (deterministic, on their own env and kwargs,
+the same seeds). Per id and policy it prints the success rate, how often the cylinder was held through the carry
 whatever the squeeze, and the carry's mean squeeze over the least that holds (median, and the
 90th percentile) among the episodes held; ``--json`` writes every episode.
 """
@@ -68,11 +70,25 @@ def main() -> None:
     parser.add_argument("--ids", nargs="+", default=list(GRIP_IDS), choices=GRIP_IDS)
     parser.add_argument("--policies", nargs="+", default=["tactile", "constant", "open-loop"],
                         choices=["tactile", "constant", "open-loop"])  # fmt: skip
+    parser.add_argument("--models", nargs="+", default=None, help="train.py runs to evaluate instead")
     parser.add_argument("--json", default=None, help="write every episode here")
     args = parser.parse_args()
     seeds = range(args.first_seed, args.first_seed + args.seeds)
     out = {}
-    for env_id in args.ids:
+    for path in args.models or []:
+        from agents.runs import load_run
+
+        run = load_run(path)
+        env = run.make_env()
+        policy = run.policy
+        policy.reset = lambda: None  # stateless
+        tic = time.perf_counter()
+        runs = [episode(env, policy, s) for s in seeds]
+        name = f"{run.meta['env']} {run.meta['algo']} {run.meta.get('env_kwargs') or ''}"
+        out[name] = runs
+        print(f"{path}: {name:40s} {summary(runs)}  ({time.perf_counter() - tic:.0f} s)", flush=True)
+        env.close()
+    for env_id in [] if args.models else args.ids:
         env = gym.make(env_id)
         tactile = TactileGripPolicy(env)
         plans = []

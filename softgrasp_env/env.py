@@ -123,7 +123,9 @@ class SoftGraspEnv(gym.Env):
     success_height, 0, 1)`` (1 once the cylinder is 5 cm up) and ``reach = -reach_weight *
     min(d, 0.1 m) / 0.1 m`` with ``d`` the grip point's distance to the cylinder centre; both terms
     are in ``info["reward_terms"]``. ``reward_type="sparse"`` (``SoftGraspSparse-v3``): 1 on steps
-    where ``info["held"]``, else 0.
+    where ``info["held"]``, else 0. The grip-force task (``SoftGraspGrip-v3`` and its rigid twins;
+    ``squeeze_weight``) adds ``squeeze = -squeeze_weight * mean(force_left, force_right) /
+    finger_force`` (0.5 on the grip ids), its own term.
 
     ## Starting state
     ``task="reach"``: fingers fully open, the fingertips 2 cm above the cylinder's top, the grip
@@ -132,7 +134,9 @@ class SoftGraspEnv(gym.Env):
     positive opens the gap at the top) and a yaw U(±yaw_range) (π/4); the palm offset along the
     faces by U(±lateral_offset_range). ``task="easy"`` (the Easy ids): the open fingers around the
     cylinder's top over the origin, no wedge, yaw U(±5°), the cylinder at U(±1 cm). Friction,
-    cylinder radius and mass are randomised too if their ranges are non-zero. Every draw comes from
+    cylinder radius and mass are randomised too if their ranges are non-zero (the grip ids, on the
+    easy start: mass 0.17 kg × U(1 ± 0.75), every friction × U(1 ± 0.45), neither observed: the
+    least force that holds spans 0.16-3.0 N). Every draw comes from
     the env's ``np_random``; ``reset(options=...)`` fixes any of them (``cylinder_xy``,
     ``lateral_offset``, ``yaw``, ``jaw_wedge``, ``friction_scale``, ``cylinder_radius``,
     ``cylinder_mass``, ``gripper_xy``; with the carry test also ``carry_frequency`` [Hz],
@@ -143,7 +147,12 @@ class SoftGraspEnv(gym.Env):
     - ``info["is_success"]``: ``info["held"]`` - lifted ≥ ``success_height``, both fingers pressing
       (≥ 0.05 N each), tilted no more than ``max_tilt`` - and, with the carry test, the carry over
       (``info["carrying"]`` while it runs) with the cylinder held at every env step of it and its
-      in-hand slide at most ``carry_slide_limit`` (5 mm; v1/v2: held at the end only).
+      in-hand slide at most ``carry_slide_limit`` (5 mm; v1/v2: held at the end only). The
+      grip-force task (``squeeze_factor``, 2 on the grip ids) also needs the carry's mean squeeze
+      ``info["carry_squeeze"]`` at most that many times ``info["least_squeeze"]``, the least force
+      per finger that holds this cylinder through this carry: Coulomb, ``m max|a - g| / (2 mu_s)``
+      across the jaw axis with the cylinder's accelerations over each env step of the carry (both
+      0 before it; softgrasp_env/tasks/grip.py).
     - Terminated: the cylinder tilts more than ``max_tilt`` (knocked over), leaves the workspace
       (more than 15 cm from the origin horizontally, below the ground or above 50 cm), or the
       simulation diverges (non-finite numbers, a body faster than 20 m/s, tissue torn more than

@@ -51,7 +51,10 @@ away, misaligned fingers, lift, then the arm sways the cylinder for the last 1.5
 per episode; success means held through all of it) with soft fingers and the dense lift reward,
 its rigid-only twin, the sparse-reward variant, the goal-conditioned variant (dict observations,
 ``compute_reward`` for HER) and the gentle start (``task="easy"``: the open fingers around the
-cylinder's top, aligned), soft and rigid, for debugging a policy or the physics. The arm moves
+cylinder's top, aligned), soft and rigid, for debugging a policy or the physics; the grip-force
+task (SoftGraspGrip-v3, soft / rigid / torsional: the gentle start with the carry, the squeeze as
+the action, mass and friction drawn and not observed, the squeeze charged and success within 2 x
+the least that holds, 4 x 4 taxels per pad: softgrasp_env/tasks/grip.py). The arm moves
 the palm at the action's velocity along a smooth path (at most 0.15 m/s and 1.5 m/s^2).
 
 v2 and v1 (the carry test of 1 cm at 2 Hz, success at its end; v1 without it) reproduce their

@@ -245,3 +245,22 @@ def test_convergence_reads_monotone_series_and_the_pad_rows_against_coulomb():
     rows = tissue_rows(SimConfig())
     for metric, (figure, coulomb) in rows.items():  # measured +0.08 %, +0.00 %, -0.10 % at the defaults
         assert abs(figure / coulomb - 1.0) < 0.005, (metric, figure, coulomb)
+
+
+def test_grip_force_runs_every_policy_and_writes_each_episode(tmp_path):
+    out = tmp_path / "grip.json"
+    proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "grip_force.py"), "--seeds", "3", "--ids",
+                           "SoftGraspGripRigid-v3", "--json", str(out)], cwd=ROOT, capture_output=True, text=True,
+                          timeout=900, env={"PYTHONPATH": str(ROOT), "PATH": ""}, check=False)  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    lines = [line for line in proc.stdout.splitlines() if line.startswith("SoftGraspGripRigid-v3")]
+    assert [line.split()[1] for line in lines] == ["tactile", "open", "constant", "constant", "constant", "constant"]
+    import json
+
+    runs = json.loads(out.read_text())["runs"]
+    assert len(runs) == 6 and all(len(r) == 3 for r in runs.values())
+    # the tactile policy holds all three seeds within the factor; 3 N holds them all, and succeeds
+    # exactly where that is within twice the least
+    assert all(r["success"] for r in runs["SoftGraspGripRigid-v3 tactile"])
+    for r in runs["SoftGraspGripRigid-v3 constant 3 N"]:
+        assert r["held"] and r["success"] == (r["carry_squeeze"] <= 2 * r["least_squeeze"])
