@@ -19,7 +19,7 @@ from . import presets
 from .config import SimConfig, TissueConfig
 from .fingers import FINGERS, FemConfig, FingerConfig, TissueFingerConfig, finger_config
 from .fingers.tactile import MAX_TAXELS, TaxelGrid
-from .observation import CARRY_OBS_NAMES, OBS_NAMES, tactile_names
+from .observation import CARRY_OBS_NAMES, OBS_NAMES, tactile_names, without_object
 from .scene import GRIP_TOP, GripperActions, SceneConfig, Workspace, fit_error, geometry_error
 from .scene.gripper import FINGER_ACTIONS
 from .tasks import TASKS, CarryTest, LeastSqueeze, StartRanges, Task
@@ -140,6 +140,10 @@ class EnvArguments:
         "rows x cols grid over the core's inner face, five per taxel: pressure and traction along y, z [Pa] and the "
         "tissue's shear along y, z [m] (0 for rigid pads); `softgrasp_env.observation.tactile_view` reshapes them. "
         "None: no tactile entries", type_="(int, int)")
+    observe_object: bool = _arg(True, "False: the observation leaves out the cylinder's pose and motion "
+        "(cyl_rel, cyl_axis, cyl_v, cyl_w, lift), keeping what the gripper's own sensors give - its pose and "
+        "velocity, the fingers' gap and forces, the clock, the taxels (the grip ids: an exact in-hand pose would "
+        "show a slip without touch)", type_="bool")
     render_width: int = _arg(480, "Width of an rgb_array frame [px]", type_="int")
     render_height: int = _arg(360, "Height of an rgb_array frame [px]", type_="int")
     render_camera: str = _arg("follow", "'follow' (frame the gripper and the cylinder wherever they are) or "
@@ -363,6 +367,9 @@ class EnvArguments:
             cylinder_radius=float(self.cylinder_radius_range), cylinder_mass=float(self.cylinder_mass_range)))  # fmt: skip
         self._set("workspace", Workspace.of(base))
         names = CARRY_OBS_NAMES if self.carry else OBS_NAMES
+        check_bool("observe_object", self.observe_object)
+        if not self.observe_object:
+            names = without_object(names)
         grid = None
         if self.tactile is not None:
             try:

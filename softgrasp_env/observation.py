@@ -41,6 +41,18 @@ reset [s]: the carry comes at a fixed time, and a policy that cannot see the clo
 task that is not Markov."""
 
 
+OBJECT_GROUPS: tuple[str, ...] = ("cyl_rel", "cyl_axis", "cyl_v", "cyl_w", "lift")
+"""The groups that observe the cylinder itself, its pose and motion: ``observe_object=False`` (the
+grip-force ids) leaves them out, keeping what a gripper's own sensors give - its pose and velocity,
+its fingers' gap and forces, the clock, the taxels."""
+
+
+def without_object(names: tuple[str, ...]) -> tuple[str, ...]:
+    """``names`` without the entries of :data:`OBJECT_GROUPS`."""
+    drop = {n for g in OBJECT_GROUPS for n in OBS_GROUPS[g]}
+    return tuple(n for n in names if n not in drop)
+
+
 TACTILE_PREFIX = "tactile_"
 """Every tactile entry's name starts with it (``tactile=(rows, cols)``: :func:`tactile_names`)."""
 
@@ -138,5 +150,5 @@ def read(scene: GraspScene, force: np.ndarray, grid: TaxelGrid | None = None) ->
                    tactile=None if grid is None else scene.fingers.tactile(grid))  # fmt: skip
 
 
-__all__ = ["CARRY_OBS_NAMES", "OBS_GROUPS", "OBS_NAMES", "TACTILE_PREFIX", "Reading", "obs_slice", "read",
-           "tactile_names", "tactile_view"]  # fmt: skip
+__all__ = ["CARRY_OBS_NAMES", "OBJECT_GROUPS", "OBS_GROUPS", "OBS_NAMES", "TACTILE_PREFIX", "Reading", "obs_slice",
+           "read", "tactile_names", "tactile_view", "without_object"]  # fmt: skip

@@ -1,7 +1,9 @@
 """Scripted policies for the grip-force task (SoftGraspGrip-v3 and its rigid twins; issue 21).
 
-Both move the arm as :class:`~softgrasp_env.policies.ScriptedGraspPolicy` does (over the
-cylinder, down onto its centre, lift to ``lift_to``) and set the squeeze themselves:
+Both read only what the gripper senses (the grip ids observe neither the cylinder's pose nor its
+motion): from the easy start around the cylinder's top they go down 3 cm with the fingers open,
+squeeze, lift the grip 6.5 cm once both fingers press, hold it there, and set the squeeze
+themselves:
 
 - :class:`ConstantGripPolicy`, the force-blind baseline: one squeeze throughout. It holds every
   cylinder whose least force lies below it, and succeeds only where that least force is within
@@ -38,13 +40,16 @@ def _env_args(env):
 
 
 class _GripPolicy:
-    """The arm as the scripted grasp moves it, the squeeze from :meth:`squeeze` [N]."""
+    """The arm and the squeeze from what the gripper itself senses (the grip ids observe neither the
+    cylinder's pose nor its motion). The grip starts around the cylinder's top (the easy start, 5
+    cm above its middle): go down ``descend`` [m] (to 2 cm above the middle) with the fingers open, squeeze, and once both
+    fingers press lift ``lift_to`` [m] and hold there; the squeeze from :meth:`squeeze` [N]."""
 
-    def __init__(self, env, *, lift_to: float = 0.065) -> None:
+    def __init__(self, env, *, descend: float = 0.03, lift_to: float = 0.065) -> None:
         args = _env_args(env)
-        # gripped from MIN_GRIP_FORCE on: a light squeeze still holds (the grasp policy's 0.5 N would
-        # send the arm back down to the cylinder's centre while it holds it lightly)
-        self.arm = ScriptedGraspPolicy.for_env(env, lift_to=lift_to, grip_force=MIN_GRIP_FORCE)
+        self.mover = ScriptedGraspPolicy.for_env(env)  # its speed profile: stops where it is sent
+        self.descend = float(descend)
+        self.lift_to = float(lift_to)
         self.names = env.unwrapped.obs_names
         self.index = {n: k for k, n in enumerate(self.names)}
         self.max_force = float(args.finger_force)
@@ -52,14 +57,31 @@ class _GripPolicy:
 
     def reset(self) -> None:
         """A new episode begins."""
+        self.grasp_z: float | None = None
+        self.down = False
+        self.gripped = False
 
     def squeeze(self, obs: np.ndarray) -> float:
         raise NotImplementedError
 
+    def lifted(self, obs: np.ndarray) -> bool:
+        """The grip is at its lift height and still."""
+        i = self.index
+        return bool(self.gripped and obs[i["grip_z"]] >= self.grasp_z + self.lift_to - 0.002
+                    and abs(obs[i["grip_vz"]]) < 0.005)  # fmt: skip
+
     def __call__(self, obs) -> np.ndarray:
         obs = np.asarray(obs, dtype=np.float64)
-        action = self.arm(obs)
-        force = min(max(self.squeeze(obs), 0.0), self.max_force)
+        i = self.index
+        z, vz = float(obs[i["grip_z"]]), float(obs[i["grip_vz"]])
+        if self.grasp_z is None:
+            self.grasp_z = z - self.descend
+        self.down = self.down or (abs(z - self.grasp_z) < 0.002 and abs(vz) < 0.005)
+        self.gripped = self.gripped or (self.down and min(obs[i["force_left"]], obs[i["force_right"]]) >= MIN_GRIP_FORCE)
+        action = np.zeros(4, dtype=np.float32)
+        target = self.grasp_z + (self.lift_to if self.gripped else 0.0)
+        action[:3] = self.mover._velocity(np.array([0.0, 0.0, target - z]))
+        force = min(max(self.squeeze(obs), 0.0), self.max_force) if self.down else 0.0  # open on the way down
         action[3] = 2.0 * force / self.max_force - 1.0
         return action
 
@@ -90,8 +112,8 @@ class ConstantGripPolicy(_GripPolicy):
 
 class TactileGripPolicy(_GripPolicy):
     """Lower the squeeze until the pads feel the cylinder slip, then hold with a margin (module
-    docstring). ``start_force`` [N] lifts any cylinder of the task; once it is up and still for
-    ``settle`` env steps, the pads' traction is its weight W. The squeeze falls by ``fast`` per step
+    docstring). ``start_force`` [N] lifts any cylinder of the task; once the grip is up and still
+    for ``settle`` env steps, the pads' traction is the cylinder's weight W. The squeeze falls by ``fast`` per step
     to W / ``mu_min`` (no cylinder with friction at least ``mu_min`` slips above it), then by
     ``step`` every ``1 + wait`` steps (a squeeze counts as holding once it has held that long); the
     first step at which the traction falls below W by more than ``tolerance`` (relative) is the
@@ -100,8 +122,8 @@ class TactileGripPolicy(_GripPolicy):
     squeeze falls push the cylinder up for a step. At
     ``deadline`` [s] (before the carry) the search stops where it is."""
 
-    def __init__(self, env, *, start_force: float = 4.0, fast: float = 0.8, step: float = 0.9, wait: int = 1,
-                 settle: int = 3, tolerance: float = 0.05, mu_min: float = 0.4, margin: float = 1.5,
+    def __init__(self, env, *, start_force: float = 4.0, fast: float = 0.8, step: float = 0.85, wait: int = 1,
+                 settle: int = 2, tolerance: float = 0.05, mu_min: float = 0.45, margin: float = 1.5,
                  deadline: float | None = None, **kwargs) -> None:  # fmt: skip
         args = _env_args(env)
         if args.taxel_grid is None:
@@ -116,10 +138,11 @@ class TactileGripPolicy(_GripPolicy):
         self.tolerance = check_range("tolerance", tolerance, 0.0, 1.0, lo_open=True, owner="TactileGripPolicy")
         self.mu_min = check_range("mu_min", mu_min, 0.0, 10.0, lo_open=True, owner="TactileGripPolicy")
         self.margin = check_range("margin", margin, 1.0, 10.0, owner="TactileGripPolicy")
-        self.deadline = float(deadline) if deadline is not None else float(args.carry_start) - 0.2
+        self.deadline = float(deadline) if deadline is not None else float(args.carry_start) - 0.05
         super().__init__(env, **kwargs)
 
     def reset(self) -> None:
+        super().reset()
         self.force = self.start_force
         self.phase = "lift"
         self.still = 0
@@ -136,8 +159,7 @@ class TactileGripPolicy(_GripPolicy):
     def squeeze(self, obs: np.ndarray) -> float:
         i = self.index
         if self.phase == "lift":
-            up = obs[i["lift"]] >= self.arm.lift_to - 0.002 and abs(obs[i["cyl_vz"]]) < 0.005
-            self.still = self.still + 1 if up else 0
+            self.still = self.still + 1 if self.lifted(obs) else 0
             if self.still >= self.settle:
                 self.phase, self.weight = "lower", self.traction(obs)
                 self.floor = self.weight / self.mu_min

@@ -43,7 +43,10 @@ def test_grip_ids_are_the_task(make_env):
     u = env.unwrapped
     assert isinstance(u.task, LeastSqueeze) and isinstance(u.task.find(CarryTest), CarryTest)
     assert u.task.reward_terms == ("lift", "reach", "squeeze")
-    assert u.obs_names[-1] == "tactile_right_r3_c3_shear_z" and len(u.obs_names) == 24 + 2 * 16 * 5
+    assert u.obs_names[-1] == "tactile_right_r3_c3_shear_z" and len(u.obs_names) == 11 + 2 * 16 * 5
+    # what the gripper itself senses: not the cylinder's pose or motion
+    assert not {"cyl_rel_x", "cyl_vz", "cyl_wx", "cyl_axis_z", "lift"} & set(u.obs_names)
+    assert {"grip_z", "grip_vz", "finger_gap", "force_left", "force_right", "time"} <= set(u.obs_names)
     # the draws span the least force 18-fold: mass 0.17 x U(1 +- 0.75), mu_s 0.9 x U(1 +- 0.45)
     seen = []
     for seed in range(40):
@@ -91,6 +94,7 @@ def test_success_needs_the_squeeze_within_the_factor(make_env):
     ({"squeeze_factor": 2.0, "carry": False}, "carry=True"),
     ({"squeeze_factor": 0.5}, "squeeze_factor"),
     ({"squeeze_weight": -1.0}, "squeeze_weight"),
+    ({"observe_object": "no"}, "observe_object"),
 ])  # fmt: skip
 def test_bad_grip_arguments_are_named(kwargs, match):
     with pytest.raises(ValueError, match=match):
@@ -127,27 +131,29 @@ def _episodes(env, policy, seeds) -> list[dict]:
 
 def test_feeling_the_pads_beats_every_force_blind_grip(make_env):
     """The rigid peer's tactile policy (its pads' binned contact forces) against constant grips,
-    20 seeded episodes each. Measured: tactile 20 / 20 (squeeze 1.5 x the least that holds,
-    median); constant 0.5 / 1 / 2 / 3 N 4 / 9 / 6 / 3 of 20 (benchmarks/grip_force.py: 50 seeds
+    20 seeded episodes each. Measured: tactile 19 / 20 (squeeze 1.56 x the least that holds,
+    median); constant 0.5 / 1 / 2 / 3 N 4 / 8 / 6 / 3 of 20 (benchmarks/grip_force.py: 50 seeds
     of every kind)."""
     env = make_env("SoftGraspGripRigid-v3")
     seeds = range(1000, 1020)
     tactile = _episodes(env, TactileGripPolicy(env), seeds)
     wins = sum(i["is_success"] for i in tactile)
-    assert wins >= 18
+    assert wins >= 17
     for force in (0.5, 1.0, 2.0, 3.0):
         blind = sum(i["is_success"] for i in _episodes(env, ConstantGripPolicy(env, force), seeds))
         assert blind <= wins - 8, force
     ratios = [i["carry_squeeze"] / i["least_squeeze"] for i in tactile if i["is_success"]]
-    assert 1.2 < np.median(ratios) < 1.8  # the margin 1.5 over the slip, found within a step of 10 %
+    assert 1.3 < np.median(ratios) < 1.8  # the margin 1.5 over the slip, found within a step of 15 %
 
 
 @pytest.mark.slow
 def test_feeling_the_tissue_pads_beats_every_force_blind_grip(make_env):
-    """As above with the soft fingers (whose pads read less cleanly: docs/RESULTS.md)."""
+    """As above with the soft fingers (whose pads read less cleanly: docs/RESULTS.md). Measured:
+    tactile 13 / 20; constant 0.5 / 1 / 2 / 3 N 3 / 1 / 3 / 4 of 20."""
     env = make_env("SoftGraspGrip-v3")
     seeds = range(1000, 1020)
     wins = sum(i["is_success"] for i in _episodes(env, TactileGripPolicy(env), seeds))
+    assert wins >= 10
     for force in (0.5, 1.0, 2.0, 3.0):
         blind = sum(i["is_success"] for i in _episodes(env, ConstantGripPolicy(env, force), seeds))
-        assert blind < wins, force
+        assert blind <= wins - 5, force

@@ -1,0 +1,97 @@
+"""A defect of the tissue's friction, reproduced (issue 21's notes; docs/RESULTS.md, "The grip-force
+task"): a pad that sticks to the cylinder holds it after the squeeze is gone.
+
+    PYTHONPATH=. python benchmarks/friction_glue.py            # seed 1013, ~10 s
+
+The grip-force scene (SoftGraspGrip-v3) with the cylinder's pose observed, so that the scripted
+grasp takes the grip down onto the cylinder's centre with the fingers squeezing 4 N all the way
+(they close on the way down, the pads dragged along the cylinder), lifts it, and then lowers the
+squeeze as the tactile policy's search does - by 0.8 per step to W / 0.4, then by 0.9 every second
+step - without ever stopping. At each printed step: the squeeze commanded, the contact normal force
+each pad presses the cylinder with (the env's measured force), what the tissue pushes its cores with
+along the jaw (the solver's impulses over the world steps of the env step), and the tissue's
+contacts whose friction exceeds mu_s times their normal multiplier. A Coulomb contact cannot: the
+patch law (tissue/friction.py) bounds what a patch transmits, not the self-equilibrated rest.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import gymnasium as gym
+import numpy as np
+
+import softgrasp_env  # noqa: F401  (registers the ids)
+from softgrasp_env.policies import ScriptedGraspPolicy
+from softgrasp_env.scene.scene import LEFT, RIGHT
+from softgrasp_env.tasks.lift import MIN_GRIP_FORCE
+
+
+def contact_cone(world, mu: float) -> tuple[int, int, float, float]:
+    """The tissue's load-bearing contacts of the last world step: how many, how many with friction
+    above mu times their normal multiplier, the median and the largest ratio of the two."""
+    lc = world.solver.last_contacts()
+    n = lc.count
+    keep = ~lc.inner[:n] & (lc.normal_lambda[:n] > 0.0)
+    lam, f, nrm = lc.normal_lambda[:n][keep], lc.friction[:n][keep], lc.normal[:n][keep]
+    tangential = np.linalg.norm(f - np.sum(f * nrm, axis=1, keepdims=True) * nrm, axis=1)
+    ratio = tangential / lam if len(lam) else np.zeros(1)
+    return int(keep.sum()), int(np.sum(ratio > mu * (1 + 1e-3))), float(np.median(ratio)), float(ratio.max())
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seed", type=int, default=1013)
+    args = parser.parse_args()
+    env = gym.make("SoftGraspGrip-v3", observe_object=True)
+    obs, _ = env.reset(seed=args.seed)
+    u = env.unwrapped
+    scene, world = u.scene, u.scene.world
+    cfg = scene.config
+    mu, mass = cfg.tissue.friction_static, cfg.cylinder_mass
+    print(f"seed {args.seed}: {mass:.3f} kg, mu_s {mu:.2f}, least squeeze m g / (2 mu_s) = "
+          f"{mass * 9.81 / (2 * mu):.3f} N per finger")  # fmt: skip
+    arm = ScriptedGraspPolicy.for_env(u, grip_force=MIN_GRIP_FORCE)
+    names = u.obs_names
+    i = {n: k for k, n in enumerate(names)}
+    axis = np.array([math.cos(cfg.yaw), math.sin(cfg.yaw), 0.0])
+    force, still, weight, floor = 4.0, 0, None, None
+    impulses = np.zeros(2)
+
+    def watched_solve(state, colliders, original=world.solver.step):  # every world step's impulses
+        out = original(state, colliders)
+        impulses[:] += [out.rigid_impulse[LEFT] @ axis, out.rigid_impulse[RIGHT] @ axis]
+        return out
+
+    world.solver.step = watched_solve
+    print(" step  commanded  measured (left, right)  tissue on cores  lift    contacts over mu_s (median, max ratio)")
+    for k in range(env.spec.max_episode_steps):
+        if weight is None:
+            up = obs[i["lift"]] >= arm.lift_to - 0.002 and abs(obs[i["cyl_vz"]]) < 0.005
+            still = still + 1 if up else 0
+            if still >= 3:
+                weight = mass * 9.81 / 2  # each pad's share (the tactile policy reads it off its taxels)
+                floor = weight / 0.4
+        elif force > floor:
+            force = max(force * 0.8, floor)
+        elif k % 2 == 0:
+            force = max(force * 0.9, 0.05)
+        action = arm(obs)
+        action[3] = 2.0 * force / u.args.finger_force - 1.0
+        impulses[:] = 0.0
+        obs, _, terminated, _, info = env.step(action)
+        dt = u.args.sim.dt * u.args.substeps
+        if k % 6 == 0 or k >= 96:
+            n, over, med, top = contact_cone(world, mu)
+            print(f"{k:5d}  {force:7.3f} N  {u._last.force[0]:6.3f} {u._last.force[1]:6.3f} N      "
+                  f"{-impulses[0] / dt:+.3f} {impulses[1] / dt:+.3f} N  {u._last.lift:.4f}  {over:2d} of {n:2d} "
+                  f"({med:.2f}, {top:.2f}; mu_s {mu:.2f})")  # fmt: skip
+        if terminated:
+            break
+    print(f"held at the end: {info['held']}")
+    env.close()
+
+
+if __name__ == "__main__":
+    main()
