@@ -40,23 +40,22 @@ def contact_cone(world, mu: float) -> tuple[int, int, float, float]:
     return int(keep.sum()), int(np.sum(ratio > mu * (1 + 1e-3))), float(np.median(ratio)), float(ratio.max())
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seed", type=int, default=1013)
-    args = parser.parse_args()
+def glue(seed: int = 1013, report=print) -> dict:
+    """The scene of the module docstring from ``seed``; ``report`` gets the table's lines. Returns
+    the last step's figures: the squeeze commanded, the pads' measured normal force, the
+    load-bearing contacts and how many have friction above mu_s times their normal multiplier,
+    whether the cylinder is held."""
     env = gym.make("SoftGraspGrip-v3", observe_object=True)
-    obs, _ = env.reset(seed=args.seed)
+    obs, _ = env.reset(seed=seed)
     u = env.unwrapped
-    scene, world = u.scene, u.scene.world
-    cfg = scene.config
+    world, cfg = u.scene.world, u.scene.config
     mu, mass = cfg.tissue.friction_static, cfg.cylinder_mass
-    print(f"seed {args.seed}: {mass:.3f} kg, mu_s {mu:.2f}, least squeeze m g / (2 mu_s) = "
-          f"{mass * 9.81 / (2 * mu):.3f} N per finger")  # fmt: skip
+    report(f"seed {seed}: {mass:.3f} kg, mu_s {mu:.2f}, least squeeze m g / (2 mu_s) = "
+           f"{mass * 9.81 / (2 * mu):.3f} N per finger")  # fmt: skip
     arm = ScriptedGraspPolicy.for_env(u, grip_force=MIN_GRIP_FORCE)
-    names = u.obs_names
-    i = {n: k for k, n in enumerate(names)}
+    i = {n: k for k, n in enumerate(u.obs_names)}
     axis = np.array([math.cos(cfg.yaw), math.sin(cfg.yaw), 0.0])
-    force, still, weight, floor = 4.0, 0, None, None
+    force, still, floor = 4.0, 0, None
     impulses = np.zeros(2)
 
     def watched_solve(state, colliders, original=world.solver.step):  # every world step's impulses
@@ -65,14 +64,14 @@ def main() -> None:
         return out
 
     world.solver.step = watched_solve
-    print(" step  commanded  measured (left, right)  tissue on cores  lift    contacts over mu_s (median, max ratio)")
+    report(" step  commanded  measured (left, right)  tissue on cores  lift    contacts over mu_s (median, max ratio)")
+    dt = u.args.sim.dt * u.args.substeps
     for k in range(env.spec.max_episode_steps):
-        if weight is None:
+        if floor is None:
             up = obs[i["lift"]] >= arm.lift_to - 0.002 and abs(obs[i["cyl_vz"]]) < 0.005
             still = still + 1 if up else 0
             if still >= 3:
-                weight = mass * 9.81 / 2  # each pad's share (the tactile policy reads it off its taxels)
-                floor = weight / 0.4
+                floor = mass * 9.81 / 2 / 0.4  # each pad's share over 0.4 (the policy reads it off its taxels)
         elif force > floor:
             force = max(force * 0.8, floor)
         elif k % 2 == 0:
@@ -81,16 +80,24 @@ def main() -> None:
         action[3] = 2.0 * force / u.args.finger_force - 1.0
         impulses[:] = 0.0
         obs, _, terminated, _, info = env.step(action)
-        dt = u.args.sim.dt * u.args.substeps
+        n, over, med, top = contact_cone(world, mu)
         if k % 6 == 0 or k >= 96:
-            n, over, med, top = contact_cone(world, mu)
-            print(f"{k:5d}  {force:7.3f} N  {u._last.force[0]:6.3f} {u._last.force[1]:6.3f} N      "
-                  f"{-impulses[0] / dt:+.3f} {impulses[1] / dt:+.3f} N  {u._last.lift:.4f}  {over:2d} of {n:2d} "
-                  f"({med:.2f}, {top:.2f}; mu_s {mu:.2f})")  # fmt: skip
+            report(f"{k:5d}  {force:7.3f} N  {u._last.force[0]:6.3f} {u._last.force[1]:6.3f} N      "
+                   f"{-impulses[0] / dt:+.3f} {impulses[1] / dt:+.3f} N  {u._last.lift:.4f}  {over:2d} of {n:2d} "
+                   f"({med:.2f}, {top:.2f}; mu_s {mu:.2f})")  # fmt: skip
         if terminated:
             break
-    print(f"held at the end: {info['held']}")
+    result = {"commanded": force, "measured": u._last.force.copy(), "contacts": n, "over": over,
+              "held": bool(info["held"])}  # fmt: skip
+    report(f"held at the end: {result['held']}")
     env.close()
+    return result
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seed", type=int, default=1013)
+    glue(parser.parse_args().seed)
 
 
 if __name__ == "__main__":
