@@ -10,8 +10,8 @@ themselves:
   the task's factor of it: no constant suits an episode whose mass and friction are not observed.
 - :class:`TactileGripPolicy` reads the pads' taxels (``tactile=(rows, cols)``, on by default on the
   grip ids): it lifts with ``start_force``, reads the cylinder's weight on the pads as their
-  traction, then lowers the squeeze until the traction departs from that weight - the pads begin
-  to slip - and holds with ``margin`` times the last squeeze that did not (Johansson & Westling
+  traction, then lowers the squeeze until the traction falls below that weight - the pads begin to
+  slip - and holds with ``margin`` times the last squeeze that held (Johansson & Westling
   1984: humans grip with a safety margin over the slip force they sense). It knows nothing of the
   episode's mass or friction: the weight it reads, the slip it feels.
 
@@ -42,12 +42,13 @@ def _env_args(env):
 class _GripPolicy:
     """The arm and the squeeze from what the gripper itself senses (the grip ids observe neither the
     cylinder's pose nor its motion). The grip starts around the cylinder's top (the easy start, 5
-    cm above its middle): go down ``descend`` [m] (to 2 cm above the middle) with the fingers open, squeeze, and once both
-    fingers press lift ``lift_to`` [m] and hold there; the squeeze from :meth:`squeeze` [N]."""
+    cm above its middle): go down ``descend`` [m] (to 2 cm above the middle) with the fingers open,
+    squeeze, and once both fingers press lift ``lift_to`` [m] and hold there; the squeeze from
+    :meth:`squeeze` [N]."""
 
     def __init__(self, env, *, descend: float = 0.03, lift_to: float = 0.065) -> None:
         args = _env_args(env)
-        self.mover = ScriptedGraspPolicy.for_env(env)  # its speed profile: stops where it is sent
+        self.mover = ScriptedGraspPolicy.for_env(env)  # its speed profile (toward): stops where it is sent
         self.descend = float(descend)
         self.lift_to = float(lift_to)
         self.names = env.unwrapped.obs_names
@@ -80,7 +81,7 @@ class _GripPolicy:
         self.gripped = self.gripped or (self.down and min(obs[i["force_left"]], obs[i["force_right"]]) >= MIN_GRIP_FORCE)
         action = np.zeros(4, dtype=np.float32)
         target = self.grasp_z + (self.lift_to if self.gripped else 0.0)
-        action[:3] = self.mover._velocity(np.array([0.0, 0.0, target - z]))
+        action[:3] = self.mover.toward(np.array([0.0, 0.0, target - z]))
         force = min(max(self.squeeze(obs), 0.0), self.max_force) if self.down else 0.0  # open on the way down
         action[3] = 2.0 * force / self.max_force - 1.0
         return action

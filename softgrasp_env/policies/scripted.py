@@ -101,13 +101,13 @@ class ScriptedGraspPolicy:
         if self.arm == "jump":
             return self._jump(rel, forces, lift, gripped, action)
         if gripped:
-            action[:3] = self._velocity(np.array([0.0, 0.0, self.lift_to - lift]))
+            action[:3] = self.toward(np.array([0.0, 0.0, self.lift_to - lift]))
             action[3] = 1.0
             return action
         move = rel.copy()
         if np.hypot(rel[0], rel[1]) > self.descend_tolerance and rel[2] < 0.0:
             move[2] = 0.0  # above it and not yet over it: no lower until over it
-        action[:3] = self._velocity(move)
+        action[:3] = self.toward(move)
         aligned = bool(np.abs(rel).max() <= self.align_tolerance)
         action[3] = 1.0 if aligned or (forces > 0.0).any() else -1.0
         return action
@@ -125,7 +125,7 @@ class ScriptedGraspPolicy:
         action[3] = 1.0 if aligned or (forces > 0.0).any() else -1.0
         return action
 
-    def _velocity(self, move: np.ndarray) -> np.ndarray:
+    def toward(self, move: np.ndarray) -> np.ndarray:
         """The action that heads along ``move`` [m] at the speed that stops there: a command holds
         for one control step T before the next can brake, so the speed s must cover s T plus the
         braking distance s^2 / 2a within the distance d: s = a (sqrt(T^2 + 2 d / a) - T)."""
