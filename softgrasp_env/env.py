@@ -94,8 +94,9 @@ class SoftGraspEnv(gym.Env):
     ``TypeError``.
 
     ## Observation space
-    ``Box(low, high, (24,), float32)`` (23 without the carry test: the v1 ids), SI units, world
-    frame (z up); ``env.obs_names`` names the entries, ``softgrasp_env.observation.obs_slice``
+    ``Box(low, high, (24,), float32)`` (23 without the carry test: the v1 ids; the grip ids, with
+    ``observe_object=False``, leave out the cylinder's rows 7-18 and 21 and add their taxels: 171),
+    SI units, world frame (z up); ``env.obs_names`` names the entries, ``softgrasp_env.observation.obs_slice``
     finds a group. The bounds are finite where they hold whatever happens - the cylinder axis in
     [-1, 1], the forces and the time at least 0, the yaw in [-π, π] - and infinite elsewhere
     (``softgrasp_env.env.OBS_BOUNDS`` says why the others are not bounded):
