@@ -23,8 +23,8 @@ mass 0.04-0.30 kg and mu_s 0.50-1.31 drawn per episode (the least force that hol
 N, 18-fold), the squeeze charged in the reward and bounded at twice the least in the success, a
 4 x 4 taxel grid on each pad, and the cylinder's pose and motion left out of the observation: with
 them, SAC learned to hold 43 of 50 within the bound without the taxels, reading the slip off the
-cylinder's exact in-hand motion, which no gripper's own sensors give. 6 N at full action: the tissue holds at 8 N without tearing (8 mm
-deviation at most, no intrusion)."""
+cylinder's exact in-hand motion, which no gripper's own sensors give. 6 N at full action: the
+tissue holds at 8 N without tearing (8 mm deviation at most, no intrusion)."""
 _ENV, _GOAL = "softgrasp_env.env:SoftGraspEnv", "softgrasp_env.env:SoftGraspGoalEnv"
 
 

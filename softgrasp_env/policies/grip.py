@@ -25,7 +25,7 @@ import numpy as np
 
 from ..observation import tactile_view
 from ..tasks.lift import MIN_GRIP_FORCE
-from ..validation import check_range
+from ..validation import check_int, check_range
 from .scripted import ScriptedGraspPolicy
 
 
@@ -114,14 +114,14 @@ class ConstantGripPolicy(_GripPolicy):
 class TactileGripPolicy(_GripPolicy):
     """Lower the squeeze until the pads feel the cylinder slip, then hold with a margin (module
     docstring). ``start_force`` [N] lifts any cylinder of the task; once the grip is up and still
-    for ``settle`` env steps, the pads' traction is the cylinder's weight W. The squeeze falls by ``fast`` per step
-    to W / ``mu_min`` (no cylinder with friction at least ``mu_min`` slips above it), then by
-    ``step`` every ``1 + wait`` steps (a squeeze counts as holding once it has held that long); the
-    first step at which the traction falls below W by more than ``tolerance`` (relative) is the
-    slip - sliding, friction carries less than the weight - and the squeeze becomes ``margin``
-    times the last one that held. A rise of the traction is not slip: the pads relaxing as the
-    squeeze falls push the cylinder up for a step. At
-    ``deadline`` [s] (before the carry) the search stops where it is."""
+    for ``settle`` env steps, the pads' traction is the cylinder's weight W. The squeeze falls by
+    ``fast`` per step to W / ``mu_min`` (no cylinder with friction at least ``mu_min`` slips above
+    it), then by ``step`` every ``1 + wait`` steps (a squeeze counts as holding once it has held
+    that long); the first step at which the traction falls below W by more than ``tolerance``
+    (relative) is the slip - sliding, friction carries less than the weight - and the squeeze
+    becomes ``margin`` times the last one that held. A rise of the traction is not slip: the pads
+    relaxing as the squeeze falls push the cylinder up for a step. At ``deadline`` [s] (default:
+    just before the carry) the search stops where it is."""
 
     def __init__(self, env, *, start_force: float = 4.0, fast: float = 0.8, step: float = 0.85, wait: int = 1,
                  settle: int = 2, tolerance: float = 0.05, mu_min: float = 0.45, margin: float = 1.5,
@@ -134,8 +134,8 @@ class TactileGripPolicy(_GripPolicy):
                                        owner="TactileGripPolicy")  # fmt: skip
         self.fast = check_range("fast", fast, 0.0, 1.0, lo_open=True, hi_open=True, owner="TactileGripPolicy")
         self.step = check_range("step", step, 0.0, 1.0, lo_open=True, hi_open=True, owner="TactileGripPolicy")
-        self.wait = int(wait)
-        self.settle = int(settle)
+        self.wait = check_int("wait", wait, 0, 100, owner="TactileGripPolicy")
+        self.settle = check_int("settle", settle, 1, 100, owner="TactileGripPolicy")
         self.tolerance = check_range("tolerance", tolerance, 0.0, 1.0, lo_open=True, owner="TactileGripPolicy")
         self.mu_min = check_range("mu_min", mu_min, 0.0, 10.0, lo_open=True, owner="TactileGripPolicy")
         self.margin = check_range("margin", margin, 1.0, 10.0, owner="TactileGripPolicy")

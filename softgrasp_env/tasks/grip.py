@@ -82,8 +82,9 @@ class LeastSqueeze(TaskWrapper):
         self.mass = math.nan if scene is None else float(scene.config.cylinder_mass)
         self.mu_s = math.nan if scene is None else float(scene.config.tissue.friction_static)
         self._prev: tuple[float, np.ndarray] | None = None  # (time, cylinder velocity) of the last reading
-        self._accelerations: list[np.ndarray] = []
-        self._axes: list[np.ndarray] = []
+        self.least = 0.0
+        """The least squeeze that holds through the carry so far [N] (0 before it): the largest of
+        each carry step's least."""
         self._squeeze_sum, self._squeeze_n = 0.0, 0
 
     def begin(self, scene: GraspScene, rng: np.random.Generator) -> None:
@@ -95,22 +96,16 @@ class LeastSqueeze(TaskWrapper):
         """The carry's mean squeeze so far [N] (0 before it)."""
         return self._squeeze_sum / self._squeeze_n if self._squeeze_n else 0.0
 
-    @property
-    def least(self) -> float:
-        """The least squeeze that holds through the carry so far [N] (0 before it)."""
-        if not self._accelerations:
-            return 0.0
-        return least_squeeze(self.mass, self.mu_s, np.array(self._accelerations), np.array(self._axes))
-
     def evaluate(self, reading: Reading, scene: GraspScene) -> Outcome:
         out = self.task.evaluate(reading, scene)
         squeeze = float(np.mean(reading.force))
         steps = scene.steps
         in_carry = self.task.phase(steps) is not None
         if self._prev is not None and in_carry and reading.time > self._prev[0]:
-            self._accelerations.append((reading.cyl_v - self._prev[1]) / (reading.time - self._prev[0]))
+            acceleration = (reading.cyl_v - self._prev[1]) / (reading.time - self._prev[0])
             yaw = reading.gripper_yaw
-            self._axes.append(np.array([math.cos(yaw), math.sin(yaw), 0.0]))  # the closing axis
+            axis = np.array([math.cos(yaw), math.sin(yaw), 0.0])  # the closing axis
+            self.least = max(self.least, least_squeeze(self.mass, self.mu_s, acceleration[None], axis))
             self._squeeze_sum += squeeze
             self._squeeze_n += 1
         self._prev = (reading.time, reading.cyl_v.copy())

@@ -157,3 +157,41 @@ def test_feeling_the_tissue_pads_beats_every_force_blind_grip(make_env):
     for force in (0.5, 1.0, 2.0, 3.0):
         blind = sum(i["is_success"] for i in _episodes(env, ConstantGripPolicy(env, force), seeds))
         assert blind <= wins - 5, force
+
+
+def _soak(env, seeds) -> list[tuple[float, float]]:
+    """Each episode the tactile policy succeeds in at 5 s, run on to 30 s: (lift at 5 s, at 30 s)
+    [m], 0 at 30 s if dropped."""
+    policy = TactileGripPolicy(env)
+    out = []
+    for seed in seeds:
+        obs, _ = env.reset(seed=seed)
+        policy.reset()
+        for k in range(600):
+            obs, _, terminated, _, info = env.step(policy(obs))
+            if k == 99:
+                if not info["is_success"]:
+                    break
+                at5 = info["lift_height"]
+            if terminated:
+                break
+        else:
+            out.append((at5, info["lift_height"] if info["held"] else 0.0))
+    return out
+
+
+def test_the_light_grip_holds_six_times_longer_than_an_episode(make_env):
+    """The tactile policy's squeeze (1.5 x the last that held) held for 30 s, 25 s past the carry:
+    the rigid twin, seeds 1000-1009. Measured (seeds 1000-1019): 19 of 19 held, the cylinder at
+    most 0.45 mm lower at 30 s than at 5 s (the torsional peer 0.46 mm; the tissue, slow test, 0)."""
+    runs = _soak(make_env("SoftGraspGripRigid-v3", max_episode_steps=600), range(1000, 1010))
+    assert len(runs) >= 9
+    assert all(at30 > 0.0 and at5 - at30 < 1.5e-3 for at5, at30 in runs), runs
+
+
+@pytest.mark.slow
+def test_the_light_tissue_grip_holds_six_times_longer_than_an_episode(make_env):
+    """As above with the soft fingers: measured 13 of 13 held, 0.00 mm lower at 30 s."""
+    runs = _soak(make_env("SoftGraspGrip-v3", max_episode_steps=600), range(1000, 1020))
+    assert len(runs) >= 10
+    assert all(at30 > 0.0 and at5 - at30 < 0.5e-3 for at5, at30 in runs), runs
