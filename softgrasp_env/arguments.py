@@ -84,6 +84,10 @@ class EnvArguments:
     tissue_material: str | None = _arg(None, "The tissue's elasticity: 'compliant' (v3: a shear modulus in Pa, the "
         "same material at every dt) or 'per_step' (v1/v2: a fraction of the way to the goal per step, the thesis'); "
         "None: the preset's, 'compliant'", type_="str")
+    tissue_contact_cone: bool | None = _arg(None, "Coulomb's cone on every tissue contact as well as on each pad's "
+        "patch (True) or on the patch alone (False: a pad squeezed on the way down can hold the cylinder after the "
+        "squeeze is gone; TissueConfig.contact_cone says why the cones are not the default yet); None: the "
+        "preset's, False", type_="bool")
     shear_modulus: float | None = _arg(None, "The compliant tissue's shear modulus [Pa] (None: the preset's, 4,000: "
         "the pad compresses ~4.4 mm under 3 N)", type_="float")
     tissue: TissueConfig | None = _arg(None, "A whole TissueConfig to start from (None: the preset's)",
@@ -261,6 +265,7 @@ class EnvArguments:
                                        ("friction_static", self.friction_static),
                                        ("friction_dynamic", self.friction_dynamic),
                                        ("material", self.tissue_material),
+                                       ("contact_cone", self.tissue_contact_cone),
                                        ("shear_modulus", self.shear_modulus)) if v is not None}  # fmt: skip
         self._set("tissue", replace(tissue, **overrides))  # validated by TissueConfig
         sim = self.sim if self.sim is not None else p_cfg.sim

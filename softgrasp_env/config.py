@@ -13,7 +13,7 @@ import warnings
 from dataclasses import dataclass, fields, replace
 from typing import Literal
 
-from .validation import accept_old_names, check_choice, check_int, check_range
+from .validation import accept_old_names, check_bool, check_choice, check_int, check_range
 
 CouplingMode = Literal["thesis", "consistent"]
 MATERIALS: tuple[str, ...] = ("compliant", "per_step")
@@ -98,6 +98,17 @@ class TissueConfig:
     compared under the same friction (issue 19: with mu_k = 0.7 < mu_s the soft grasp lifted at
     0.230 x the default friction where Coulomb needs 0.209 x, with mu_k = mu_s at 0.212 x; it held
     0.427 kg against 0.439 kg). A number below mu_s gives the two-coefficient law (v1/v2: 0.7)."""
+    contact_cone: bool = False
+    """Coulomb per contact as well as per patch (tissue/friction.py, _apply_with_cones): each tissue
+    contact's friction at most mu_s times its normal force, and what that sheds handed to the
+    patch's other contacts so that the patch still transmits what its law decides. False, the
+    default: the patch's bound on what it transmits alone, which lets the self-equilibrated
+    friction of a pad wrapped round the cylinder grow without bound - a pad squeezed on the way down
+    and then relaxed held the cylinder while its core pushed 0.058 N, 0.04 x Coulomb's least force;
+    with the cones 1.01 x (benchmarks/friction_glue.py). Not the default yet: the cones let a
+    squeezed pad spread, and its compression under 3 N moves with the iterations (5.23 / 4.98 /
+    4.80 / 4.42 / 4.23 mm at 2 / 3 / 5 / 10 / 20, 1/240 s; the patch law 4.51 / 4.34 / 4.30 /
+    4.32 / 4.32), which the material must not (issue 22's notes)."""
 
     def __post_init__(self) -> None:
         o = "TissueConfig"
@@ -106,6 +117,7 @@ class TissueConfig:
         check_int("group_size", self.group_size, 4, 16, owner=o)
         check_range("mass_density", self.mass_density, 100.0, 1e4, owner=o)
         check_choice("material", self.material, MATERIALS, owner=o)
+        check_bool("contact_cone", self.contact_cone, owner=o)
         if self.material == "compliant":
             if self.stiffness is not None:
                 raise ValueError(

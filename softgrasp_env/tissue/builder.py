@@ -352,6 +352,7 @@ def _single_body_model(
         body_compliant=np.array([compliant]),
         group_kappa=kappa,
         body_max_deviation=np.array([tissue.deviation_limit]),
+        body_contact_cone=np.array([tissue.contact_cone]),
     )
 
 

@@ -15,6 +15,13 @@ cylinder is held (iff 2 mu_s N >= m g) lives here, so three points are made exac
   contacts do.
 - **Kinetic friction half on positions, half on velocities**, which removes the v dt / 2 that
   position-level friction takes off every slide (friction_velocity_pass).
+- **Cones per contact** (optional, TissueConfig.contact_cone): within a sticking patch, each
+  contact's share of the self-equilibrated friction is bounded by its own cone, mu_s lambda_n, and
+  what that sheds in the patch's plane goes to the patch's contacts by their normal loads, so the
+  patch still transmits what its law decided (_apply_with_cones). Without it (the default,
+  _apply_patch_law) a pad wrapped round the cylinder held it with friction alone after its squeeze
+  was gone; with it a squeezed pad's compression moves with the iteration count (config.py,
+  TissueConfig.contact_cone), which is why it is not the default yet.
 
 friction_pairs (tissue against tissue of another body) keeps the per-step, per-contact rule.
 
@@ -101,7 +108,7 @@ def _patch_lever(c, p, c_point, patch):
 def friction_patches(
     nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_normal, c_rn, c_anchor, c_point, xp, inv_mass,
     body_friction, ns, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
-    rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose, patch, patch_slide, patch_change, last,
+    rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose, patch, patch_slide, patch_change, last, body_cone,
 ):  # fmt: skip
     """One Gauss-Seidel pass of Coulomb friction over all tissue-shape contacts.
 
@@ -126,10 +133,11 @@ def friction_patches(
     slide by v dt / 2 (-12 % from 0.25 m/s at 240 Hz).
 
     ``patch`` rows: 0 N, 1-3 sum lambda_n p, 4-6 sum lambda_n n, 7 e N, 8 J = sum lambda_n r^2,
-    9-11 F, 12 M, 13 scale of the transmitted part, 14 1 if the self-equilibrated part is kept."""
+    9-11 F, 12 M, 13 scale of the transmitted part, 14 1 if the self-equilibrated part is kept, 15-17
+    what the contacts' cones shed, per unit normal load."""
     npatch = patch.shape[0]
     for p in range(npatch):
-        for a in range(15):
+        for a in range(18):
             patch[p, a] = 0.0
     # pass 1: where each contact touches, and each patch's centre of pressure and mean normal
     for c in range(nc):
@@ -235,8 +243,31 @@ def friction_patches(
         else:
             patch_change[p] = False
             patch[p, 13] = 0.5 * kin / load
-    # pass 3: apply. Each contact's transmitted share: its normal load's share of F plus the
-    # torsion M / J lambda_n (m x r); the rest of its friction is the self-equilibrated part.
+    cone_any = False
+    for b in range(body_cone.shape[0]):
+        cone_any = cone_any or body_cone[b]
+    # Two compiled functions, not one with a branch per contact: the patch law alone then compiles
+    # to the very instructions it did before the cones (fastmath contraction is decided per
+    # function), and every id replays bit for bit (tests/test_trajectories.py).
+    if cone_any:
+        _apply_with_cones(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_point, xp, inv_mass,
+                          body_friction, ns, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
+                          imp_lin, imp_ang, dt, patch, body_cone)  # fmt: skip
+    else:
+        _apply_patch_law(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_point, xp, inv_mass,
+                         shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt,
+                         patch)  # fmt: skip
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def _apply_patch_law(
+    nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_point, xp, inv_mass, shape_rigid, rig_x,
+    rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, patch,
+):  # fmt: skip
+    """Pass 3 of friction_patches under the patch law alone (the default): each contact's transmitted
+    share - its normal load's share of F plus the torsion M / J lambda_n (m x r) - scaled as the
+    patch decided, and the rest of its friction, the self-equilibrated part, kept while the patch
+    sticks; applied to the particle and the body."""
     for c in range(nc):
         p = c_patch[c]
         lam = c_lambda[c]
@@ -262,6 +293,110 @@ def friction_patches(
             tx = keep * (tx - gx) + sc * gx
             ty = keep * (ty - gy) + sc * gy
             tz = keep * (tz - gz) + sc * gz
+        ix = tx - c_friction[c, 0]
+        iy = ty - c_friction[c, 1]
+        iz = tz - c_friction[c, 2]
+        c_friction[c, 0] = tx
+        c_friction[c, 1] = ty
+        c_friction[c, 2] = tz
+        wp = inv_mass[i]
+        xp[i, 0] += wp * ix
+        xp[i, 1] += wp * iy
+        xp[i, 2] += wp * iz
+        if r >= 0:
+            rigid_apply(r, c_point[c, 0] - rig_x[r, 0], c_point[c, 1] - rig_x[r, 1], c_point[c, 2] - rig_x[r, 2], -ix,
+                         -iy, -iz, rig_move[r], dt, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang)  # fmt: skip
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def _apply_with_cones(
+    nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_point, xp, inv_mass, body_friction, ns,
+    shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, patch, body_cone,
+):  # fmt: skip
+    """Pass 3 of friction_patches with Coulomb's cone on every contact as well (TissueConfig.
+    contact_cone): as _apply_patch_law, then each contact's self-equilibrated part bounded by its
+    own cone, and what that sheds in the patch's plane handed back to the patch's contacts."""
+    npatch = patch.shape[0]
+    for c in range(nc):
+        p = c_patch[c]
+        lam = c_lambda[c]
+        if p < 0 or lam <= 0.0:
+            continue
+        sc = patch[p, 13]
+        keep = patch[p, 14]
+        b = p // ns
+        cone = body_cone[b] and keep == 1.0
+        if sc == 1.0 and keep == 1.0 and not cone:
+            continue  # the goal as it is
+        tx, ty, tz = c_friction_goal[c, 0], c_friction_goal[c, 1], c_friction_goal[c, 2]
+        inv_n = 1.0 / patch[p, 0]
+        share = lam * inv_n
+        gx = share * patch[p, 9]
+        gy = share * patch[p, 10]
+        gz = share * patch[p, 11]
+        if patch[p, 8] > 0.0:
+            rx, ry, rz, mx, my, mz = _patch_lever(c, p, c_point, patch)
+            k = patch[p, 12] / patch[p, 8] * lam
+            gx += k * (my * rz - mz * ry)
+            gy += k * (mz * rx - mx * rz)
+            gz += k * (mx * ry - my * rx)
+        if not cone:
+            c_friction_goal[c, 0] = keep * (tx - gx) + sc * gx
+            c_friction_goal[c, 1] = keep * (ty - gy) + sc * gy
+            c_friction_goal[c, 2] = keep * (tz - gz) + sc * gz
+            continue
+        sx, sy, sz = tx - gx, ty - gy, tz - gz  # the self-equilibrated part (kept: the patch sticks)
+        gx, gy, gz = sc * gx, sc * gy, sc * gz  # the transmitted part
+        # Coulomb per contact for the self-equilibrated part: it may not take the contact's
+        # friction past mu_s lambda_n. Unbounded, the flanks of a pad wrapped round the cylinder
+        # pulled it into the pad along their tangents - a squeeze the core never made - and a
+        # pad whose core pushed 0.06 N held the cylinder with 1.4 N (benchmarks/
+        # friction_glue.py). What a clamped contact sheds in the patch's plane is summed in
+        # patch[15:18] and handed to the patch's contacts by their normal loads below.
+        lim = body_friction[b, 0] * lam
+        aa = sx * sx + sy * sy + sz * sz
+        if (gx + sx) ** 2 + (gy + sy) ** 2 + (gz + sz) ** 2 > lim * lim and aa > 0.0:
+            bb = gx * sx + gy * sy + gz * sz
+            cc = gx * gx + gy * gy + gz * gz - lim * lim
+            f = 0.0  # |g + f s| = lim: the largest f in [0, 1]; 0 if g alone reaches the cone
+            if cc < 0.0:
+                f = min(1.0, (-bb + math.sqrt(bb * bb - aa * cc)) / aa)
+            patch[p, 15] += (1.0 - f) * sx
+            patch[p, 16] += (1.0 - f) * sy
+            patch[p, 17] += (1.0 - f) * sz
+            sx, sy, sz = f * sx, f * sy, f * sz
+        c_friction_goal[c, 0] = sx + gx
+        c_friction_goal[c, 1] = sy + gy
+        c_friction_goal[c, 2] = sz + gz
+    # What the clamped contacts shed in the plane of the patch goes to all its contacts in
+    # proportion to their normal loads, so that the patch transmits what its law decided: on
+    # a pad over a ramp the lightly loaded contacts reach their cones first, and without this
+    # the pad broke loose at 0.90 mu_s (3 iterations). Along the mean normal it is dropped: that
+    # is the squeeze by friction the cone bounds.
+    for p in range(npatch):
+        if patch[p, 0] <= 0.0 or (patch[p, 15] == 0.0 and patch[p, 16] == 0.0 and patch[p, 17] == 0.0):
+            continue
+        mx, my, mz = patch[p, 4], patch[p, 5], patch[p, 6]
+        ml = math.sqrt(mx * mx + my * my + mz * mz)
+        mx, my, mz = mx / ml, my / ml, mz / ml
+        dn = patch[p, 15] * mx + patch[p, 16] * my + patch[p, 17] * mz
+        inv_n = 1.0 / patch[p, 0]
+        patch[p, 15] = (patch[p, 15] - dn * mx) * inv_n
+        patch[p, 16] = (patch[p, 16] - dn * my) * inv_n
+        patch[p, 17] = (patch[p, 17] - dn * mz) * inv_n
+    # pass 4: apply
+    for c in range(nc):
+        p = c_patch[c]
+        lam = c_lambda[c]
+        if p < 0 or lam <= 0.0:
+            continue
+        i = np.uint64(c_particle[c])
+        r = shape_rigid[c_shape[c]]
+        tx, ty, tz = c_friction_goal[c, 0], c_friction_goal[c, 1], c_friction_goal[c, 2]
+        if body_cone[p // ns]:
+            tx += lam * patch[p, 15]
+            ty += lam * patch[p, 16]
+            tz += lam * patch[p, 17]
         ix = tx - c_friction[c, 0]
         iy = ty - c_friction[c, 1]
         iz = tz - c_friction[c, 2]

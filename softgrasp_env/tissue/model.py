@@ -59,6 +59,10 @@ class TissueModel:
     body_max_deviation: np.ndarray | None = None
     """(B,) the strain limit of each body [m]: the farthest a free particle may be from the spot its
     core carries it to (compliant bodies; anchors.limit_deviation); None: all inf (none)."""
+    body_contact_cone: np.ndarray | None = None
+    """(B,) bool: besides its patch's bound on what the patch transmits, each contact's friction is
+    bounded by its own cone, mu_s lambda_n (friction.friction_patches; TissueConfig.contact_cone);
+    None: all False (the patch bound alone, the default law)."""
 
     def __post_init__(self) -> None:
         if self.body_compliant is None:
@@ -67,6 +71,8 @@ class TissueModel:
             object.__setattr__(self, "group_kappa", np.zeros(self.particle_mass.shape[0]))
         if self.body_max_deviation is None:
             object.__setattr__(self, "body_max_deviation", np.full(self.body_core_shape.shape[0], np.inf))
+        if self.body_contact_cone is None:
+            object.__setattr__(self, "body_contact_cone", np.zeros(self.body_core_shape.shape[0], dtype=np.bool_))
 
     @property
     def particle_count(self) -> int:
@@ -127,6 +133,7 @@ def concatenate(models: list[TissueModel]) -> TissueModel:
         body_compliant=cat("body_compliant"),
         group_kappa=cat("group_kappa"),
         body_max_deviation=cat("body_max_deviation"),
+        body_contact_cone=cat("body_contact_cone"),
     )
 
 

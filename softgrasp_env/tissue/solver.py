@@ -120,7 +120,7 @@ _F_SCRATCH = (
     ("c_lambda", "contacts", 0), ("c_normal", "contacts", 3), ("c_rn", "contacts", 0), ("c_friction", "contacts", 3),
     ("c_friction_goal", "contacts", 3), ("c_anchor", "contacts", 3), ("c_point", "contacts", 3),
     ("pair_lambda", "pairs", 0), ("pair_lambda_t", "pairs", 0), ("pair_normal", "pairs", 3),
-    ("shape_pose", "shapes", 8), ("patch", "patches", 16),
+    ("shape_pose", "shapes", 8), ("patch", "patches", 18),
     ("g_u", "members", 3), ("g_raw", "members", 3),
 )  # fmt: skip
 _I_SCRATCH = (("c_particle", "contacts", 0), ("c_shape", "contacts", 0), ("c_patch", "contacts", 0),
@@ -134,7 +134,7 @@ _F_MODEL = (("rest_x", "n", 3), ("rest_q", "n", 4), ("rest_moment", "n", 9), ("i
             ("body_friction", "bodies", 2), ("group_kappa", "n", 0), ("body_max_deviation", "bodies", 0))  # fmt: skip
 _I_MODEL = (("p_body", "n", 0), ("g_off", "groups", 0), ("g_mem", "members", 0), ("body_off", "body_offsets", 0),
             ("body_core_shape", "bodies", 0))  # fmt: skip
-_B_MODEL = (("attached", "n", 0), ("body_compliant", "bodies", 0))
+_B_MODEL = (("attached", "n", 0), ("body_compliant", "bodies", 0), ("body_contact_cone", "bodies", 0))
 _F_PACK = _F_SCRATCH + _F_MODEL
 _I_PACK = _I_SCRATCH + _I_MODEL
 _B_PACK = _B_SCRATCH + _B_MODEL
@@ -148,11 +148,12 @@ _PACK = _F_PACK + _I_PACK + _B_PACK
  _C_PARTICLE, _C_SHAPE, _C_PATCH, _PAIR_I, _PAIR_J,
  _P_BODY, _G_OFF, _G_MEM, _BODY_OFF, _BODY_CORE_SHAPE,
  _C_INNER, _PATCH_SLIDE, _PATCH_CHANGE, _FIXED,
- _ATTACHED, _BODY_COMPLIANT) = range(len(_PACK))  # fmt: skip
+ _ATTACHED, _BODY_COMPLIANT, _BODY_CONTACT_CONE) = range(len(_PACK))  # fmt: skip
 assert [name for name, _, _ in _PACK][_ATTACHED] == "attached" and _PACK[_P_BODY][0] == "p_body"
 assert _PACK[_G_RAW][0] == "g_raw" and _PACK[_GROUP_KAPPA][0] == "group_kappa"
 assert _PACK[_BODY_MAX_DEVIATION][0] == "body_max_deviation"
 assert _PACK[_PAIR_J][0] == "pair_j" and _PACK[_FIXED][0] == "fixed" and _PACK[_BODY_COMPLIANT][0] == "body_compliant"
+assert _PACK[_BODY_CONTACT_CONE][0] == "body_contact_cone"
 
 
 @nb.njit(cache=True, inline="always")
@@ -219,6 +220,7 @@ def _step(
     p_body, g_off, g_mem = _view1(i_pack, layout, _P_BODY), _view1(i_pack, layout, _G_OFF), _view1(i_pack, layout, _G_MEM)
     body_off, body_core_shape = _view1(i_pack, layout, _BODY_OFF), _view1(i_pack, layout, _BODY_CORE_SHAPE)
     attached, body_compliant = _view1(b_pack, layout, _ATTACHED), _view1(b_pack, layout, _BODY_COMPLIANT)
+    body_contact_cone = _view1(b_pack, layout, _BODY_CONTACT_CONE)
     xp, qp, q_pred = _view(f_pack, layout, _XP), _view(f_pack, layout, _QP), _view(f_pack, layout, _Q_PRED)
     vd, wd, moment = _view(f_pack, layout, _VD), _view(f_pack, layout, _WD), _view(f_pack, layout, _MOMENT)
     spin_kick, g_frame = _view(f_pack, layout, _SPIN_KICK), _view(f_pack, layout, _G_FRAME)
@@ -289,8 +291,7 @@ def _step(
         friction_patches(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_normal, c_rn,
                          c_anchor, c_point, xp, inv_mass, body_friction, ns, shape_rigid, shape_local_x, shape_local_q,
                          rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose,
-                         patch,
-                         patch_slide, patch_change, it == iterations - 1)  # fmt: skip
+                         patch, patch_slide, patch_change, it == iterations - 1, body_contact_cone)  # fmt: skip
         friction_pairs(npairs, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, x, xp, inv_mass, p_body,
                        body_friction)  # fmt: skip
         if compliant:
@@ -344,7 +345,7 @@ class TissueSolver:
             "g_mem": model.group_members, "body_off": model.body_particle_offsets,
             "body_core_shape": model.body_core_shape, "attached": model.particle_attached,
             "body_compliant": model.body_compliant, "group_kappa": model.group_kappa,
-            "body_max_deviation": model.body_max_deviation,
+            "body_max_deviation": model.body_max_deviation, "body_contact_cone": model.body_contact_cone,
         }  # fmt: skip
         self._sizes = {"n": n, "contacts": 4 * n + 16, "pairs": 4 * n + 16, "shapes": 0, "patches": 0,
                        "members": model.group_members.shape[0], "groups": model.group_offsets.shape[0],

@@ -216,6 +216,16 @@ def test_pad_breaks_loose_at_the_friction_angle(mu_s, mu_k):
 
 
 @pytest.mark.parametrize("mu_s, mu_k", MU_PAIRS)
+def test_pad_with_contact_cones_breaks_loose_at_the_friction_angle(mu_s, mu_k):
+    """The same with Coulomb's cone on every contact (TissueConfig.contact_cone): what the lightly
+    loaded contacts shed is handed to the patch's others, so the pad still breaks loose at mu_s.
+    Without the handing on it broke loose at 0.898 mu_s (mu_s 0.3)."""
+    tissue = TissueConfig(friction_static=mu_s, friction_dynamic=mu_k, contact_cone=True)
+    tan = accuracy.ramp_breakaway(tissue, SimConfig())
+    assert abs(tan / mu_s - 1.0) < 0.005, f"breaks loose at tan {tan:.4f}, mu_s {mu_s}"
+
+
+@pytest.mark.parametrize("mu_s, mu_k", MU_PAIRS)
 def test_pad_slides_down_a_steeper_ramp_at_the_coulomb_rate(mu_s, mu_k):
     """Above the friction angle the pad accelerates at g (sin theta - mu_k cos theta)."""
     theta = math.atan(mu_s + 0.15)
