@@ -43,6 +43,53 @@ def read_card(model_dir: Path) -> dict[str, Any]:
     return json.loads((Path(model_dir) / "card.json").read_text())
 
 
+CONVERGED_POINTS = 5.0
+"""Issue 22's rule: a run has converged when its evaluation success changes by less than 5 points
+over the last 20 % of its budget."""
+CONVERGED_WINDOW = 0.2
+
+
+def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
+    """Wilson's score interval for a binomial proportion (Wilson 1927; 95 % at z = 1.96): unlike the
+    normal approximation it stays inside [0, 1] and is not empty at 0 or n successes."""
+    if n < 1 or not 0 <= successes <= n:
+        raise ValueError(f"need 0 <= successes <= n and n >= 1, got successes={successes!r}, n={n!r}")
+    p = successes / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z / (1 + z * z / n) * (p * (1 - p) / n + z * z / (4 * n * n)) ** 0.5
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def convergence(progress: list[dict[str, str]], budget: int, *, window: float = CONVERGED_WINDOW,
+                points: float = CONVERGED_POINTS) -> dict[str, Any]:  # fmt: skip
+    """Whether a run's evaluation success settled: the change over the last ``window`` of its
+    ``budget`` (env steps), read off a least-squares line through train.py's periodic evaluations
+    in that window (a line, not the two end points: each evaluation is a small sample, and its
+    noise would decide otherwise), in percentage points, with its standard error. Converged when
+    the change is below ``points`` in magnitude. Fewer than 3 evaluations in the window: not
+    decided (``converged`` None)."""
+    start = budget * (1.0 - window)
+    pts = [(float(r["timesteps"]), float(r["success_rate"])) for r in progress
+           if r.get("timesteps") and float(r["timesteps"]) >= start - 1e-9]  # fmt: skip
+    out: dict[str, Any] = {"rule": f"|change| < {points:g} points over the last {window:.0%} of {budget:,} steps "
+                                   "(least-squares line through the evaluations there)",
+                           "evaluations": len(pts), "change_points": None, "stderr_points": None,
+                           "converged": None}  # fmt: skip
+    if len(pts) < 3:
+        return out
+    import numpy as np
+
+    x, y = np.array(pts).T
+    slope, intercept = np.polyfit(x, y, 1)
+    resid = y - (slope * x + intercept)
+    sxx = float(np.sum((x - x.mean()) ** 2))
+    se = float(np.sqrt(np.sum(resid**2) / max(1, len(x) - 2) / sxx)) if sxx > 0 else float("nan")
+    span = budget * window
+    out.update(change_points=round(float(slope * span * 100), 2), stderr_points=round(se * span * 100, 2),
+               converged=bool(abs(slope * span * 100) < points), final_evaluation=float(y[-1]))  # fmt: skip
+    return out
+
+
 def _jsonable(value: Any) -> Any:
     if isinstance(value, dict):
         return {str(k): _jsonable(v) for k, v in value.items()}
@@ -140,6 +187,11 @@ def publish(run_dir: Path, *, episodes: int = EPISODES, seed: int = SEED, dest: 
         writer = csv.DictWriter(f, fieldnames=TRAINING_COLUMNS)
         writer.writeheader()
         writer.writerows(log)
+    successes = round(ev.success_rate * ev.episodes)
+    progress: list[dict[str, str]] = []
+    if (out / "progress.csv").exists():
+        with open(out / "progress.csv", newline="") as f:
+            progress = list(csv.DictReader(f))
     card = {
         "name": out.name,
         "env": meta["env"],
@@ -157,10 +209,13 @@ def publish(run_dir: Path, *, episodes: int = EPISODES, seed: int = SEED, dest: 
             "seeds": f"{seed}-{seed + episodes - 1}",
             "deterministic": True,
             "success_rate": ev.success_rate,
+            "successes": successes,
+            "wilson95": [round(v, 4) for v in wilson(successes, ev.episodes)],
             "mean_return": round(ev.mean_return, 4),
             "mean_final_lift_m": round(ev.mean_final_lift, 5),
             "diverged": ev.diverged,
         },
+        "convergence": convergence(progress, int(loaded.model.num_timesteps)),
         "versions": {"softgrasp_env": softgrasp_env.__version__, "stable_baselines3": stable_baselines3.__version__,
                      "torch": torch.__version__, "numpy": np.__version__, "python": platform.python_version()},
         "machine": "2-core x86-64 CPU, no GPU; two runs trained at a time, one torch thread each",
@@ -190,6 +245,7 @@ def render_card(card: dict[str, Any]) -> str:
             f"deterministic policy); mean return {ev['mean_return']:.2f}, mean final lift "
             f"{ev['mean_final_lift_m'] * 100:.2f} cm, diverged {ev['diverged']} |"
         ),
+        *_card_extras(card),
         f"| wall time | {minutes} of training on {card['machine']} |",
         f"| command | `{card['command']}` |",
         "",
@@ -198,6 +254,25 @@ def render_card(card: dict[str, Any]) -> str:
         "",
     ]
     return "\n".join(lines)
+
+
+def _card_extras(card: dict[str, Any]) -> list[str]:
+    """The card rows issue 22 added (cards published before it have neither)."""
+    rows = []
+    ev = card["evaluation"]
+    if "wilson95" in ev:
+        lo, hi = ev["wilson95"]
+        rows.append(f"| 95 % interval | {lo:.0%} - {hi:.0%} (Wilson, {ev['successes']} of {ev['episodes']}) |")
+    conv = card.get("convergence")
+    if conv:
+        if conv["converged"] is None:
+            verdict = f"not decided ({conv['evaluations']} evaluations in the window)"
+        else:
+            verdict = (f"{'**converged**' if conv['converged'] else '**not converged**'}: "
+                       f"{conv['change_points']:+.1f} ± {conv['stderr_points']:.1f} points "
+                       f"over the window, {conv['evaluations']} evaluations")  # fmt: skip
+        rows.append(f"| convergence | {verdict}; rule: {conv['rule']} |")
+    return rows
 
 
 def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True) -> str:
@@ -219,7 +294,7 @@ def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True) 
                 ev = evaluate(env, ScriptedGraspPolicy.for_env(env), episodes=episodes, seed=seed)
             finally:
                 env.close()
-            rows.append(("scripted", env_id, "-", "-", [ev.success_rate]))
+            rows.append(("scripted", env_id, "-", "-", [ev.success_rate], "-"))
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for model_dir in shipped():
         card = read_card(model_dir)
@@ -228,14 +303,19 @@ def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True) 
         rates = [c["evaluation"]["success_rate"] for c in cards]
         steps = sorted({c["timesteps"] for c in cards})
         minutes = [c["train_seconds"] / 60 for c in cards if c["train_seconds"] is not None]
+        decided = [c["convergence"]["converged"] for c in cards if c.get("convergence")]
+        converged = f"{sum(bool(d) for d in decided)} of {len(cards)}" if decided else "-"
         rows.append((algo, env_id, "/".join(f"{s:,}" for s in steps),
-                     f"{np.mean(minutes):.0f}" if minutes else "-", rates))  # fmt: skip
-    out = ["| policy | env | env steps | train min (mean) | seeds | success, 100 episodes each (mean; per seed) |",
-           "|---|---|---|---|---|---|"]  # fmt: skip
-    for algo, env_id, steps, minutes, rates in rows:
+                     f"{np.mean(minutes):.0f}" if minutes else "-", rates, converged))  # fmt: skip
+    out = [("| policy | env | env steps | train min (mean) | seeds | success, 100 episodes each (mean; per seed) "
+            "| 95 % interval (Wilson, all episodes) | converged |"),
+           "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    for algo, env_id, steps, minutes, rates, converged in rows:
         per_seed = " / ".join(f"{r:.0%}" for r in rates)
+        lo, hi = wilson(round(sum(rates) * episodes), episodes * len(rates))
         out.append(f"| {algo} | {env_id} | {steps} | {minutes} | {len(rates) if algo != 'scripted' else '-'} | "
-                   f"**{np.mean(rates):.0%}**" + (f" ({per_seed})" if len(rates) > 1 else "") + " |")  # fmt: skip
+                   f"**{np.mean(rates):.0%}**" + (f" ({per_seed})" if len(rates) > 1 else "") +
+                   f" | {lo:.0%} - {hi:.0%} | {converged} |")  # fmt: skip
     return "\n".join(out)
 
 

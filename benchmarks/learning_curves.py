@@ -24,9 +24,14 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-FINGERS = {"SoftGrasp": "soft (tissue)", "SoftGraspRigid": "rigid", "SoftGraspGoal": "soft, goal (HER)"}
-COLORS = {"SoftGrasp": "tab:blue", "SoftGraspRigid": "tab:red", "SoftGraspGoal": "tab:green"}
-VERSIONS = {"v2": "v2 (carry test)", "v1": "v1 (no carry test)"}
+FINGERS = {"SoftGrasp": "soft (tissue)", "SoftGraspRigid": "rigid", "SoftGraspGoal": "soft, goal (HER)",
+           "SoftGraspRigidTorsion": "rigid + torsional friction", "SoftGraspGrip": "grip force, soft",
+           "SoftGraspGripRigid": "grip force, rigid", "SoftGraspGripRigidTorsion": "grip force, torsional"}  # fmt: skip
+COLORS = {"SoftGrasp": "tab:blue", "SoftGraspRigid": "tab:red", "SoftGraspGoal": "tab:green",
+          "SoftGraspRigidTorsion": "tab:orange", "SoftGraspGrip": "tab:blue", "SoftGraspGripRigid": "tab:red",
+          "SoftGraspGripRigidTorsion": "tab:orange"}  # fmt: skip
+ALGO_COLORS = {"ppo": "tab:purple", "sac": "tab:blue", "her-sac": "tab:green"}
+VERSIONS = {"v3": "v3 (the sway band)", "v2": "v2 (carry test)", "v1": "v1 (no carry test)"}
 
 
 def _split(env_id: str) -> tuple[str, str]:
@@ -84,6 +89,10 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--models", type=Path, default=ROOT / "agents" / "trained")
     parser.add_argument("--out", type=Path, default=ROOT / "docs" / "results")
+    parser.add_argument("--by", choices=["algo", "kind"], default="algo",
+                        help="one panel per algorithm (lines: finger kinds; the v1/v2 figure) or per finger kind "
+                             "(lines: algorithms; issue 22's v3 figure)")  # fmt: skip
+    parser.add_argument("--name", default="learning_curves", help="file name of the .png and .csv")
     ns = parser.parse_args(argv)
     groups = load_runs(ns.models)
     if not groups:
@@ -95,33 +104,44 @@ def main(argv: list[str] | None = None) -> int:
 
     algos = sorted({algo for algo, _ in groups}, key=["ppo", "sac", "her-sac"].index)
     versions = sorted({_split(env)[1] for _, env in groups}, reverse=True)
-    fig, axes = plt.subplots(len(versions), len(algos), figsize=(5.2 * len(algos), 3.6 * len(versions)), squeeze=False)
+    kinds = sorted({_split(env)[0] for _, env in groups}, key=lambda k: list(FINGERS).index(k) if k in FINGERS else 99)
+    columns = algos if ns.by == "algo" else kinds
+    fig, axes = plt.subplots(len(versions), len(columns), figsize=(5.2 * len(columns), 3.6 * len(versions)),
+                             squeeze=False)  # fmt: skip
     table = []
-    for ax, (version, algo) in zip(axes.flat, [(v, a) for v in versions for a in algos]):
-        if not any(a == algo and _split(env)[1] == version for a, env in groups):
+    for ax, (version, column) in zip(axes.flat, [(v, c) for v in versions for c in columns]):
+
+        def in_panel(algo: str, env: str, version=version, column=column) -> bool:
+            name, v = _split(env)
+            return v == version and (algo if ns.by == "algo" else name) == column
+
+        if not any(in_panel(a, env) for a, env in groups):
             ax.set_visible(False)
             continue
-        for (a, env), runs in sorted(groups.items()):
-            name, v = _split(env)
-            if a != algo or v != version:
+        for (algo, env), runs in sorted(groups.items()):
+            if not in_panel(algo, env):
                 continue
-            label = f"{FINGERS.get(name, name)} ({len(runs)} seed{'s' if len(runs) > 1 else ''})"
+            name, _ = _split(env)
+            seeds = f"{len(runs)} seed{'s' if len(runs) > 1 else ''}"
+            label = f"{FINGERS.get(name, name)} ({seeds})" if ns.by == "algo" else f"{algo.upper()} ({seeds})"
+            color = COLORS.get(name) if ns.by == "algo" else ALGO_COLORS.get(algo)
             b = band([r["train"] for r in runs])
             if b is not None:
                 grid, mean, lo, hi = b
-                ax.plot(grid, mean, color=COLORS.get(name), label=label)
-                ax.fill_between(grid, lo, hi, color=COLORS.get(name), alpha=0.2, lw=0)
+                ax.plot(grid, mean, color=color, label=label)
+                ax.fill_between(grid, lo, hi, color=color, alpha=0.2, lw=0)
                 table += [{"algo": algo, "env": env, "measure": "training episodes", "steps": f"{s:.0f}",
                            "mean": f"{m:.3f}", "min": f"{lo_:.3f}", "max": f"{hi_:.3f}"}
                           for s, m, lo_, hi_ in zip(grid[::20], mean[::20], lo[::20], hi[::20])]  # fmt: skip
             for r in runs:
                 x, y = r["eval"]
                 if len(x):
-                    ax.plot(x, y, "o", ms=3.5, color=COLORS.get(name), alpha=0.6)
+                    ax.plot(x, y, "o", ms=3.5, color=color, alpha=0.6)
                     table += [{"algo": algo, "env": env, "measure": f"evaluation, seed {r['seed']}",
                                "steps": f"{s:.0f}", "mean": f"{v:.3f}", "min": "", "max": ""}
                               for s, v in zip(x, y)]  # fmt: skip
-        ax.set_title(f"{algo.upper()}, {VERSIONS.get(version, version)}")
+        title = column.upper() if ns.by == "algo" else FINGERS.get(column, column)
+        ax.set_title(f"{title}, {VERSIONS.get(version, version)}")
         ax.set_xlabel("env steps")
         ax.set_ylim(-0.03, 1.03)
         ax.grid(alpha=0.3)
@@ -129,15 +149,15 @@ def main(argv: list[str] | None = None) -> int:
     for row in axes:
         row[0].set_ylabel("success rate")
     fig.suptitle("success vs env steps; lines: last 100 training episodes (mean, band: min-max over seeds)\n"
-                 "dots: evaluations of the deterministic policy (20 episodes each)", fontsize=9)  # fmt: skip
+                 "dots: evaluations of the deterministic policy (train.py's --eval-episodes each)", fontsize=9)  # fmt: skip
     fig.tight_layout()
     ns.out.mkdir(parents=True, exist_ok=True)
-    fig.savefig(ns.out / "learning_curves.png", dpi=110)
-    with open(ns.out / "learning_curves.csv", "w", newline="") as f:
+    fig.savefig(ns.out / f"{ns.name}.png", dpi=110)
+    with open(ns.out / f"{ns.name}.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=["algo", "env", "measure", "steps", "mean", "min", "max"])
         writer.writeheader()
         writer.writerows(table)
-    print(f"wrote {ns.out / 'learning_curves.png'} and learning_curves.csv ({len(groups)} algo/env groups)")
+    print(f"wrote {ns.out / (ns.name + '.png')} and {ns.name}.csv ({len(groups)} algo/env groups)")
     return 0
 
 

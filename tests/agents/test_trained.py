@@ -39,10 +39,35 @@ def test_the_headline_set_is_shipped():
     assert groups.get(("her-sac", "SoftGraspGoal-v1")), groups
 
 
+def test_wilson_interval_matches_the_published_values():
+    """Wilson's 95 % score interval: 95 of 100 is 88.8-97.8 % (Newcombe 1998, table I's method 3
+    gives 0.8882-0.9785 for 95/100); at 0 and n it is one-sided and not empty."""
+    lo, hi = cards.wilson(95, 100)
+    assert abs(lo - 0.8882) < 5e-5 and abs(hi - 0.9785) < 5e-5
+    assert cards.wilson(0, 100)[0] == 0.0 and 0.03 < cards.wilson(0, 100)[1] < 0.04
+    assert cards.wilson(100, 100)[1] == pytest.approx(1.0) and 0.96 < cards.wilson(100, 100)[0] < 0.97
+    with pytest.raises(ValueError, match="successes"):
+        cards.wilson(101, 100)
+
+
+def test_convergence_reads_the_last_fifth_of_the_budget():
+    """A run rising 10 points per 20k steps to the end has not converged; one flat (but noisy) over
+    its last 20 % has; evaluations before the window do not count; fewer than 3 in it decide nothing."""
+
+    def rows(values, every=10_000):
+        return [{"timesteps": str(every * (k + 1)), "success_rate": str(v)} for k, v in enumerate(values)]
+
+    rising = cards.convergence(rows([0.1 * k / 2 for k in range(10)]), 100_000)
+    assert rising["converged"] is False and rising["change_points"] == pytest.approx(10.0)
+    flat = cards.convergence(rows([0.0] * 7 + [0.9, 0.92, 0.9, 0.88]), 110_000)  # the early rise is outside
+    assert flat["converged"] is True and flat["evaluations"] == 3 and abs(flat["change_points"]) < 5
+    assert cards.convergence(rows([0.5, 0.6]), 20_000)["converged"] is None
+
+
 @pytest.mark.parametrize("model_dir", MODELS, ids=[d.name for d in MODELS])
 def test_card_agrees_with_the_files(model_dir):
     card = cards.read_card(model_dir)
-    assert set(card) == CARD_KEYS
+    assert CARD_KEYS <= set(card) <= CARD_KEYS | {"convergence"}  # issue 22's cards say their convergence
     meta = json.loads((model_dir / "run.json").read_text())
     assert (card["env"], card["algo"], card["seed"], card["env_kwargs"]) == (
         meta["env"], meta["algo"], meta["seed"], meta.get("env_kwargs", {}))  # fmt: skip
@@ -52,6 +77,12 @@ def test_card_agrees_with_the_files(model_dir):
     ev = card["evaluation"]
     assert ev["episodes"] == cards.EPISODES and ev["seeds"] == f"{cards.SEED}-{cards.SEED + cards.EPISODES - 1}"
     assert 0.0 <= ev["success_rate"] <= 1.0
+    if "wilson95" in ev:
+        assert ev["successes"] == round(ev["success_rate"] * ev["episodes"])
+        assert ev["wilson95"] == [round(v, 4) for v in cards.wilson(ev["successes"], ev["episodes"])]
+    if "convergence" in card:
+        with open(model_dir / "progress.csv", newline="") as f:
+            assert card["convergence"] == cards.convergence(list(csv.DictReader(f)), card["timesteps"])
     assert card["command"].startswith("python train.py") and f"--env {card['env']}" in card["command"]
     assert card["train_seconds"] > 0
     assert (model_dir / "README.md").read_text() == cards.render_card(card)
@@ -94,6 +125,18 @@ def test_learning_curves_are_drawn_from_the_shipped_runs(tmp_path):
     assert learning_curves.main(["--out", str(tmp_path)]) == 0
     assert (tmp_path / "learning_curves.png").stat().st_size > 10_000
     with open(tmp_path / "learning_curves.csv", newline="") as f:
+        groups = {(r["algo"], r["env"]) for r in csv.DictReader(f)}
+    assert groups == {(cards.read_card(d)["algo"], cards.read_card(d)["env"]) for d in MODELS}
+
+
+def test_learning_curves_by_finger_kind_have_a_panel_per_kind(tmp_path):
+    """Issue 22's layout: a panel per finger kind and version, a line per algorithm; the same
+    groups as by algorithm."""
+    from benchmarks import learning_curves
+
+    assert learning_curves.main(["--out", str(tmp_path), "--by", "kind", "--name", "by_kind"]) == 0
+    assert (tmp_path / "by_kind.png").stat().st_size > 10_000
+    with open(tmp_path / "by_kind.csv", newline="") as f:
         groups = {(r["algo"], r["env"]) for r in csv.DictReader(f)}
     assert groups == {(cards.read_card(d)["algo"], cards.read_card(d)["env"]) for d in MODELS}
 
