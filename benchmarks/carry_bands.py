@@ -10,6 +10,12 @@ table separates "lost in the carry" from "never got a grip".
 
     PYTHONPATH=. python benchmarks/carry_bands.py                  # 10 seeds per cell
     PYTHONPATH=. python benchmarks/carry_bands.py --seeds 3 --kinds tissue,rigid
+    PYTHONPATH=. python benchmarks/carry_bands.py --policy rigid=runs/SoftGraspRigid-v3_sac_0   # a learned policy
+
+``--policy KIND=SPEC`` replaces the scripted grasp of one kind by any policy ``agents.evaluate``
+loads (a train.py run or shipped baseline, an RLlib trial, ``random``): issue 22's learned soft /
+rigid / torsional gap per band. A run is evaluated on its kind's id here (the band is set by the
+reset options), so it must have been trained on that id.
 
 Prints, per kind and cell: held when the carry began / episodes, held through it (v3 success) /
 those, the median in-hand slide and the largest tilt [deg] over the held-at-start episodes.
@@ -51,15 +57,33 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--seeds", type=int, default=10, help="episodes per cell (seeds 1000, 1001, ...)")
     parser.add_argument("--kinds", default=",".join(IDS))
+    parser.add_argument("--policy", action="append", default=[], metavar="KIND=SPEC",
+                        help="the policy of one kind (default: the scripted grasp): a train.py run, a shipped "
+                             "baseline's name, an RLlib trial, or 'random'")  # fmt: skip
     ns = parser.parse_args(argv)
+    specs = {}
+    for item in ns.policy:
+        kind, sep, spec = item.partition("=")
+        if not sep or kind not in IDS or not spec:
+            parser.error(f"--policy takes KIND=SPEC with KIND one of {sorted(IDS)}, got {item!r}")
+        specs[kind] = spec
+    for kind in ns.kinds.split(","):
+        if kind not in IDS:
+            parser.error(f"--kinds: {kind!r} is not one of {sorted(IDS)}")
     seeds = range(1000, 1000 + ns.seeds)
-    print(f"scripted grasp, reach task, seeds {seeds.start}-{seeds.stop - 1}; 1 process")
+    named = ", ".join(f"{k}: {v}" for k, v in specs.items()) or "none"
+    print(f"reach task, seeds {seeds.start}-{seeds.stop - 1}; 1 process; the scripted grasp but for ({named})")
     print(f"{'kind':<15}{'f Hz':>6}{'a m/s2':>8}{'direction':>10}{'held@start':>12}{'held through':>14}"
           f"{'slide mm':>10}{'tilt deg':>10}")  # fmt: skip
     totals: dict[str, list[int]] = {}
     for kind in ns.kinds.split(","):
         env = gym.make(IDS[kind])
-        policy = ScriptedGraspPolicy.for_env(env)
+        if kind in specs:
+            from agents.evaluate import load_policy
+
+            policy = load_policy(specs[kind], env)
+        else:
+            policy = ScriptedGraspPolicy.for_env(env)
         tic = time.perf_counter()
         tot = totals.setdefault(kind, [0, 0, 0])
         try:

@@ -230,6 +230,18 @@ def test_carry_bands_counts_the_tissue_and_the_torsional_peer_holding_in_every_b
     assert "rigid_torsion   all cells: held when the carry began 30/30, held through it 30/30" in out, out
 
 
+def test_carry_bands_takes_any_policy_per_kind():
+    """Issue 22's learned gap per band goes through --policy KIND=SPEC: random actions never lift the
+    cylinder, so no cell has a grip when the carry begins; a bad spec is named."""
+    out = _run_plain("carry_bands.py", "--seeds", "1", "--kinds", "rigid", "--policy", "rigid=random")
+    assert "(rigid: random)" in out, out
+    assert "rigid           all cells: held when the carry began 0/30, held through it 0/0" in out, out
+    from benchmarks import carry_bands
+
+    with pytest.raises(SystemExit):
+        carry_bands.main(["--policy", "soft=scripted"])
+
+
 def test_stability_diff_reads_the_shipped_v3_map():
     out = _run_plain("stability_diff.py", str(ROOT / "docs" / "results" / "stability_map_v3.csv"),
                      "--a", "tissue, thesis", "--b", "rigid_torsion")  # fmt: skip
