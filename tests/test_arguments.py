@@ -44,3 +44,18 @@ def test_range_corners_are_checked_without_building_scenes(monkeypatch):
     EnvArguments.from_kwargs(cylinder_radius_range=0.005, yaw_range=0.5)
     with pytest.raises(ValueError, match="the randomisation ranges reach a scene that cannot start"):
         EnvArguments.from_kwargs(cylinder_radius=0.04, cylinder_radius_range=0.01, jaw_wedge_range=0.5)
+
+
+def test_the_contact_cones_reach_the_tissue_model_and_bad_values_are_named():
+    """tissue_contact_cone goes to TissueConfig.contact_cone (default False, the patch law) and into
+    the solver's model per body; anything but a bool is a ValueError naming the field."""
+    assert EnvArguments.from_kwargs().scene.tissue.contact_cone is False
+    assert EnvArguments.from_kwargs(tissue_contact_cone=True).scene.tissue.contact_cone is True
+    env = gym.make("SoftGraspEasy-v3", tissue_contact_cone=True)
+    try:
+        env.reset(seed=0)
+        assert env.unwrapped.scene.world.solver.model.body_contact_cone.tolist() == [True, True]
+    finally:
+        env.close()
+    with pytest.raises(ValueError, match="TissueConfig.contact_cone must be a bool, got 'yes'"):
+        EnvArguments.from_kwargs(tissue_contact_cone="yes")
