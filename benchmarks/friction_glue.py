@@ -49,7 +49,8 @@ def glue(seed: int = 1013, report=print, cones: bool = False) -> dict:
     """The scene of the module docstring from ``seed``; ``report`` gets the table's lines. Returns
     the last step's figures: the squeeze commanded, the pads' measured normal force, the
     load-bearing contacts and how many have friction above mu_s times their normal multiplier,
-    whether the cylinder is held; and the least mean push of the two cores (the solver's impulses
+    whether the cylinder is held, the largest friction / normal ratio (``top_ratio``) against mu_s
+    (``mu``); and the least mean push of the two cores (the solver's impulses
     along the jaw) the cylinder was held up with after the lift (``weakest_hold``), against
     Coulomb's least force (``least``)."""
     env = gym.make("SoftGraspGrip-v3", observe_object=True, tissue_contact_cone=cones)
@@ -100,7 +101,7 @@ def glue(seed: int = 1013, report=print, cones: bool = False) -> dict:
             break
     least = mass * 9.81 / (2 * mu)
     result = {"commanded": force, "measured": u._last.force.copy(), "contacts": n, "over": over,
-              "held": bool(info["held"]), "weakest_hold": weakest, "least": least}  # fmt: skip
+              "held": bool(info["held"]), "weakest_hold": weakest, "least": least, "top_ratio": top, "mu": mu}  # fmt: skip
     report(f"held at the end: {result['held']}; the least the cores pushed with while it was held: {weakest:.3f} N, "
            f"{weakest / least:.2f} x Coulomb's least m g / (2 mu_s)")  # fmt: skip
     env.close()

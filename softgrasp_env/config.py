@@ -100,15 +100,17 @@ class TissueConfig:
     0.427 kg against 0.439 kg). A number below mu_s gives the two-coefficient law (v1/v2: 0.7)."""
     contact_cone: bool = False
     """Coulomb per contact as well as per patch (tissue/friction.py, _apply_with_cones): each tissue
-    contact's friction at most mu_s times its normal force, and what that sheds handed to the
-    patch's other contacts so that the patch still transmits what its law decides. False, the
-    default: the patch's bound on what it transmits alone, which lets the self-equilibrated
-    friction of a pad wrapped round the cylinder grow without bound - a pad squeezed on the way down
-    and then relaxed held the cylinder while its core pushed 0.058 N, 0.04 x Coulomb's least force;
-    with the cones 1.01 x (benchmarks/friction_glue.py). Not the default yet: the cones let a
-    squeezed pad spread, and its compression under 3 N moves with the iterations (5.23 / 4.98 /
-    4.80 / 4.42 / 4.23 mm at 2 / 3 / 5 / 10 / 20, 1/240 s; the patch law 4.51 / 4.34 / 4.30 /
-    4.32 / 4.32), which the material must not (issue 22's notes)."""
+    contact's friction at most mu_s times its normal force, what that sheds handed to the patch's
+    other contacts so that the patch still transmits what its law decides, and a contact its cone
+    held back re-anchored where it slipped to. False, the default: the patch's bound on what it
+    transmits alone, which lets the self-equilibrated friction of a pad wrapped round the cylinder
+    grow without bound - a pad squeezed on the way down and then relaxed held the cylinder while its
+    core pushed 0.058 N, 0.04 x Coulomb's least force; with the cones 1.01 x
+    (benchmarks/friction_glue.py). Not the default yet, because it changes the material: a squeezed
+    pad's edges now slip, and under 3 N it compresses 5.38 mm instead of 4.34 (5.28 at 20
+    iterations, 5.31 at 1/1000 s: it converges), so the ids' shear modulus would want re-choosing
+    and the soft ids a new version; and a particle snagged on the cylinder's top stays at its strain
+    limit where the patch law lets it slide off (issue 22's notes)."""
 
     def __post_init__(self) -> None:
         o = "TissueConfig"

@@ -126,6 +126,7 @@ _F_SCRATCH = (
 _I_SCRATCH = (("c_particle", "contacts", 0), ("c_shape", "contacts", 0), ("c_patch", "contacts", 0),
               ("pair_i", "pairs", 0), ("pair_j", "pairs", 0))  # fmt: skip  (int32)
 _B_SCRATCH = (("c_inner", "contacts", 0), ("patch_slide", "patches", 0), ("patch_change", "patches", 0),
+              ("c_slip", "contacts", 0),
               ("fixed", "n", 0))  # fmt: skip  (bool)
 # the model's arrays, copied in once (TissueModel is frozen; the solver reads it at construction,
 # as it does for the rest moments and group data it derives from it)
@@ -147,7 +148,7 @@ _PACK = _F_PACK + _I_PACK + _B_PACK
  _GROUP_KAPPA, _BODY_MAX_DEVIATION,
  _C_PARTICLE, _C_SHAPE, _C_PATCH, _PAIR_I, _PAIR_J,
  _P_BODY, _G_OFF, _G_MEM, _BODY_OFF, _BODY_CORE_SHAPE,
- _C_INNER, _PATCH_SLIDE, _PATCH_CHANGE, _FIXED,
+ _C_INNER, _PATCH_SLIDE, _PATCH_CHANGE, _C_SLIP, _FIXED,
  _ATTACHED, _BODY_COMPLIANT, _BODY_CONTACT_CONE) = range(len(_PACK))  # fmt: skip
 assert [name for name, _, _ in _PACK][_ATTACHED] == "attached" and _PACK[_P_BODY][0] == "p_body"
 assert _PACK[_G_RAW][0] == "g_raw" and _PACK[_GROUP_KAPPA][0] == "group_kappa"
@@ -236,6 +237,7 @@ def _step(
     pair_i, pair_j = _view1(i_pack, layout, _PAIR_I), _view1(i_pack, layout, _PAIR_J)
     c_inner, patch_slide = _view1(b_pack, layout, _C_INNER), _view1(b_pack, layout, _PATCH_SLIDE)
     patch_change, fixed = _view1(b_pack, layout, _PATCH_CHANGE), _view1(b_pack, layout, _FIXED)
+    c_slip = _view1(b_pack, layout, _C_SLIP)
     compliant = False
     for b in range(body_compliant.shape[0]):
         compliant = compliant or body_compliant[b]
@@ -291,7 +293,7 @@ def _step(
         friction_patches(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_normal, c_rn,
                          c_anchor, c_point, xp, inv_mass, body_friction, ns, shape_rigid, shape_local_x, shape_local_q,
                          rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose,
-                         patch, patch_slide, patch_change, it == iterations - 1, body_contact_cone)  # fmt: skip
+                         patch, patch_slide, patch_change, it == iterations - 1, body_contact_cone, c_slip)  # fmt: skip
         friction_pairs(npairs, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, x, xp, inv_mass, p_body,
                        body_friction)  # fmt: skip
         if compliant:
@@ -312,7 +314,7 @@ def _step(
                            shape_rigid, rig_x0, rig_q0, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
                            imp_lin, imp_ang, dt, patch_slide, patch_change)  # fmt: skip
     store_anchors(nc, c_particle, c_shape, c_patch, c_lambda, c_anchor, x, shape_rigid, shape_local_x, shape_local_q,
-                  rig_x, rig_q, patch_slide, patch_change, anchor_shape, anchor_x, anchor_slide)  # fmt: skip
+                  rig_x, rig_q, patch_slide, patch_change, anchor_shape, anchor_x, anchor_slide, c_slip)  # fmt: skip
     return 0
 
 

@@ -65,6 +65,18 @@ def test_pad_compression_over_the_rest_of_the_grid(dt, iterations):
     assert spread < 2.5e-5
 
 
+def test_with_contact_cones_the_pad_compression_still_converges():
+    """With Coulomb's cone on every contact (tissue_contact_cone) a squeezed pad's edges slip and it
+    compresses more - but as a property of the material still, the same at every dt and iteration
+    count. Measured: 5.31 mm at 1/1000 s, 5.38 at 1/120 s (3 iterations), 5.32 at 1/240 s and 10
+    iterations (2: 5.59, 5, 5.34, 20: 5.28); the patch law 4.34. Before a contact its cone held back
+    was re-anchored, 4.98 mm at 3 iterations and 4.23 at 20."""
+    runs = [squeeze(SimConfig(dt=dt, iterations=it), TissueConfig(contact_cone=True))[0]
+            for dt, it in ((1 / 1000, 3), (1 / 120, 3), (1 / 240, 10))]  # fmt: skip
+    assert max(runs) / min(runs) < 1.04, runs
+    assert min(runs) > 1.15 * COMPRESSION, runs
+
+
 def test_a_stiffer_material_compresses_less_as_a_thin_layer_under_a_cylinder():
     """Compression is the material's. A cylinder pressed into a thin layer (thickness h) by a force
     F: F ~ G w delta / h over a contact width w ~ sqrt(R delta), so delta ~ G^(-2/3), and at twice
