@@ -259,6 +259,44 @@ def friction_patches(
                          patch)  # fmt: skip
 
 
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _transmitted_share(c, p, lam, c_point, patch):
+    """Contact c's share of what its patch transmits: its normal load's share of F plus the torsion
+    M / J lambda_n (m x r) (pass 2 of friction_patches summed them)."""
+    inv_n = 1.0 / patch[p, 0]
+    share = lam * inv_n
+    gx = share * patch[p, 9]
+    gy = share * patch[p, 10]
+    gz = share * patch[p, 11]
+    if patch[p, 8] > 0.0:
+        rx, ry, rz, mx, my, mz = _patch_lever(c, p, c_point, patch)
+        k = patch[p, 12] / patch[p, 8] * lam
+        gx += k * (my * rz - mz * ry)
+        gy += k * (mz * rx - mx * rz)
+        gz += k * (mx * ry - my * rx)
+    return gx, gy, gz
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _set_friction(c, i, r, tx, ty, tz, c_friction, c_point, xp, inv_mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
+                  rig_axis, rig_move, imp_lin, imp_ang, dt):  # fmt: skip
+    """Contact c's friction this step becomes (tx, ty, tz): the change applied to its particle and,
+    reversed, to the body under it."""
+    ix = tx - c_friction[c, 0]
+    iy = ty - c_friction[c, 1]
+    iz = tz - c_friction[c, 2]
+    c_friction[c, 0] = tx
+    c_friction[c, 1] = ty
+    c_friction[c, 2] = tz
+    wp = inv_mass[i]
+    xp[i, 0] += wp * ix
+    xp[i, 1] += wp * iy
+    xp[i, 2] += wp * iz
+    if r >= 0:
+        rigid_apply(r, c_point[c, 0] - rig_x[r, 0], c_point[c, 1] - rig_x[r, 1], c_point[c, 2] - rig_x[r, 2], -ix, -iy,
+                    -iz, rig_move[r], dt, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang)  # fmt: skip
+
+
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _apply_patch_law(
     nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_point, xp, inv_mass, shape_rigid, rig_x,
@@ -279,33 +317,12 @@ def _apply_patch_law(
         keep = patch[p, 14]
         tx, ty, tz = c_friction_goal[c, 0], c_friction_goal[c, 1], c_friction_goal[c, 2]
         if sc != 1.0 or keep != 1.0:
-            inv_n = 1.0 / patch[p, 0]
-            share = lam * inv_n
-            gx = share * patch[p, 9]
-            gy = share * patch[p, 10]
-            gz = share * patch[p, 11]
-            if patch[p, 8] > 0.0:
-                rx, ry, rz, mx, my, mz = _patch_lever(c, p, c_point, patch)
-                k = patch[p, 12] / patch[p, 8] * lam
-                gx += k * (my * rz - mz * ry)
-                gy += k * (mz * rx - mx * rz)
-                gz += k * (mx * ry - my * rx)
+            gx, gy, gz = _transmitted_share(c, p, lam, c_point, patch)
             tx = keep * (tx - gx) + sc * gx
             ty = keep * (ty - gy) + sc * gy
             tz = keep * (tz - gz) + sc * gz
-        ix = tx - c_friction[c, 0]
-        iy = ty - c_friction[c, 1]
-        iz = tz - c_friction[c, 2]
-        c_friction[c, 0] = tx
-        c_friction[c, 1] = ty
-        c_friction[c, 2] = tz
-        wp = inv_mass[i]
-        xp[i, 0] += wp * ix
-        xp[i, 1] += wp * iy
-        xp[i, 2] += wp * iz
-        if r >= 0:
-            rigid_apply(r, c_point[c, 0] - rig_x[r, 0], c_point[c, 1] - rig_x[r, 1], c_point[c, 2] - rig_x[r, 2], -ix,
-                         -iy, -iz, rig_move[r], dt, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang)  # fmt: skip
+        _set_friction(c, i, r, tx, ty, tz, c_friction, c_point, xp, inv_mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
+                      rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -332,17 +349,7 @@ def _apply_with_cones(
         if sc == 1.0 and keep == 1.0 and not cone:
             continue  # the goal as it is
         tx, ty, tz = c_friction_goal[c, 0], c_friction_goal[c, 1], c_friction_goal[c, 2]
-        inv_n = 1.0 / patch[p, 0]
-        share = lam * inv_n
-        gx = share * patch[p, 9]
-        gy = share * patch[p, 10]
-        gz = share * patch[p, 11]
-        if patch[p, 8] > 0.0:
-            rx, ry, rz, mx, my, mz = _patch_lever(c, p, c_point, patch)
-            k = patch[p, 12] / patch[p, 8] * lam
-            gx += k * (my * rz - mz * ry)
-            gy += k * (mz * rx - mx * rz)
-            gz += k * (mx * ry - my * rx)
+        gx, gy, gz = _transmitted_share(c, p, lam, c_point, patch)
         if not cone:
             c_friction_goal[c, 0] = keep * (tx - gx) + sc * gx
             c_friction_goal[c, 1] = keep * (ty - gy) + sc * gy
@@ -402,19 +409,8 @@ def _apply_with_cones(
             tx += lam * patch[p, 15]
             ty += lam * patch[p, 16]
             tz += lam * patch[p, 17]
-        ix = tx - c_friction[c, 0]
-        iy = ty - c_friction[c, 1]
-        iz = tz - c_friction[c, 2]
-        c_friction[c, 0] = tx
-        c_friction[c, 1] = ty
-        c_friction[c, 2] = tz
-        wp = inv_mass[i]
-        xp[i, 0] += wp * ix
-        xp[i, 1] += wp * iy
-        xp[i, 2] += wp * iz
-        if r >= 0:
-            rigid_apply(r, c_point[c, 0] - rig_x[r, 0], c_point[c, 1] - rig_x[r, 1], c_point[c, 2] - rig_x[r, 2], -ix,
-                         -iy, -iz, rig_move[r], dt, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang)  # fmt: skip
+        _set_friction(c, i, r, tx, ty, tz, c_friction, c_point, xp, inv_mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
+                      rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
