@@ -2,7 +2,8 @@
 mean and spread (min-max) over seeds, one panel per algorithm and task version (a row each: v2
 with the carry test, v1 without).
 
-    python benchmarks/learning_curves.py                       # agents/trained/ -> docs/results/
+    python benchmarks/learning_curves.py --versions v2,v1      # agents/trained/ -> docs/results/
+    python benchmarks/learning_curves.py --versions v3 --by kind --name learning_curves_v3   # issue 22's figure
     python benchmarks/learning_curves.py --models runs --out /tmp/curves
 
 Two measures per run, both from the files train.py writes:
@@ -93,10 +94,14 @@ def main(argv: list[str] | None = None) -> int:
                         help="one panel per algorithm (lines: finger kinds; the v1/v2 figure) or per finger kind "
                              "(lines: algorithms; issue 22's v3 figure)")  # fmt: skip
     parser.add_argument("--name", default="learning_curves", help="file name of the .png and .csv")
+    parser.add_argument("--versions", default=None, help="only these env versions, e.g. v3 or v2,v1 (default: all)")
     ns = parser.parse_args(argv)
     groups = load_runs(ns.models)
+    if ns.versions:
+        keep = set(ns.versions.split(","))
+        groups = {k: v for k, v in groups.items() if _split(k[1])[1] in keep}
     if not groups:
-        parser.error(f"no runs (*/run.json) under {str(ns.models)!r}")
+        parser.error(f"no runs (*/run.json) under {str(ns.models)!r}" + (f" of {ns.versions}" if ns.versions else ""))
     import matplotlib
 
     matplotlib.use("Agg")
