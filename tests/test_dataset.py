@@ -84,14 +84,15 @@ def test_the_learned_policy_is_the_best_shipped_baseline():
 
 
 def test_no_learned_dataset_where_no_baseline_was_trained(datasets_path, capsys):
-    """v3 has no shipped baseline: asked for by name it is an error naming the ids that have one;
-    by default the learned dataset of such an id is skipped with a line saying so."""
+    """The easy start has no shipped baseline (it is for debugging, no benchmark): asked for by name
+    it is an error naming the ids that have one; by default the learned dataset of such an id is
+    skipped with a line saying so."""
     from scripts import make_dataset
 
     with pytest.raises(SystemExit):
-        make_dataset.main(["--envs", "SoftGraspRigid-v3", "--policies", "learned", "--episodes", "1"])
-    assert "no shipped baseline for 'SoftGraspRigid-v3'" in capsys.readouterr().err
-    assert make_dataset.main(["--envs", "SoftGraspRigid-v3", "--episodes", "1"]) == 0
+        make_dataset.main(["--envs", "SoftGraspEasyRigid-v3", "--policies", "learned", "--episodes", "1"])
+    assert "no shipped baseline for 'SoftGraspEasyRigid-v3'" in capsys.readouterr().err
+    assert make_dataset.main(["--envs", "SoftGraspEasyRigid-v3", "--episodes", "1"]) == 0
     out = capsys.readouterr().out
-    assert "SoftGraspRigid-v3: no shipped baseline, no learned dataset" in out
-    assert "softgrasp/SoftGraspRigid-v3/scripted-v0: 1 episodes" in out
+    assert "SoftGraspEasyRigid-v3: no shipped baseline, no learned dataset" in out
+    assert "softgrasp/SoftGraspEasyRigid-v3/scripted-v0: 1 episodes" in out
