@@ -242,6 +242,30 @@ def test_carry_bands_takes_any_policy_per_kind():
         carry_bands.main(["--policy", "soft=scripted"])
 
 
+def test_task_regions_split_the_same_starts_for_every_kind():
+    """Issue 22, item 3's per-region table: the kinds draw the same starts from a seed (so a region
+    holds the same episodes in every column), each third of a drawn quantity holds a third of the
+    episodes, and the scripted soft grasp and torsional peer hold every one (cards: 100 / 100)."""
+    from benchmarks import task_regions
+
+    results = {k: task_regions.episodes(k, None, range(1000, 1003)) for k in ("tissue", "rigid_torsion")}
+    assert [r["success"] for r in results["tissue"]] == [1.0, 1.0, 1.0]
+    assert [r["held_at_carry"] for r in results["rigid_torsion"]] == [1.0, 1.0, 1.0]
+    rows = task_regions.regions(results)
+    labels = {label for label, _, _ in rows}
+    # v3's reach task draws the wedge, yaw, start, and the sway; not the cylinder or the friction
+    assert labels == {task_regions.QUANTITIES[q] for q in ("jaw_wedge", "abs_yaw", "approach", "carry_frequency",
+                                                           "carry_acceleration", "carry_direction")}, labels
+    assert all(cell == {"tissue": (1, 1, 1), "rigid_torsion": (1, 1, 1)} for _, _, cell in rows), rows
+    for r in results["tissue"]:
+        assert -0.15 <= r["jaw_wedge"] <= 0.15 and 0.0 <= r["carry_direction"] <= 90.0
+    results["rigid_torsion"][0] = {**results["rigid_torsion"][0], "jaw_wedge": 0.3}
+    with pytest.raises(RuntimeError, match="other starts"):
+        task_regions.regions(results)
+    with pytest.raises(SystemExit):
+        task_regions.main(["--kinds", "tissue", "--policy", "rigid=random"])
+
+
 def test_stability_diff_reads_the_shipped_v3_map():
     out = _run_plain("stability_diff.py", str(ROOT / "docs" / "results" / "stability_map_v3.csv"),
                      "--a", "tissue, thesis", "--b", "rigid_torsion")  # fmt: skip

@@ -1,0 +1,186 @@
+"""Where in the reach task's ranges each finger kind holds: success per region of every quantity
+the v3 start draws (issue 22, item 3; the successor of wedge_sign.py, which splits by the wedge
+only and reads v2's carry).
+
+Runs one policy per kind (soft, rigid twin, torsional peer; default the scripted grasp) on the
+card seeds (1000-1099) of SoftGrasp-v3, SoftGraspRigid-v3 and SoftGraspRigidTorsion-v3. The kinds
+draw the same starts from the same seed (the draw does not depend on the fingers), so a region
+holds the same episodes for every kind and the columns compare like with like. For each drawn
+quantity - the jaw wedge (signed: positive opens the gap at the top), the palm's yaw, the grip's
+start distance from the cylinder, the cylinder's radius, mass and friction scale when the id
+draws them, and the sway's frequency, peak acceleration and direction (0 = across the jaw) - the
+episodes are split into thirds by its value, and each third prints, per kind, how many were held
+when the carry began and how many succeeded (held through the carry).
+
+    PYTHONPATH=. python benchmarks/task_regions.py                  # the scripted grasp, 100 seeds
+    PYTHONPATH=. python benchmarks/task_regions.py --policy tissue=SoftGrasp-v3_sac_0 \\
+        --policy rigid=SoftGraspRigid-v3_sac_0 --policy rigid_torsion=SoftGraspRigidTorsion-v3_sac_0
+
+``--policy KIND=SPEC`` takes anything ``agents.evaluate`` loads (a train.py run, a shipped
+baseline's name, an RLlib trial, ``random``); it must have been trained on its kind's id.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+
+import gymnasium as gym
+import numpy as np
+
+import softgrasp_env  # noqa: F401  (registers the ids)
+from softgrasp_env.policies import ScriptedGraspPolicy
+
+IDS = {"tissue": "SoftGrasp-v3", "rigid": "SoftGraspRigid-v3", "rigid_torsion": "SoftGraspRigidTorsion-v3"}
+SEED = 1000
+"""The model cards' first seed (agents.cards.SEED): a region's rates read against the cards'."""
+
+QUANTITIES = {
+    "jaw_wedge": "jaw wedge [rad]",
+    "abs_yaw": "|palm yaw| [rad]",
+    "approach": "grip start to cylinder [cm]",
+    "cylinder_radius": "cylinder radius [mm]",
+    "cylinder_mass": "cylinder mass [g]",
+    "friction_scale": "friction scale [-]",
+    "carry_frequency": "sway frequency [Hz]",
+    "carry_acceleration": "sway peak acceleration [m/s^2]",
+    "carry_direction": "sway direction from across the jaw [deg]",
+}
+"""The drawn quantities, as printed (a quantity every episode shares is left out)."""
+
+
+def start_of(env) -> dict[str, float]:
+    """The quantities this episode's start drew, read back from the scene and the carry task."""
+    u = env.unwrapped
+    cfg, base = u.scene.config, u.args.scene
+    dx = np.subtract(cfg.gripper_xy, cfg.cylinder_xy)
+    carry = u.task
+    omega = 2.0 * math.pi * carry.frequency
+    direction = math.degrees(carry.angle) % 180.0
+    return {
+        "jaw_wedge": cfg.jaw_wedge,
+        "abs_yaw": abs(cfg.yaw),
+        "approach": 100.0 * math.hypot(*dx),
+        "cylinder_radius": 1e3 * cfg.cylinder_radius,
+        "cylinder_mass": 1e3 * cfg.cylinder_mass,
+        "friction_scale": cfg.ground_friction / base.ground_friction,
+        "carry_frequency": carry.frequency,
+        "carry_acceleration": carry.amplitude * omega * omega,
+        # a sway along +d and along -d is the same sway: fold to 0-90 deg from across the jaw
+        "carry_direction": min(direction, 180.0 - direction),
+    }
+
+
+def episodes(kind: str, spec: str | None, seeds: range) -> list[dict[str, float]]:
+    """Per seed: the start's quantities, ``held_at_carry`` and ``success`` (1.0 / 0.0)."""
+    env = gym.make(IDS[kind])
+    try:
+        if spec is None:
+            policy = ScriptedGraspPolicy.for_env(env)
+        else:
+            from agents.evaluate import load_policy
+
+            policy = load_policy(spec, env)
+        rows = []
+        for seed in seeds:
+            obs, _ = env.reset(seed=seed)
+            row = start_of(env)
+            held_at_carry, done, info = None, False, {}
+            while not done:
+                obs, _, term, trunc, info = env.step(policy(obs))
+                done = term or trunc
+                if held_at_carry is None and info["carrying"]:
+                    held_at_carry = bool(info["held"])
+            row["held_at_carry"] = float(bool(held_at_carry))  # None: the episode ended before the carry
+            row["success"] = float(info["is_success"])
+            rows.append(row)
+        return rows
+    finally:
+        env.close()
+
+
+def thirds(values: np.ndarray) -> list[np.ndarray]:
+    """Masks splitting the episodes into thirds by ``values`` (by rank, so each third holds a
+    third of the episodes whatever the quantity's distribution)."""
+    order = np.argsort(values, kind="stable")
+    parts = np.array_split(order, 3)
+    masks = []
+    for idx in parts:
+        m = np.zeros(len(values), dtype=bool)
+        m[idx] = True
+        masks.append(m)
+    return masks
+
+
+def regions(results: dict[str, list[dict[str, float]]]) -> list[tuple[str, str, dict[str, tuple[int, int, int]]]]:
+    """(quantity, range, {kind: (episodes, held when the carry began, succeeded)}) per third of
+    every drawn quantity; the kinds must have run the same seeds (so they share the starts)."""
+    kinds = list(results)
+    first = results[kinds[0]]
+    for kind in kinds[1:]:
+        for q in QUANTITIES:
+            a = np.array([r[q] for r in first])
+            b = np.array([r[q] for r in results[kind]])
+            if not np.allclose(a, b, rtol=1e-9, atol=1e-12):
+                raise RuntimeError(f"{kind} drew other starts than {kinds[0]} ({q}): the regions would not compare")
+    out = []
+    for q, label in QUANTITIES.items():
+        values = np.array([r[q] for r in first])
+        if np.ptp(values) <= 1e-9 * max(1.0, abs(values).max()):
+            continue  # not drawn on this id
+        for m in thirds(values):
+            span = f"{values[m].min():.3g} to {values[m].max():.3g}"
+            cell = {}
+            for kind in kinds:
+                held = np.array([r["held_at_carry"] for r in results[kind]])[m]
+                ok = np.array([r["success"] for r in results[kind]])[m]
+                cell[kind] = (int(m.sum()), int(held.sum()), int(ok.sum()))
+            out.append((label, span, cell))
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--episodes", type=int, default=100, help="seeds 1000, 1001, ... (default: the cards' 100)")
+    parser.add_argument("--kinds", default=",".join(IDS))
+    parser.add_argument("--policy", action="append", default=[], metavar="KIND=SPEC",
+                        help="the policy of one kind (default: the scripted grasp): a train.py run, a shipped "
+                             "baseline's name, an RLlib trial, or 'random'")  # fmt: skip
+    ns = parser.parse_args(argv)
+    kinds = ns.kinds.split(",")
+    for kind in kinds:
+        if kind not in IDS:
+            parser.error(f"--kinds: {kind!r} is not one of {sorted(IDS)}")
+    specs: dict[str, str] = {}
+    for item in ns.policy:
+        kind, sep, spec = item.partition("=")
+        if not sep or kind not in IDS or not spec:
+            parser.error(f"--policy takes KIND=SPEC with KIND one of {sorted(IDS)}, got {item!r}")
+        if kind not in kinds:
+            parser.error(f"--policy {item!r}: {kind!r} is not among --kinds {ns.kinds!r}")
+        specs[kind] = spec
+    if ns.episodes < 3:
+        parser.error(f"--episodes must be at least 3 (one per third), got {ns.episodes}")
+    seeds = range(SEED, SEED + ns.episodes)
+    named = ", ".join(f"{k}: {specs.get(k, 'scripted')}" for k in kinds)
+    print(f"reach task, seeds {seeds.start}-{seeds.stop - 1}; 1 process; {named}")
+    results = {}
+    for kind in kinds:
+        tic = time.perf_counter()
+        results[kind] = episodes(kind, specs.get(kind), seeds)
+        n_ok = int(sum(r["success"] for r in results[kind]))
+        n_held = int(sum(r["held_at_carry"] for r in results[kind]))
+        print(f"{kind:<14} success {n_ok}/{ns.episodes}, held when the carry began {n_held}/{ns.episodes} "
+              f"({time.perf_counter() - tic:.0f} s)", flush=True)  # fmt: skip
+    print("\nper third of each drawn quantity: held when the carry began / succeeded (of the third's episodes)")
+    print(f"{'quantity':<42}{'range':>18}" + "".join(f"{k:>16}" for k in kinds))
+    for label, span, cell in regions(results):
+        row = "".join(f"{f'{h}/{s} of {n}':>16}" for n, h, s in cell.values())
+        print(f"{label:<42}{span:>18}{row}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
