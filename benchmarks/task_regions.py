@@ -18,6 +18,10 @@ when the carry began and how many succeeded (held through the carry).
 
 ``--policy KIND=SPEC`` takes anything ``agents.evaluate`` loads (a train.py run, a shipped
 baseline's name, an RLlib trial, ``random``); it must have been trained on its kind's id.
+``--option NAME=VALUE`` fixes a reset option in every episode (the env checks it), e.g. a heavier
+cylinder or less friction than the task draws, to probe beyond its ranges:
+
+    PYTHONPATH=. python benchmarks/task_regions.py --option cylinder_mass=0.3 --option friction_scale=0.6
 """
 
 from __future__ import annotations
@@ -73,8 +77,11 @@ def start_of(env) -> dict[str, float]:
     }
 
 
-def episodes(kind: str, spec: str | None, seeds: range) -> list[dict[str, float]]:
-    """Per seed: the start's quantities, ``held_at_carry`` and ``success`` (1.0 / 0.0)."""
+def episodes(
+    kind: str, spec: str | None, seeds: range, options: dict[str, float] | None = None
+) -> list[dict[str, float]]:
+    """Per seed: the start's quantities, ``held_at_carry`` and ``success`` (1.0 / 0.0); ``options``
+    are passed to every reset."""
     env = gym.make(IDS[kind])
     try:
         if spec is None:
@@ -85,7 +92,7 @@ def episodes(kind: str, spec: str | None, seeds: range) -> list[dict[str, float]
             policy = load_policy(spec, env)
         rows = []
         for seed in seeds:
-            obs, _ = env.reset(seed=seed)
+            obs, _ = env.reset(seed=seed, options=options)
             row = start_of(env)
             held_at_carry, done, info = None, False, {}
             while not done:
@@ -148,7 +155,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--policy", action="append", default=[], metavar="KIND=SPEC",
                         help="the policy of one kind (default: the scripted grasp): a train.py run, a shipped "
                              "baseline's name, an RLlib trial, or 'random'")  # fmt: skip
+    parser.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
+                        help="a reset option fixed in every episode (a number), e.g. cylinder_mass=0.3")  # fmt: skip
     ns = parser.parse_args(argv)
+    options: dict[str, float] = {}
+    for item in ns.option:
+        name, sep, value = item.partition("=")
+        if not (sep and name):
+            parser.error(f"--option takes NAME=VALUE, got {item!r}")
+        try:
+            options[name] = float(value)
+        except ValueError:
+            parser.error(f"--option {item!r}: the value must be a number")
     kinds = ns.kinds.split(",")
     for kind in kinds:
         if kind not in IDS:
@@ -165,11 +183,12 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--episodes must be at least 3 (one per third), got {ns.episodes}")
     seeds = range(SEED, SEED + ns.episodes)
     named = ", ".join(f"{k}: {specs.get(k, 'scripted')}" for k in kinds)
-    print(f"reach task, seeds {seeds.start}-{seeds.stop - 1}; 1 process; {named}")
+    fixed = "".join(f", {k}={v:g}" for k, v in options.items())
+    print(f"reach task{fixed}, seeds {seeds.start}-{seeds.stop - 1}; 1 process; {named}")
     results = {}
     for kind in kinds:
         tic = time.perf_counter()
-        results[kind] = episodes(kind, specs.get(kind), seeds)
+        results[kind] = episodes(kind, specs.get(kind), seeds, options)
         n_ok = int(sum(r["success"] for r in results[kind]))
         n_held = int(sum(r["held_at_carry"] for r in results[kind]))
         print(f"{kind:<14} success {n_ok}/{ns.episodes}, held when the carry began {n_held}/{ns.episodes} "

@@ -264,6 +264,11 @@ def test_task_regions_split_the_same_starts_for_every_kind():
         task_regions.regions(results)
     with pytest.raises(SystemExit):
         task_regions.main(["--kinds", "tissue", "--policy", "rigid=random"])
+    with pytest.raises(SystemExit):
+        task_regions.main(["--option", "cylinder_mass=heavy"])
+    # a fixed option reaches every reset: the heavier cylinder is the one the scene holds
+    (row,) = task_regions.episodes("rigid_torsion", "random", range(1000, 1001), {"cylinder_mass": 0.3})
+    assert row["cylinder_mass"] == pytest.approx(300.0) and row["success"] == 0.0
 
 
 def test_stability_diff_reads_the_shipped_v3_map():
