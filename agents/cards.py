@@ -287,8 +287,9 @@ def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True) 
 
     rows = []
     if scripted:
-        for env_id in ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspGoal-v3", "SoftGrasp-v2", "SoftGraspRigid-v2",
-                       "SoftGrasp-v1", "SoftGraspRigid-v1", "SoftGraspGoal-v1"):  # fmt: skip
+        for env_id in ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspGoal-v3",
+                       "SoftGrasp-v2", "SoftGraspRigid-v2", "SoftGrasp-v1", "SoftGraspRigid-v1",
+                       "SoftGraspGoal-v1"):  # fmt: skip
             env = gym.make(env_id)
             try:
                 ev = evaluate(env, ScriptedGraspPolicy.for_env(env), episodes=episodes, seed=seed)
