@@ -146,12 +146,40 @@ def _training_log(run_dir: Path) -> list[dict[str, str]]:
                 if row.get("time/total_timesteps")]  # fmt: skip
 
 
-def train_seconds(meta: dict[str, Any], log: list[dict[str, str]]) -> float | None:
-    """Wall time of the training: recorded by train.py, else the last ``time/time_elapsed`` of SB3's log."""
-    if meta.get("train_seconds") is not None:
-        return float(meta["train_seconds"])
-    times = [float(r["time/time_elapsed"]) for r in log if r.get("time/time_elapsed")]
-    return max(times) if times else None
+def train_seconds(meta: dict[str, Any], log: list[dict[str, str]],
+                  progress: list[dict[str, str]] = ()) -> float | None:  # fmt: skip
+    """Wall time of the training: recorded by train.py, else the last ``time/time_elapsed`` of SB3's log.
+
+    A run trained in parts (``sessions`` in run.json, from ``--resume``) sums its parts. A part cut
+    off before train.py could record its time (the first session, when its machine stopped) counts
+    up to the checkpoint the next part resumed from, read off the wall clock of train.py's
+    evaluations (``progress.csv``, a clock that a resumed run continues from that checkpoint's
+    evaluation); the steps trained past the checkpoint were discarded and are not counted. None if
+    a part's time cannot be told."""
+    sessions = meta.get("sessions") or []
+    if not sessions:
+        if meta.get("train_seconds") is not None:
+            return float(meta["train_seconds"])
+        times = [float(r["time/time_elapsed"]) for r in log if r.get("time/time_elapsed")]
+        return max(times) if times else None
+    rows = sorted((int(float(r["timesteps"])), float(r["wall_seconds"])) for r in progress if r.get("wall_seconds"))
+
+    def clock(steps: int) -> float:
+        """The evaluations' clock at ``steps``: its last reading at or before them (train.py's
+        offset for a part resumed there)."""
+        return max((w for t, w in rows if t <= steps), default=0.0)
+
+    starts = [0] + [int(s["at_timesteps"]) for s in sessions]
+    recorded = [meta.get("train_seconds")] + [s.get("train_seconds") for s in sessions]
+    total = 0.0
+    for i, seconds in enumerate(recorded):
+        if seconds is not None:
+            total += float(seconds)
+        elif i + 1 < len(starts) and rows:
+            total += clock(starts[i + 1]) - clock(starts[i])
+        else:
+            return None  # the last part unrecorded (still training, or cut with nothing resumed from it)
+    return round(total, 1)
 
 
 def publish(run_dir: Path, *, episodes: int = EPISODES, seed: int = SEED, dest: Path = TRAINED) -> Path:
@@ -202,7 +230,7 @@ def publish(run_dir: Path, *, episodes: int = EPISODES, seed: int = SEED, dest: 
         "hyperparameters": hyperparameters(meta),
         "timesteps": int(loaded.model.num_timesteps),
         "seed": int(meta["seed"]),
-        "train_seconds": train_seconds(meta, log),
+        "train_seconds": train_seconds(meta, log, progress),
         "command": command(meta),
         "evaluation": {
             "episodes": ev.episodes,

@@ -64,6 +64,26 @@ def test_convergence_reads_the_last_fifth_of_the_budget():
     assert cards.convergence(rows([0.5, 0.6]), 20_000)["converged"] is None
 
 
+def test_train_seconds_of_a_run_trained_in_parts():
+    """A run cut at 50k steps (no time recorded) and resumed from its 50k checkpoint: the cut part
+    counts up to the checkpoint on the evaluations' clock, the resumed part its recorded time; the
+    steps trained past the checkpoint and discarded do not count."""
+    progress = [{"timesteps": "40000", "wall_seconds": "400"}, {"timesteps": "50000", "wall_seconds": "500"},
+                {"timesteps": "60000", "wall_seconds": "560"}]  # fmt: skip
+    meta = {"sessions": [{"at_timesteps": 50000, "train_seconds": 900.0}]}
+    assert cards.train_seconds(meta, [], progress) == pytest.approx(1400.0)
+    # a checkpoint between two evaluations: the clock's last reading before it
+    meta = {"sessions": [{"at_timesteps": 45000, "train_seconds": 900.0}]}
+    assert cards.train_seconds(meta, [], progress) == pytest.approx(1300.0)
+    # a complete first part, then 50k more: both recorded times
+    meta = {"train_seconds": 480.0, "sessions": [{"at_timesteps": 50000, "train_seconds": 100.0}]}
+    assert cards.train_seconds(meta, [], progress) == pytest.approx(580.0)
+    # the last part still training (or cut, nothing resumed from it): unknown, not a guess
+    meta = {"sessions": [{"at_timesteps": 50000}]}
+    assert cards.train_seconds(meta, [], progress) is None
+    assert cards.train_seconds({"train_seconds": 12.5}, []) == 12.5
+
+
 @pytest.mark.parametrize("model_dir", MODELS, ids=[d.name for d in MODELS])
 def test_card_agrees_with_the_files(model_dir):
     card = cards.read_card(model_dir)
