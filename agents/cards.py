@@ -303,9 +303,11 @@ def _card_extras(card: dict[str, Any]) -> list[str]:
     return rows
 
 
-def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True) -> str:
+def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True,
+          versions: tuple[int, ...] | None = None) -> str:  # fmt: skip
     """The results table (markdown): the scripted policy, measured now on the same seeds, and every
-    shipped model from its card; per algo and env, mean and range over seeds."""
+    shipped model from its card; per algo and env, mean and range over seeds; only the ids of
+    ``versions`` if given (e.g. ``(3,)``)."""
     import gymnasium as gym
     import numpy as np
 
@@ -318,6 +320,8 @@ def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True) 
         for env_id in ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspGoal-v3",
                        "SoftGrasp-v2", "SoftGraspRigid-v2", "SoftGrasp-v1", "SoftGraspRigid-v1",
                        "SoftGraspGoal-v1"):  # fmt: skip
+            if versions is not None and int(env_id.rsplit("-v", 1)[1]) not in versions:
+                continue
             env = gym.make(env_id)
             try:
                 ev = evaluate(env, ScriptedGraspPolicy.for_env(env), episodes=episodes, seed=seed)
@@ -327,6 +331,8 @@ def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True) 
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for model_dir in shipped():
         card = read_card(model_dir)
+        if versions is not None and card["env_version"] not in versions:
+            continue
         groups.setdefault((card["algo"], card["env"]), []).append(card)
     for (algo, env_id), cards in sorted(groups.items()):
         rates = [c["evaluation"]["success_rate"] for c in cards]
@@ -358,6 +364,8 @@ def main(argv: list[str] | None = None) -> int:
     pub.add_argument("--dest", type=Path, default=TRAINED)
     tab = sub.add_parser("table", help="print the results table")
     tab.add_argument("--no-scripted", action="store_true")
+    tab.add_argument("--versions", type=int, nargs="+", default=None, metavar="N",
+                     help="only the ids of these versions (default: every shipped one)")  # fmt: skip
     ns = parser.parse_args(argv)
     if ns.command == "publish":
         if ns.episodes < 1:
@@ -371,7 +379,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{out}: success {card['evaluation']['success_rate']:.0%} over {card['evaluation']['episodes']} "
                   f"episodes, {card['timesteps']:,} steps", flush=True)  # fmt: skip
     else:
-        print(table(scripted=not ns.no_scripted))
+        print(table(scripted=not ns.no_scripted, versions=None if ns.versions is None else tuple(ns.versions)))
     return 0
 
 

@@ -137,6 +137,10 @@ def test_results_table_lists_every_group_with_its_cards_rates():
         card = cards.read_card(d)
         row = next(line for line in text.splitlines() if line.startswith(f"| {card['algo']} | {card['env']} |"))
         assert f"{card['evaluation']['success_rate']:.0%}" in row
+    v3 = cards.table(scripted=False, versions=(3,)).splitlines()[2:]
+    assert v3 and all("-v3 |" in line for line in v3), v3
+    assert len(v3) == len({(cards.read_card(d)["algo"], cards.read_card(d)["env"]) for d in MODELS
+                           if cards.read_card(d)["env_version"] == 3})  # fmt: skip
 
 
 def test_learning_curves_are_drawn_from_the_shipped_runs(tmp_path):
