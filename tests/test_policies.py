@@ -91,6 +91,16 @@ def test_loading_without_stable_baselines3_names_the_train_extra(monkeypatch):
     assert "SoftGrasp-v2_sac_0" in str(exc.value)
 
 
+def test_a_missing_old_baseline_says_where_the_old_ones_are():
+    """The wheel leaves issue 10's v1/v2 models in the repository: asking an install for one names
+    where they are; a missing v3 name gets the plain list."""
+    with pytest.raises(ValueError, match="not in the wheel.*source repository"):
+        baseline_card("SoftGrasp-v2_sac_7")
+    with pytest.raises(ValueError) as exc:
+        baseline_card("SoftGrasp-v3_sac_7")
+    assert "not in the wheel" not in str(exc.value) and "SoftGrasp-v3_sac_0" in str(exc.value)
+
+
 def test_the_scripted_policy_is_one_class_under_both_names():
     import agents.scripted
 

@@ -1,29 +1,32 @@
-"""The trained baselines that ship with the package: PPO and SAC on the soft and rigid fingers, with
-and without the carry test, three seeds each, and HER + SAC on the goal env (25 in all). Each is a
-folder of ``trained/`` beside this file: ``model.zip`` (stable-baselines3), ``vecnormalize.pkl``
-(the observation statistics it was trained with; HER runs have none), ``card.json`` and
-``README.md`` (the model card: env, algo, hyperparameters, steps, seed, success over 100 seeded
-episodes, the command that made it), ``run.json`` (train.py's record) and the training logs.
+"""The trained baselines that ship with the package: SAC and PPO on the v3 soft fingers, rigid twin
+and torsional peer (issue 22, several seeds each), and, in the source repository, issue 10's PPO
+and SAC on the v1/v2 ids and HER + SAC on the goal env. Each is a folder of ``trained/`` beside
+this file: ``model.zip`` (stable-baselines3), ``vecnormalize.pkl`` (the observation statistics it
+was trained with; HER runs have none), ``card.json`` and ``README.md`` (the model card: env, algo,
+hyperparameters, steps, seed, success over 100 seeded episodes, the command that made it),
+``run.json`` (train.py's record) and the training logs.
 
     from softgrasp_env.policies import list_baselines, baseline_card, load_baseline
 
-    list_baselines(env="SoftGrasp-v2")          # names; no stable-baselines3 needed
-    baseline_card("SoftGrasp-v2_sac_0")         # the card as a dict; no stable-baselines3 needed
-    b = load_baseline("SoftGrasp-v2_sac_0")     # needs the [train] extra
+    list_baselines(env="SoftGrasp-v3")          # names; no stable-baselines3 needed
+    baseline_card("SoftGrasp-v3_sac_0")         # the card as a dict; no stable-baselines3 needed
+    b = load_baseline("SoftGrasp-v3_sac_0")     # needs the [train] extra
     env = b.make_env()                          # the env it trained on, with its kwargs
     obs, _ = env.reset(seed=1000)
     action = b.policy(obs)                      # deterministic; the statistics applied inside
 
-They are package data, not downloads: about 13 MB of the wheel (the SAC models are 0.95 MB each,
-their critics and optimiser state included, so that training can go on from them), against a
-download that would need a server and a network at run time. The repository's ``agents.cards``
-publishes new ones here.
+They are package data, not downloads (a download would need a server and a network at run
+time): the SAC models are 0.95 MB each, their critics and optimiser state included, so that
+training can go on from them. The wheel carries the baselines of the current ids (v3); the v1/v2
+ones (issue 10's, on the old ids, 15 MB) are in the source repository's folder only, where these
+functions find them from a checkout. The repository's ``agents.cards`` publishes new ones here.
 """
 
 from __future__ import annotations
 
 import difflib
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -58,6 +61,9 @@ def baseline_path(name: str) -> Path:
         names = [d.name for d in _dirs()]
         near = difflib.get_close_matches(str(name), names, n=3)
         hint = f" (did you mean {', '.join(map(repr, near))}?)" if near else ""
+        if isinstance(name, str) and re.search(r"-v[12]_", name):
+            hint += (" (the v1/v2 baselines are not in the wheel: they are in the source repository's "
+                     "softgrasp_env/policies/trained/, found from a checkout or loaded by path with agents.evaluate)")  # fmt: skip
         raise ValueError(f"no shipped baseline {name!r}{hint}; the baselines are: {', '.join(names)}")
     return TRAINED / name
 
