@@ -53,44 +53,63 @@ def episode(env, policy, seed: int, options: dict) -> tuple[bool, bool, float, f
     return bool(held_at_start), bool(info["is_success"]), env.unwrapped.task.slide, tilt
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--seeds", type=int, default=10, help="episodes per cell (seeds 1000, 1001, ...)")
+def add_kind_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--kinds`` (which of IDS, comma-separated) and ``--policy KIND=SPEC`` (repeatable)."""
     parser.add_argument("--kinds", default=",".join(IDS))
     parser.add_argument("--policy", action="append", default=[], metavar="KIND=SPEC",
                         help="the policy of one kind (default: the scripted grasp): a train.py run, a shipped "
                              "baseline's name, an RLlib trial, or 'random'")  # fmt: skip
-    ns = parser.parse_args(argv)
-    specs = {}
+
+
+def kinds_and_policies(parser: argparse.ArgumentParser, ns: argparse.Namespace) -> tuple[list[str], dict[str, str]]:
+    """The kinds asked for and the policy spec of each kind given one; a parser error naming a
+    kind that is not one of IDS or a --policy for a kind not asked for."""
+    kinds = ns.kinds.split(",")
+    for kind in kinds:
+        if kind not in IDS:
+            parser.error(f"--kinds: {kind!r} is not one of {sorted(IDS)}")
+    specs: dict[str, str] = {}
     for item in ns.policy:
         kind, sep, spec = item.partition("=")
         if not sep or kind not in IDS or not spec:
             parser.error(f"--policy takes KIND=SPEC with KIND one of {sorted(IDS)}, got {item!r}")
+        if kind not in kinds:
+            parser.error(f"--policy {item!r}: {kind!r} is not among --kinds {ns.kinds!r}")
         specs[kind] = spec
-    for kind in ns.kinds.split(","):
-        if kind not in IDS:
-            parser.error(f"--kinds: {kind!r} is not one of {sorted(IDS)}")
+    return kinds, specs
+
+
+def make_policy(spec: str | None, env):
+    """The scripted grasp for ``env`` (spec None), else what ``agents.evaluate`` loads for ``spec``."""
+    if spec is None:
+        return ScriptedGraspPolicy.for_env(env)
+    from agents.evaluate import load_policy
+
+    return load_policy(spec, env)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--seeds", type=int, default=10, help="episodes per cell (seeds 1000, 1001, ...)")
+    add_kind_arguments(parser)
+    ns = parser.parse_args(argv)
+    kinds, specs = kinds_and_policies(parser, ns)
     seeds = range(1000, 1000 + ns.seeds)
     named = ", ".join(f"{k}: {v}" for k, v in specs.items()) or "none"
     print(f"reach task, seeds {seeds.start}-{seeds.stop - 1}; 1 process; the scripted grasp but for ({named})")
     print(f"{'kind':<15}{'f Hz':>6}{'a m/s2':>8}{'direction':>10}{'held@start':>12}{'held through':>14}"
           f"{'slide mm':>10}{'tilt deg':>10}")  # fmt: skip
     totals: dict[str, list[int]] = {}
-    for kind in ns.kinds.split(","):
+    for kind in kinds:
         env = gym.make(IDS[kind])
-        if kind in specs:
-            from agents.evaluate import load_policy
-
-            policy = load_policy(specs[kind], env)
-        else:
-            policy = ScriptedGraspPolicy.for_env(env)
+        policy = make_policy(specs.get(kind), env)
         tic = time.perf_counter()
         tot = totals.setdefault(kind, [0, 0, 0])
         try:
             for f in FREQUENCIES:
                 for a in ACCELERATIONS:
                     for name, angle in DIRECTIONS.items():
-                        opts = dict(carry_frequency=f, carry_acceleration=a, carry_direction=angle)
+                        opts = {"carry_frequency": f, "carry_acceleration": a, "carry_direction": angle}
                         rows = [episode(env, policy, s, opts) for s in seeds]
                         started = [r for r in rows if r[0]]
                         through = sum(r[1] for r in started)

@@ -34,10 +34,8 @@ import time
 import gymnasium as gym
 import numpy as np
 
-import softgrasp_env  # noqa: F401  (registers the ids)
-from softgrasp_env.policies import ScriptedGraspPolicy
+from benchmarks.carry_bands import IDS, add_kind_arguments, kinds_and_policies, make_policy
 
-IDS = {"tissue": "SoftGrasp-v3", "rigid": "SoftGraspRigid-v3", "rigid_torsion": "SoftGraspRigidTorsion-v3"}
 SEED = 1000
 """The model cards' first seed (agents.cards.SEED): a region's rates read against the cards'."""
 
@@ -84,12 +82,7 @@ def episodes(
     are passed to every reset."""
     env = gym.make(IDS[kind])
     try:
-        if spec is None:
-            policy = ScriptedGraspPolicy.for_env(env)
-        else:
-            from agents.evaluate import load_policy
-
-            policy = load_policy(spec, env)
+        policy = make_policy(spec, env)
         rows = []
         for seed in seeds:
             obs, _ = env.reset(seed=seed, options=options)
@@ -151,10 +144,7 @@ def regions(results: dict[str, list[dict[str, float]]]) -> list[tuple[str, str, 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--episodes", type=int, default=100, help="seeds 1000, 1001, ... (default: the cards' 100)")
-    parser.add_argument("--kinds", default=",".join(IDS))
-    parser.add_argument("--policy", action="append", default=[], metavar="KIND=SPEC",
-                        help="the policy of one kind (default: the scripted grasp): a train.py run, a shipped "
-                             "baseline's name, an RLlib trial, or 'random'")  # fmt: skip
+    add_kind_arguments(parser)
     parser.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                         help="a reset option fixed in every episode (a number), e.g. cylinder_mass=0.3")  # fmt: skip
     ns = parser.parse_args(argv)
@@ -167,18 +157,7 @@ def main(argv: list[str] | None = None) -> int:
             options[name] = float(value)
         except ValueError:
             parser.error(f"--option {item!r}: the value must be a number")
-    kinds = ns.kinds.split(",")
-    for kind in kinds:
-        if kind not in IDS:
-            parser.error(f"--kinds: {kind!r} is not one of {sorted(IDS)}")
-    specs: dict[str, str] = {}
-    for item in ns.policy:
-        kind, sep, spec = item.partition("=")
-        if not sep or kind not in IDS or not spec:
-            parser.error(f"--policy takes KIND=SPEC with KIND one of {sorted(IDS)}, got {item!r}")
-        if kind not in kinds:
-            parser.error(f"--policy {item!r}: {kind!r} is not among --kinds {ns.kinds!r}")
-        specs[kind] = spec
+    kinds, specs = kinds_and_policies(parser, ns)
     if ns.episodes < 3:
         parser.error(f"--episodes must be at least 3 (one per third), got {ns.episodes}")
     seeds = range(SEED, SEED + ns.episodes)
