@@ -334,3 +334,29 @@ def test_no_tissue_grip_holds_below_coulombs_least_force_by_default():
     result = glue(1013, report=lambda line: None)
     assert not result["held"] and result["over"] == 0, result
     assert 0.97 <= result["weakest_hold"] / result["least"], result
+
+
+def test_rim_creep_centre_grips_hold_under_palm_noise_and_the_peer_holds_high():
+    """Issue 22's 'where ours loses', the part that holds: a 0.2 kg cylinder at half friction
+    (Coulomb's margin 1.19 with the arm's 1.5 m/s^2), lifted to 11 cm with the palm shaken. The
+    tissue gripping at the centre keeps it (creep measured 2.3-2.6 mm, the pads' shear included);
+    the torsional peer keeps it gripped 4 cm up too (0.0-2.5 mm)."""
+    from benchmarks.rim_creep import run
+
+    options = {"cylinder_mass": 0.2, "friction_scale": 0.5}
+    soft = run("tissue", 0.0, 0.11, 0.8, range(1000, 1003), options)
+    assert soft["success"] == 3 and soft["max_creep"] < 0.005 and soft["margin"] == pytest.approx(1.19, abs=0.01), soft
+    peer = run("rigid_torsion", 0.04, 0.11, 0.8, range(1000, 1003), options)
+    assert peer["success"] == 3 and peer["max_creep"] < 0.005, peer
+
+
+@pytest.mark.xfail(strict=True, reason="a tissue grip with the pads' upper 2 cm above the cylinder's rim creeps down "
+                   "(13 mm median on a still lift) and is lost when the palm moves about, at 1.19 x Coulomb's margin "
+                   "where the torsional peer holds (benchmarks/rim_creep.py; issue 22's notes): cause not found yet")
+def test_a_tissue_grip_high_on_the_cylinder_holds_what_coulomb_allows():
+    """Measured: 0 of 10 (per-contact cones: 1 of 10), the cylinder sliding 50 mm (median) down the
+    pads; strict, so that the fix says so."""
+    from benchmarks.rim_creep import run
+
+    soft = run("tissue", 0.04, 0.11, 0.8, range(1000, 1003), {"cylinder_mass": 0.2, "friction_scale": 0.5})
+    assert soft["success"] == 3 and soft["max_creep"] < 0.005, soft
