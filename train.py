@@ -53,6 +53,9 @@ from agents.evaluate import evaluate
 from agents.runs import CHECKPOINT_PREFIX, deterministic_policy, load_model, make_env, run_files
 from agents.threads import DEFAULT_TORCH_THREADS, set_threads, threads_error
 
+EVAL_EVERY = 10_000  # timesteps between a fresh run's evaluations
+EVAL_EPISODES = 10
+
 
 def _log(message: str) -> None:
     tqdm.write(message)  # prints above a running progress bar instead of through it
@@ -216,15 +219,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--vec", choices=("subproc", "dummy"), default=None,
                         help="how --n-envs > 1 run: 'subproc' (default; one process each, SB3's SubprocVecEnv) or "
                              "'dummy' (in this process, one after the other)")  # fmt: skip
-    parser.add_argument("--eval-every", type=int, default=10_000, help="timesteps between evaluations")
-    parser.add_argument("--eval-episodes", type=int, default=10)
+    parser.add_argument("--eval-every", type=int, default=None,
+                        help=f"timesteps between evaluations (default {EVAL_EVERY}; with --resume: the run's)")
+    parser.add_argument("--eval-episodes", type=int, default=None,
+                        help=f"episodes per evaluation (default {EVAL_EPISODES}; with --resume: the run's)")
     parser.add_argument("--learning-starts", type=int, default=None, help="override the preset (off-policy algos)")
     parser.add_argument(
         "--checkpoint-every",
         type=int,
         default=None,
         metavar="N",
-        help="save model, replay buffer and VecNormalize stats every N timesteps to checkpoints/",
+        help="save model, replay buffer and VecNormalize stats every N timesteps to checkpoints/ "
+        "(default none; with --resume: the run's)",
     )
     parser.add_argument("--resume", type=Path, default=None, metavar="PATH",
                         help="continue the run at PATH (its directory, model.zip or a checkpoint zip): model, "
@@ -263,9 +269,18 @@ def main(argv: list[str] | None = None) -> int:
                 parser.error(f"--{name.replace('_', '-')} {value!r} differs from the resumed run's "
                              f"{meta.get(name)!r}: a resumed run keeps its settings")  # fmt: skip
         env_id, algo, n_envs = meta["env"], meta["algo"], meta["n_envs"]
+        # How often it evaluates and saves goes on as the run was started unless asked otherwise:
+        # a resumed part that fell back to the fresh defaults would save no checkpoint (a cut part
+        # is then lost whole) and evaluate on 10 episodes where the run's curve has 50.
+        fallback = {"eval_every": EVAL_EVERY, "eval_episodes": EVAL_EPISODES, "checkpoint_every": None}
+        for name, default in fallback.items():
+            if getattr(ns, name) is None:
+                setattr(ns, name, meta.get(name, default))
         env_kwargs, algo_kwargs = meta.get("env_kwargs", {}), meta.get("algo_kwargs", {})
         run = files.run_dir
     else:
+        ns.eval_every = EVAL_EVERY if ns.eval_every is None else ns.eval_every
+        ns.eval_episodes = EVAL_EPISODES if ns.eval_episodes is None else ns.eval_episodes
         env_id = ns.env or "SoftGrasp-v3"
         algo = ns.algo or default_algo(env_id)
         n_envs = ns.n_envs or 1
@@ -366,7 +381,9 @@ def main(argv: list[str] | None = None) -> int:
         venv.seed(seed)
         model.set_random_seed(seed)
         meta.setdefault("sessions", []).append({"resumed_from": str(files.model), "at_timesteps": start,
-                                                "timesteps": ns.timesteps, "seed": seed})  # fmt: skip
+                                                "timesteps": ns.timesteps, "seed": seed, "eval_every": ns.eval_every,
+                                                "eval_episodes": ns.eval_episodes,
+                                                "checkpoint_every": ns.checkpoint_every})  # fmt: skip
     model.set_logger(make_logger(run / "logs", "progress.csv" if start == 0 else f"progress_from_{start}.csv"))
 
     progress = EvalProgress(eval_env, ns.eval_every, ns.eval_episodes, run / "progress.csv", norm,

@@ -175,10 +175,13 @@ def test_resume_sac_from_a_checkpoint_keeps_its_replay_buffer(tmp_path):
     files = runs.run_files(checkpoint)
     assert files.run_dir == run and files.replay_buffer.exists() and files.vecnormalize.exists()
     assert (run / "replay_buffer.pkl").exists()
-    assert train.main(["--resume", str(checkpoint), "--timesteps", "30", "--eval-every", "1000", "--eval-episodes", "1",
-                       "--no-progress"]) == 0  # fmt: skip
+    # No evaluation or checkpoint options: the resumed part goes on with the run's (every 25 steps).
+    assert train.main(["--resume", str(checkpoint), "--timesteps", "30", "--no-progress"]) == 0
     model = runs.load_run(run).model
     assert model.num_timesteps == 55
+    assert (run / "checkpoints" / "model_50_steps.zip").exists()
+    session = json.loads((run / "run.json").read_text())["sessions"][-1]
+    assert (session["eval_every"], session["eval_episodes"], session["checkpoint_every"]) == (1000, 1, 25)
     model.load_replay_buffer(str(run / "replay_buffer.pkl"))
     # 24 from the checkpoint's buffer (SB3's CheckpointCallback runs after the 25th env step, before
     # that transition is stored) + 30 new; an empty buffer would give 30.
