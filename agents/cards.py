@@ -137,13 +137,33 @@ def command(meta: dict[str, Any]) -> str:
 
 
 def _training_log(run_dir: Path) -> list[dict[str, str]]:
-    path = run_dir / "logs" / "progress.csv"
-    if not path.exists():
-        return []
-    with open(path, newline="") as f:
-        # SB3 writes evaluation rows of its own (eval/* only): the curves need the training ones
-        return [{k: row.get(k, "") for k in TRAINING_COLUMNS} for row in csv.DictReader(f)
-                if row.get("time/total_timesteps")]  # fmt: skip
+    """SB3's training rows of the run, every part of it: a run resumed at step N logs on in
+    ``logs/progress_from_N.csv`` (train.py). Each part is cut where the next one resumed (rows past
+    that checkpoint were discarded with the steps that made them) and its ``time/time_elapsed``,
+    which SB3 starts at 0 in each part, goes on from the previous part's last row."""
+    logs = run_dir / "logs"
+    parts = [(0, logs / "progress.csv")] if (logs / "progress.csv").exists() else []
+    for path in logs.glob("progress_from_*.csv"):
+        start = path.stem.removeprefix("progress_from_")
+        if start.isdigit():
+            parts.append((int(start), path))
+    parts.sort()
+    rows: list[dict[str, str]] = []
+    offset = 0.0
+    for i, (_, path) in enumerate(parts):
+        end = parts[i + 1][0] if i + 1 < len(parts) else None
+        with open(path, newline="") as f:
+            # SB3 writes evaluation rows of its own (eval/* only): the curves need the training ones
+            part = [{k: row.get(k, "") for k in TRAINING_COLUMNS} for row in csv.DictReader(f)
+                    if row.get("time/total_timesteps")]  # fmt: skip
+        part = [r for r in part if end is None or int(float(r["time/total_timesteps"])) <= end]
+        for r in part:
+            if r.get("time/time_elapsed"):
+                r["time/time_elapsed"] = f"{float(r['time/time_elapsed']) + offset:g}"
+        rows += part
+        elapsed = [float(r["time/time_elapsed"]) for r in part if r.get("time/time_elapsed")]
+        offset = max(elapsed, default=offset)
+    return rows
 
 
 def train_seconds(meta: dict[str, Any], log: list[dict[str, str]],

@@ -84,6 +84,22 @@ def test_train_seconds_of_a_run_trained_in_parts():
     assert cards.train_seconds({"train_seconds": 12.5}, []) == 12.5
 
 
+def test_training_log_of_a_run_trained_in_parts(tmp_path):
+    """A run cut past its 50k checkpoint and resumed there logs on in progress_from_50000.csv: the
+    curve takes the first part up to 50k (the rows past it were discarded with their steps), then
+    the second, whose elapsed time SB3 starts at 0 and the curve continues."""
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    header = "time/total_timesteps,time/time_elapsed,rollout/success_rate,eval/success_rate\n"
+    (logs / "progress.csv").write_text(header + "".join(
+        f"{t},{t // 100},{t / 1e5},\n" for t in (25_000, 50_000, 75_000)) + ",,,0.5\n")  # fmt: skip
+    (logs / "progress_from_50000.csv").write_text(header + "60000,90,0.7,\n70000,190,0.8,\n")
+    log = cards._training_log(tmp_path)
+    assert [int(r["time/total_timesteps"]) for r in log] == [25_000, 50_000, 60_000, 70_000]
+    assert [float(r["time/time_elapsed"]) for r in log] == [250, 500, 590, 690]
+    assert [float(r["rollout/success_rate"]) for r in log] == [0.25, 0.5, 0.7, 0.8]
+
+
 @pytest.mark.parametrize("model_dir", MODELS, ids=[d.name for d in MODELS])
 def test_card_agrees_with_the_files(model_dir):
     card = cards.read_card(model_dir)
@@ -110,6 +126,8 @@ def test_card_agrees_with_the_files(model_dir):
     with open(model_dir / "training.csv", newline="") as f:
         steps = [int(float(r["time/total_timesteps"])) for r in csv.DictReader(f)]
     assert steps and steps == sorted(steps) and steps[-1] <= card["timesteps"]
+    # The curve covers the whole run (a run trained in parts once shipped its first part only).
+    assert steps[-1] >= 0.95 * card["timesteps"]
 
 
 @pytest.mark.parametrize("model_dir", MODELS, ids=[d.name for d in MODELS])
