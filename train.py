@@ -244,7 +244,12 @@ def main(argv: list[str] | None = None) -> int:
                         help="torch threads of the learner (default 1: measured fastest on a 2-core machine with "
                              "another run beside it; env processes always take one)")  # fmt: skip
     parser.add_argument("--out", type=Path, default=Path("runs"))
+    parser.add_argument("--name", default=None, metavar="NAME",
+                        help="the run directory's name under --out (default <env>_<algo>_<seed>); e.g. for a "
+                             "variant by --env-kwargs, which the default name does not tell apart")  # fmt: skip
     ns = parser.parse_args(argv)
+    if ns.name is not None and (not ns.name.strip() or ns.name in (".", "..") or any(c in ns.name for c in "/\\")):
+        parser.error(f"--name {ns.name!r}: a run's name is one directory name (no path separators)")
     problem = threads_error(ns.torch_threads)
     if problem:
         parser.error(f"--torch-threads: {problem}")
@@ -261,6 +266,8 @@ def main(argv: list[str] | None = None) -> int:
         except ValueError as exc:
             parser.error(f"--resume: {exc}")
         meta = files.meta
+        if ns.name is not None:
+            parser.error(f"--name {ns.name!r}: a resumed run keeps its directory ({str(files.run_dir)!r})")
         given = {"env": ns.env, "algo": ns.algo, "env_kwargs": ns.env_kwargs and env_kwargs,
                  "algo_kwargs": ns.algo_kwargs and algo_kwargs, "n_envs": ns.n_envs,
                  "learning_starts": ns.learning_starts}  # fmt: skip
@@ -291,7 +298,7 @@ def main(argv: list[str] | None = None) -> int:
                 "checkpoint_every": ns.checkpoint_every, "out": str(ns.out),
                 "normalized_observations": default_algo(env_id) != "her-sac",  # the goal env runs raw (HER)
                 "softgrasp_env": softgrasp_env.__version__}  # fmt: skip
-        run = ns.out / f"{env_id}_{algo}_{seed}"
+        run = ns.out / (ns.name or f"{env_id}_{algo}_{seed}")
     goal = default_algo(env_id) == "her-sac"  # the goal-conditioned ids
     if algo == "her-sac" and not goal:
         parser.error("--algo her-sac needs a goal-conditioned env (SoftGraspGoal-v3 or -v1)")

@@ -323,6 +323,13 @@ def _card_extras(card: dict[str, Any]) -> list[str]:
     return rows
 
 
+def env_label(card: dict[str, Any]) -> str:
+    """The env a card's model was trained on as the table names it: the id, and the ``--env-kwargs``
+    it was made with (a variant, e.g. ``SoftGraspGrip-v3 tactile=None``, is a group of its own)."""
+    kwargs = card.get("env_kwargs") or {}
+    return " ".join([card["env"], *(f"{k}={v!r}" for k, v in sorted(kwargs.items()))])
+
+
 def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True,
           versions: tuple[int, ...] | None = None) -> str:  # fmt: skip
     """The results table (markdown): the scripted policy, measured now on the same seeds, and every
@@ -353,7 +360,7 @@ def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True,
         card = read_card(model_dir)
         if versions is not None and card["env_version"] not in versions:
             continue
-        groups.setdefault((card["algo"], card["env"]), []).append(card)
+        groups.setdefault((card["algo"], env_label(card)), []).append(card)
     for (algo, env_id), cards in sorted(groups.items()):
         rates = [c["evaluation"]["success_rate"] for c in cards]
         steps = sorted({c["timesteps"] for c in cards})

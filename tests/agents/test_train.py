@@ -314,6 +314,17 @@ def test_train_refuses_to_overwrite_a_run_unless_forced(tmp_path, capsys):
     assert "give one of them" in capsys.readouterr().err
     assert train.main([*args, "--force"]) == 0  # anew: the old run's files are gone
     assert not (run / "notes.txt").exists() and json.loads((run / "run.json").read_text())["num_timesteps"] == 64
+    # A variant by --env-kwargs beside it, under a name of its own; it resumes by its path only.
+    assert train.main([*args, "--env-kwargs", "cylinder_mass=0.2", "--name", "heavy"]) == 0
+    assert json.loads((tmp_path / "heavy" / "run.json").read_text())["env_kwargs"] == {"cylinder_mass": 0.2}
+    assert json.loads((run / "run.json").read_text())["env_kwargs"] == {}  # the default-named run untouched
+    with pytest.raises(SystemExit):
+        train.main(["--resume", str(tmp_path / "heavy"), "--name", "other", "--timesteps", "64"])
+    assert "keeps its directory" in capsys.readouterr().err
+    for bad in ("", "a/b", ".."):
+        with pytest.raises(SystemExit):
+            train.main([*args, "--name", bad])
+        assert "one directory name" in capsys.readouterr().err
 
 
 def test_bad_algo_kwargs_are_named_before_anything_is_written(tmp_path, capsys):

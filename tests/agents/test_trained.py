@@ -153,12 +153,13 @@ def test_results_table_lists_every_group_with_its_cards_rates():
     text = cards.table(scripted=False)
     for d in MODELS:
         card = cards.read_card(d)
-        row = next(line for line in text.splitlines() if line.startswith(f"| {card['algo']} | {card['env']} |"))
+        row = next(line for line in text.splitlines() if line.startswith(f"| {card['algo']} | {cards.env_label(card)} |"))
         assert f"{card['evaluation']['success_rate']:.0%}" in row
     v3 = cards.table(scripted=False, versions=(3,)).splitlines()[2:]
-    assert v3 and all("-v3 |" in line for line in v3), v3
-    assert len(v3) == len({(cards.read_card(d)["algo"], cards.read_card(d)["env"]) for d in MODELS
+    assert v3 and all(line.split(" | ")[1].split()[0].endswith("-v3") for line in v3), v3
+    assert len(v3) == len({(cards.read_card(d)["algo"], cards.env_label(cards.read_card(d))) for d in MODELS
                            if cards.read_card(d)["env_version"] == 3})  # fmt: skip
+    assert cards.env_label({"env": "SoftGraspGrip-v3", "env_kwargs": {"tactile": None}}) == "SoftGraspGrip-v3 tactile=None"
 
 
 def test_learning_curves_are_drawn_from_the_shipped_runs(tmp_path):
