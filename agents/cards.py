@@ -341,20 +341,25 @@ def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True,
     import softgrasp_env  # noqa: F401
     from agents.evaluate import evaluate
     from softgrasp_env.policies import ScriptedGraspPolicy
+    from softgrasp_env.policies.grip import TactileGripPolicy
 
     rows = []
     if scripted:
         for env_id in ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspGoal-v3",
+                       "SoftGraspGrip-v3", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3",
                        "SoftGrasp-v2", "SoftGraspRigid-v2", "SoftGrasp-v1", "SoftGraspRigid-v1",
                        "SoftGraspGoal-v1"):  # fmt: skip
             if versions is not None and int(env_id.rsplit("-v", 1)[1]) not in versions:
                 continue
             env = gym.make(env_id)
+            # The grip ids' scripted policy reads the taxels (issue 21); the others the scripted grasp.
+            grip = env_id.startswith("SoftGraspGrip")
             try:
-                ev = evaluate(env, ScriptedGraspPolicy.for_env(env), episodes=episodes, seed=seed)
+                policy = TactileGripPolicy(env) if grip else ScriptedGraspPolicy.for_env(env)
+                ev = evaluate(env, policy, episodes=episodes, seed=seed)
             finally:
                 env.close()
-            rows.append(("scripted", env_id, "-", "-", [ev.success_rate], "-"))
+            rows.append(("scripted tactile" if grip else "scripted", env_id, "-", "-", [ev.success_rate], "-"))
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for model_dir in shipped():
         card = read_card(model_dir)
@@ -375,7 +380,7 @@ def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True,
     for algo, env_id, steps, minutes, rates, converged in rows:
         per_seed = " / ".join(f"{r:.0%}" for r in rates)
         lo, hi = wilson(round(sum(rates) * episodes), episodes * len(rates))
-        out.append(f"| {algo} | {env_id} | {steps} | {minutes} | {len(rates) if algo != 'scripted' else '-'} | "
+        out.append(f"| {algo} | {env_id} | {steps} | {minutes} | {'-' if algo.startswith('scripted') else len(rates)} | "
                    f"**{np.mean(rates):.0%}**" + (f" ({per_seed})" if len(rates) > 1 else "") +
                    f" | {lo:.0%} - {hi:.0%} | {converged} |")  # fmt: skip
     return "\n".join(out)

@@ -58,8 +58,13 @@ def run_episode(env: gym.Env, policy: Callable[[object], np.ndarray], *, seed: i
                 on_step: Callable[[object, float, bool, bool, dict], None] | None = None) -> Episode:  # fmt: skip
     """Reset ``env`` (``seed``, ``options``) and step ``policy(obs) -> action`` until the episode
     ends, or for ``max_steps`` steps; ``on_step(obs, reward, terminated, truncated, info)`` sees
-    every step. The one episode loop the evaluator, the benchmarks and the tests share."""
+    every step. A policy with a ``reset()`` (a stateful one: the grip task's scripted policies) is
+    reset at the episode's start. The one episode loop the evaluator, the benchmarks and the tests
+    share."""
     obs, info = env.reset(seed=seed, options=options)
+    reset = getattr(policy, "reset", None)
+    if callable(reset):
+        reset()
     steps, total, successes, max_lift = 0, 0.0, 0, -np.inf
     terminated = truncated = False
     while not (terminated or truncated) and (max_steps is None or steps < max_steps):

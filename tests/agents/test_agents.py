@@ -27,6 +27,31 @@ def test_scripted_policy_succeeds_where_random_actions_do_not():
     assert random.success_rate == 0.0 and random.mean_return < scripted.mean_return
 
 
+def test_evaluate_resets_a_stateful_policy_at_every_episode():
+    """The grip task's scripted policies keep state within an episode (issue 21): the evaluator
+    resets them at each episode's start, so every episode meets the policy as it was made."""
+    env = gym.make("SoftGraspEasyRigid-v1")
+
+    class Counting:
+        def __init__(self):
+            self.resets, self.steps, self.longest = 0, 0, 0
+
+        def reset(self):
+            self.resets, self.steps = self.resets + 1, 0
+
+        def __call__(self, obs):
+            self.steps += 1
+            self.longest = max(self.longest, self.steps)
+            return np.zeros(env.action_space.shape, dtype=np.float32)
+
+    policy = Counting()
+    try:
+        ev = evaluate(env, policy, episodes=2, seed=0)
+    finally:
+        env.close()
+    assert policy.resets == 2 and policy.longest == env.spec.max_episode_steps and ev.episodes == 2
+
+
 def test_default_algos_and_presets():
     assert default_algo("SoftGraspGoal-v1") == "her-sac"
     assert default_algo("SoftGrasp-v2") == "sac"
