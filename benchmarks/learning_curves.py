@@ -2,15 +2,17 @@
 mean and spread (min-max) over seeds, one panel per algorithm and task version (a row each: v2
 with the carry test, v1 without).
 
-    python benchmarks/learning_curves.py --versions v2,v1      # agents/trained/ -> docs/results/
-    python benchmarks/learning_curves.py --versions v3 --by kind --name learning_curves_v3   # issue 22's figure
-    python benchmarks/learning_curves.py --models runs --out /tmp/curves
+    PYTHONPATH=. python benchmarks/learning_curves.py --versions v2,v1      # agents/trained/ -> docs/results/
+    PYTHONPATH=. python benchmarks/learning_curves.py --versions v3 --by kind --name learning_curves_v3   # issue 22's
+    PYTHONPATH=. python benchmarks/learning_curves.py --models runs --out /tmp/curves
 
 Two measures per run, both from the files train.py writes:
 - lines: ``rollout/success_rate`` of SB3's log (``training.csv`` in a shipped model, ``logs/progress.csv``
   in a run): the share of the last 100 training episodes that ended in success, stochastic actions;
 - markers: train.py's periodic evaluations (``progress.csv``): deterministic policy, separate seeds.
 Each seed's curve is interpolated onto a common step grid before the mean and the band are taken.
+A variant trained with ``--env-kwargs`` (the grip task without taxels) is a group of its own, drawn
+in grey.
 Writes ``learning_curves.png`` and ``learning_curves.csv`` (the plotted means and bands).
 """
 
@@ -24,6 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
+from agents.cards import env_label
+
 ROOT = Path(__file__).resolve().parents[1]
 FINGERS = {"SoftGrasp": "soft (tissue)", "SoftGraspRigid": "rigid", "SoftGraspGoal": "soft, goal (HER)",
            "SoftGraspRigidTorsion": "rigid + torsional friction", "SoftGraspGrip": "grip force, soft",
@@ -36,9 +40,15 @@ VERSIONS = {"v3": "v3 (the sway band)", "v2": "v2 (carry test)", "v1": "v1 (no c
 
 
 def _split(env_id: str) -> tuple[str, str]:
-    """``"SoftGraspRigid-v2"`` -> ``("SoftGraspRigid", "v2")``."""
-    name, _, version = env_id.rpartition("-")
+    """``"SoftGraspRigid-v2"`` -> ``("SoftGraspRigid", "v2")``; a variant's env kwargs after the id
+    (``"SoftGraspGrip-v3 tactile=None"``, agents.cards.env_label) stay out of it."""
+    name, _, version = env_id.split(" ", 1)[0].rpartition("-")
     return name, version
+
+
+def _variant(env: str) -> str:
+    """The env kwargs of a variant's group name (``"tactile=None"``), "" for the id as registered."""
+    return env.split(" ", 1)[1] if " " in env else ""
 
 
 def _rows(path: Path) -> list[dict[str, str]]:
@@ -64,7 +74,7 @@ def load_runs(models: Path) -> dict[tuple[str, str], list[dict]]:
         meta = json.loads(meta_path.read_text())
         d = meta_path.parent
         training = _rows(d / "training.csv") or _rows(d / "logs" / "progress.csv")
-        groups.setdefault((meta["algo"], meta["env"]), []).append({
+        groups.setdefault((meta["algo"], env_label(meta)), []).append({
             "seed": meta["seed"],
             "train": _series(training, "time/total_timesteps", "rollout/success_rate"),
             "eval": _series(_rows(d / "progress.csv"), "timesteps", "success_rate"),
@@ -129,7 +139,11 @@ def main(argv: list[str] | None = None) -> int:
             name, _ = _split(env)
             seeds = f"{len(runs)} seed{'s' if len(runs) > 1 else ''}"
             label = f"{FINGERS.get(name, name)} ({seeds})" if ns.by == "algo" else f"{algo.upper()} ({seeds})"
+            if _variant(env):
+                label = f"{label}, {_variant(env)}"
             color = COLORS.get(name) if ns.by == "algo" else ALGO_COLORS.get(algo)
+            if _variant(env):
+                color = "tab:gray"
             b = band([r["train"] for r in runs])
             if b is not None:
                 grid, mean, lo, hi = b

@@ -169,7 +169,7 @@ def test_learning_curves_are_drawn_from_the_shipped_runs(tmp_path):
     assert (tmp_path / "learning_curves.png").stat().st_size > 10_000
     with open(tmp_path / "learning_curves.csv", newline="") as f:
         groups = {(r["algo"], r["env"]) for r in csv.DictReader(f)}
-    assert groups == {(cards.read_card(d)["algo"], cards.read_card(d)["env"]) for d in MODELS}
+    assert groups == {(cards.read_card(d)["algo"], cards.env_label(cards.read_card(d))) for d in MODELS}
 
 
 def test_learning_curves_by_finger_kind_have_a_panel_per_kind(tmp_path):
@@ -181,8 +181,25 @@ def test_learning_curves_by_finger_kind_have_a_panel_per_kind(tmp_path):
     assert (tmp_path / "by_kind.png").stat().st_size > 10_000
     with open(tmp_path / "by_kind.csv", newline="") as f:
         groups = {(r["algo"], r["env"]) for r in csv.DictReader(f)}
-    assert groups == {(cards.read_card(d)["algo"], cards.read_card(d)["env"]) for d in MODELS}
+    assert groups == {(cards.read_card(d)["algo"], cards.env_label(cards.read_card(d))) for d in MODELS}
 
+
+
+def test_learning_curves_draw_a_variant_by_env_kwargs_as_a_group_of_its_own(tmp_path):
+    """The grip task with and without taxels: one id, two groups (the second by its env kwargs)."""
+    import shutil
+
+    from benchmarks import learning_curves
+
+    src = cards.TRAINED / "SoftGraspGrip-v3_sac_0"
+    for name, kwargs in (("with", {}), ("without", {"tactile": None})):
+        shutil.copytree(src, tmp_path / "models" / name)
+        meta = json.loads((src / "run.json").read_text())
+        (tmp_path / "models" / name / "run.json").write_text(json.dumps({**meta, "env_kwargs": kwargs}))
+    assert learning_curves.main(["--models", str(tmp_path / "models"), "--out", str(tmp_path), "--by", "kind"]) == 0
+    with open(tmp_path / "learning_curves.csv", newline="") as f:
+        groups = {(r["algo"], r["env"]) for r in csv.DictReader(f)}
+    assert groups == {("sac", "SoftGraspGrip-v3"), ("sac", "SoftGraspGrip-v3 tactile=None")}
 
 @pytest.mark.slow
 @pytest.mark.parametrize("model_dir", MODELS, ids=[d.name for d in MODELS])
