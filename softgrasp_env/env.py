@@ -412,8 +412,11 @@ class SoftGraspEnv(gym.Env):
 class SoftGraspGoalEnv(SoftGraspEnv):
     """Goal-conditioned SoftGrasp (``SoftGraspGoal-v1``) for hindsight experience replay.
 
-    As :class:`SoftGraspEnv` (same actions, physics, starting state and episode end; no carry
-    test), with the goal task (softgrasp_env/tasks/goal.py):
+    As :class:`SoftGraspEnv` (same actions, physics, starting state and time limit; no carry
+    test), with the goal task (softgrasp_env/tasks/goal.py). A knocked-over or pushed-away
+    cylinder does not end the episode (it runs to the time limit at -1 per step: an early end
+    would pay less, and HER + SAC learned to knock the cylinder over for it); only a physics
+    failure does (the cylinder below the ground or flung out, a diverged step).
 
     - Observation: ``Dict(observation=Box(23), achieved_goal=Box(3), desired_goal=Box(3))``:
       ``observation`` is SoftGraspEnv's vector, ``achieved_goal`` the cylinder centre [m],
@@ -424,11 +427,14 @@ class SoftGraspGoalEnv(SoftGraspEnv):
       batch dimensions, as HER needs); -1 on a diverged step. ``info["is_success"]`` is exactly
       ``compute_reward(...) == 0``.
 
-    Extra arguments: ``distance_threshold`` (0.02 m), ``goal_height_range`` ((0.05, 0.08) m).
+    Extra arguments: ``distance_threshold`` (0.02 m), ``goal_height_range`` ((0.05, 0.08) m),
+    ``end_when_knocked_over`` (False; True on SoftGraspGoal-v1: the lift task's episode ends, as
+    v1's results were made with).
     """
 
     def __init__(self, render_mode: str | None = None, *, distance_threshold: float = DISTANCE_THRESHOLD,
-                 goal_height_range: tuple[float, float] = GOAL_HEIGHT_RANGE, **kwargs: Any) -> None:  # fmt: skip
+                 goal_height_range: tuple[float, float] = GOAL_HEIGHT_RANGE, end_when_knocked_over: bool = False,
+                 **kwargs: Any) -> None:  # fmt: skip
         if "reward_type" in kwargs:
             raise ValueError("SoftGraspGoalEnv's reward is the goal reward (compute_reward); do not pass reward_type")
         if kwargs.get("carry"):
@@ -437,7 +443,10 @@ class SoftGraspGoalEnv(SoftGraspEnv):
         check_range("distance_threshold", distance_threshold, 0.0, 0.1, lo_open=True)
         if len(goal_height_range) != 2 or not 0.0 <= goal_height_range[0] <= goal_height_range[1] <= 0.15:
             raise ValueError(f"goal_height_range must be (lo, hi) with 0 <= lo <= hi <= 0.15 m, got {goal_height_range!r}")
-        self._goal_kwargs = {"distance_threshold": distance_threshold, "goal_height_range": tuple(goal_height_range)}
+        if not isinstance(end_when_knocked_over, (bool, np.bool_)):
+            raise TypeError(f"end_when_knocked_over must be True or False, got {end_when_knocked_over!r}")
+        self._goal_kwargs = {"distance_threshold": distance_threshold, "goal_height_range": tuple(goal_height_range),
+                             "end_when_knocked_over": bool(end_when_knocked_over)}  # fmt: skip
         super().__init__(render_mode, **{**kwargs, "carry": False, "reward_type": "sparse"})
         self._init_kwargs = {"render_mode": render_mode, **self._goal_kwargs, **kwargs}
         box = spaces.Box(-np.inf, np.inf, shape=(3,), dtype=np.float32)

@@ -36,7 +36,8 @@ _SPECS: dict[str, tuple[str, dict]] = {
     **{f"SoftGrasp-{v}": (_ENV, _kw("tissue", v, reward_type="dense", carry=True)) for v in ("v3", "v2")},
     **{f"SoftGraspRigid-{v}": (_ENV, _kw("rigid", v, reward_type="dense", carry=True)) for v in ("v3", "v2")},
     **{f"SoftGraspSparse-{v}": (_ENV, _kw("tissue", v, reward_type="sparse", carry=True)) for v in ("v3", "v2")},
-    **{f"SoftGraspGoal-{v}": (_GOAL, _kw("tissue", v)) for v in ("v3", "v1")},
+    "SoftGraspGoal-v3": (_GOAL, _kw("tissue", "v3")),
+    "SoftGraspGoal-v1": (_GOAL, _kw("tissue", "v1", end_when_knocked_over=True)),  # its episodes end as v1's did
     **{f"SoftGraspEasy-{v}": (_ENV, _kw("tissue", v, reward_type="dense", task="easy")) for v in ("v3", "v1")},
     **{f"SoftGraspEasyRigid-{v}": (_ENV, _kw("rigid", v, reward_type="dense", task="easy")) for v in ("v3", "v1")},
     "SoftGraspRigidTorsion-v3": (_ENV, _kw("rigid_torsion", "v3", reward_type="dense", carry=True)),

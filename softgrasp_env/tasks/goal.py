@@ -3,7 +3,18 @@ replay: the cylinder centre is the achieved goal, a point above the cylinder's s
 one, and the reward is -1 while they are farther apart than ``distance_threshold``, else 0
 (``compute_reward``, vectorised over leading batch dimensions as HER needs). Success is exactly
 "compute_reward gives 0" on the goals the agent sees, so relabelled and online rewards agree.
-It has no carry test: HER relabels goals alone, and a time-bound test would break that."""
+It has no carry test: HER relabels goals alone, and a time-bound test would break that.
+
+Nor does it end an episode when the cylinder is knocked over or pushed out of the workspace, as
+the lift task does: with -1 on every step until the goal is reached, an episode that ends early
+pays less, so ending it becomes the thing to learn. HER + SAC on SoftGraspGoal-v3 learned exactly
+that (issue 22: its episodes fell from 71 steps on average over its first 20k steps to 50 over
+steps 50k-75k, 77 % of them cut short by a knock-over, at 0 % success). The goal-conditioned
+tasks HER was made on run a fixed number of steps (Andrychowicz et al. 2017; Plappert et al.
+2018, the Fetch tasks); here only a physics failure ends one early: the cylinder below the
+ground or flung above the workspace (lift.py's LOWEST, HIGHEST), and a diverged step (the env's).
+``end_when_knocked_over=True`` keeps the lift task's ends (SoftGraspGoal-v1, as its results were
+made)."""
 
 from __future__ import annotations
 
@@ -13,6 +24,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .base import Outcome, Task, TaskWrapper
+from .lift import HIGHEST, LOWEST
 
 if TYPE_CHECKING:
     from ..observation import Reading
@@ -28,8 +40,10 @@ class GoalTask(TaskWrapper):
     """``task`` with a goal drawn per episode (see the module docstring)."""
 
     def __init__(self, task: Task, *, distance_threshold: float = DISTANCE_THRESHOLD,
-                 goal_height_range: tuple[float, float] = GOAL_HEIGHT_RANGE) -> None:  # fmt: skip
+                 goal_height_range: tuple[float, float] = GOAL_HEIGHT_RANGE,
+                 end_when_knocked_over: bool = False) -> None:  # fmt: skip
         super().__init__(task)
+        self.end_when_knocked_over = bool(end_when_knocked_over)
         self.diverged_reward = -1.0
         self.distance_threshold = float(distance_threshold)
         self.goal_height_range = (float(goal_height_range[0]), float(goal_height_range[1]))
@@ -61,7 +75,11 @@ class GoalTask(TaskWrapper):
         # the goals as the agent sees them (float32), so that a relabelled reward equals this one
         reward = float(self.compute_reward(self.achieved_goal(reading).astype(np.float32), self.goal.astype(np.float32),
                                            None))  # fmt: skip
-        return replace(out, reward=reward, success=reward == 0.0)
+        if self.end_when_knocked_over:
+            return replace(out, reward=reward, success=reward == 0.0)
+        z = reading.cylinder_x[2]
+        lost = bool(z < LOWEST or z > HIGHEST)  # a physics failure, not something to learn (module docstring)
+        return replace(out, reward=reward, success=reward == 0.0, terminated=lost)
 
 
 __all__ = ["DISTANCE_THRESHOLD", "GOAL_HEIGHT_RANGE", "GoalTask"]
