@@ -49,6 +49,7 @@ from agents.baselines import ALGOS, default_algo, make_model, model_class
 from agents.cards import hyperparameters, quote_arg
 from agents.cli import kwargs_dict as _kwargs_dict
 from agents.cli import parse_kwarg
+from agents.demos import MAX_DEMOS, add_demonstrations
 from agents.evaluate import evaluate
 from agents.runs import CHECKPOINT_PREFIX, deterministic_policy, load_model, make_env, run_files
 from agents.threads import DEFAULT_TORCH_THREADS, set_threads, threads_error
@@ -224,6 +225,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--eval-episodes", type=int, default=None,
                         help=f"episodes per evaluation (default {EVAL_EPISODES}; with --resume: the run's)")
     parser.add_argument("--learning-starts", type=int, default=None, help="override the preset (off-policy algos)")
+    parser.add_argument("--demos", type=int, default=None, metavar="N",
+                        help="start an off-policy learner's replay buffer with N episodes of the scripted grasp "
+                             "(agents/demos.py: HER on the goal id never lifts the cylinder by itself)")
     parser.add_argument(
         "--checkpoint-every",
         type=int,
@@ -255,9 +259,11 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--torch-threads: {problem}")
     env_kwargs = _kwargs_dict(parser, "--env-kwargs", ns.env_kwargs)
     algo_kwargs = _kwargs_dict(parser, "--algo-kwargs", ns.algo_kwargs)
-    for name in ("timesteps", "n_envs", "eval_every", "eval_episodes", "checkpoint_every"):
+    for name in ("timesteps", "n_envs", "eval_every", "eval_episodes", "checkpoint_every", "demos"):
         if getattr(ns, name) is not None and getattr(ns, name) < 1:
             parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(ns, name)}")
+    if ns.demos is not None and ns.demos > MAX_DEMOS:
+        parser.error(f"--demos must be <= {MAX_DEMOS}, got {ns.demos}")
 
     files = None
     if ns.resume is not None:
@@ -268,6 +274,8 @@ def main(argv: list[str] | None = None) -> int:
         meta = files.meta
         if ns.name is not None:
             parser.error(f"--name {ns.name!r}: a resumed run keeps its directory ({str(files.run_dir)!r})")
+        if ns.demos is not None:
+            parser.error("--demos fills a new run's replay buffer before it trains; a resumed run keeps its buffer")
         given = {"env": ns.env, "algo": ns.algo, "env_kwargs": ns.env_kwargs and env_kwargs,
                  "algo_kwargs": ns.algo_kwargs and algo_kwargs, "n_envs": ns.n_envs,
                  "learning_starts": ns.learning_starts}  # fmt: skip
@@ -295,7 +303,7 @@ def main(argv: list[str] | None = None) -> int:
         meta = {"env": env_id, "env_kwargs": env_kwargs, "algo": algo, "algo_kwargs": algo_kwargs, "seed": seed,
                 "n_envs": n_envs, "timesteps": ns.timesteps, "eval_every": ns.eval_every,
                 "eval_episodes": ns.eval_episodes, "learning_starts": ns.learning_starts,
-                "checkpoint_every": ns.checkpoint_every, "out": str(ns.out),
+                "checkpoint_every": ns.checkpoint_every, "demos": ns.demos, "out": str(ns.out),
                 "normalized_observations": default_algo(env_id) != "her-sac",  # the goal env runs raw (HER)
                 "softgrasp_env": softgrasp_env.__version__}  # fmt: skip
         run = ns.out / (ns.name or f"{env_id}_{algo}_{seed}")
@@ -304,6 +312,10 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--algo her-sac needs a goal-conditioned env (SoftGraspGoal-v3 or -v1)")
     if algo == "her-sac" and n_envs != 1:
         parser.error("--algo her-sac runs with --n-envs 1")
+    if ns.demos is not None and algo == "ppo":
+        parser.error("--demos fills a replay buffer; ppo has none (an off-policy algo: sac, her-sac)")
+    if ns.demos is not None and n_envs != 1:
+        parser.error("--demos runs with --n-envs 1 (the demonstrations fill a single-env buffer)")
     if files is None:
         problem = algo_kwargs_error(algo, algo_kwargs)
         if problem:
@@ -367,6 +379,14 @@ def main(argv: list[str] | None = None) -> int:
             parser.error(f"--algo-kwargs {algo_kwargs}: {algo} cannot be built with them: {type(exc).__name__}: {exc}")
         meta["hyperparameters"] = hyperparameters(meta)  # the preset as it stands, with the overrides
         start = 0
+        if ns.demos is not None:
+            assert isinstance(model, OffPolicyAlgorithm)  # ppo refused above
+            tic = time.perf_counter()
+            meta["demonstrations"] = add_demonstrations(model, env_id, env_kwargs, ns.demos, seed=seed, norm=norm)
+            meta["demonstrations"]["seconds"] = round(time.perf_counter() - tic, 1)
+            _log(f"{ns.demos} scripted demonstrations in the replay buffer: {meta['demonstrations']['transitions']} "
+                 f"transitions, {meta['demonstrations']['successes']} successes")  # fmt: skip
+            (run / "run.json").write_text(json.dumps(meta, indent=2))
     else:
         if not goal:
             if not files.vecnormalize.exists():

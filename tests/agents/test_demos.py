@@ -1,0 +1,87 @@
+"""train.py --demos (agents/demos.py): scripted episodes in an off-policy learner's replay buffer,
+stored as SB3 stores its own transitions (raw observations, scaled actions, time limits as
+truncations), on their own seeds; HER's buffer keeps them as episodes it can relabel."""
+
+from __future__ import annotations
+
+import json
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+import softgrasp_env  # noqa: F401  (registers the ids)
+import train
+from agents.baselines import make_model
+from agents.demos import DEMO_SEED_BASE, add_demonstrations, demo_seeds
+from softgrasp_env.tasks.goal import DISTANCE_THRESHOLD
+
+GOAL = "SoftGraspGoal-v3"
+RIGID = "SoftGraspRigidTorsion-v3"  # the scripted grasp holds there (100 % in the results table)
+
+
+def test_her_buffer_holds_the_demonstrations_as_relabelable_successful_episodes():
+    env = DummyVecEnv([lambda: gym.make(GOAL)])
+    model = make_model("her-sac", env, seed=0, buffer_size=1000, learning_starts=10_000)
+    stats = add_demonstrations(model, GOAL, {}, 2, seed=3)
+    buf = model.replay_buffer
+    assert stats["episodes"] == 2 and stats["successes"] == 2
+    assert buf.pos == stats["transitions"] == 2 * gym.spec(GOAL).max_episode_steps
+    # The first stored observation is the env's own reset observation on the first demo seed.
+    first, _ = gym.make(GOAL).reset(seed=DEMO_SEED_BASE + 10_000 * 3)
+    for key in first:
+        np.testing.assert_array_equal(buf.observations[key][0, 0], first[key])
+    # Two episodes of 100 steps each, the second starting where the first ended.
+    assert buf.ep_start[0, 0] == 0 and buf.ep_start[100, 0] == 100
+    assert buf.ep_length[0, 0] == buf.ep_length[199, 0] == 100
+    # Each reached its goal (reward 0 at the end) after lifting the cylinder off the table: the
+    # achieved goals HER relabels with are heights above the table, not only the resting spot.
+    for ep in (slice(0, 100), slice(100, 200)):
+        ach, des = buf.observations["achieved_goal"][ep, 0], buf.observations["desired_goal"][ep, 0]
+        assert buf.rewards[ep, 0][-1] == 0.0
+        assert np.linalg.norm(buf.next_observations["achieved_goal"][ep, 0][-1] - des[-1]) <= DISTANCE_THRESHOLD
+        assert ach[:, 2].max() - ach[0, 2] > 0.04
+    # Time limits are truncations (the critic bootstraps past them), stored as SB3 does.
+    assert buf.dones[99, 0] == 1.0 and buf.timeouts[99, 0] == 1.0
+    assert np.all(np.abs(buf.actions[:200]) <= 1.0)
+    # Sampling (with relabelling) works on them.
+    sample = buf.sample(64, env=None)
+    assert sample.rewards.shape == (64, 1) and set(np.unique(sample.rewards.numpy())) <= {-1.0, 0.0}
+    env.close()
+
+
+def test_a_normalised_sac_run_stores_raw_observations_and_updates_its_statistics():
+    venv = VecNormalize(make_vec_env(RIGID, n_envs=1, seed=0), norm_obs=True, norm_reward=False)
+    model = make_model("sac", venv, seed=0, buffer_size=500, learning_starts=10_000)
+    count = venv.obs_rms.count
+    stats = add_demonstrations(model, RIGID, {}, 1, seed=0, norm=venv)
+    n = stats["transitions"]
+    first, _ = gym.make(RIGID).reset(seed=DEMO_SEED_BASE)
+    np.testing.assert_array_equal(model.replay_buffer.observations[0, 0], first)  # raw, not normalised
+    assert venv.obs_rms.count == pytest.approx(count + n + 1)  # the reset and every step's observation
+    assert stats["successes"] == 1 and model.replay_buffer.pos == n
+    venv.close()
+
+
+def test_demo_seeds_are_per_run_and_bounded():
+    assert demo_seeds(0, 2) == [DEMO_SEED_BASE, DEMO_SEED_BASE + 1]
+    assert set(demo_seeds(1, 5)).isdisjoint(demo_seeds(0, 5)) and min(demo_seeds(0, 1)) > 1099
+    with pytest.raises(ValueError, match="episodes"):
+        demo_seeds(0, 10_001)
+
+
+def test_train_records_the_demonstrations_and_refuses_them_where_they_cannot_go(tmp_path, capsys):
+    common = ["--timesteps", "20", "--learning-starts", "1000", "--eval-every", "1000", "--eval-episodes", "1",
+              "--no-progress", "--out", str(tmp_path)]  # fmt: skip
+    assert train.main(["--env", GOAL, "--demos", "1", *common]) == 0
+    meta = json.loads((tmp_path / f"{GOAL}_her-sac_0" / "run.json").read_text())
+    assert meta["demos"] == 1 and meta["demonstrations"]["successes"] == 1
+    assert meta["demonstrations"]["transitions"] == 100
+    for bad, message in ((["--env", RIGID, "--algo", "ppo", "--demos", "2"], "ppo has none"),
+                         (["--env", RIGID, "--demos", "0"], "--demos must be >= 1"),
+                         (["--resume", str(tmp_path / f"{GOAL}_her-sac_0"), "--demos", "2"], "a resumed run keeps")):  # fmt: skip
+        with pytest.raises(SystemExit):
+            train.main([*bad, *common])
+        assert message in capsys.readouterr().err
