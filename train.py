@@ -10,8 +10,8 @@
 
 Writes ``<out>/<env>_<algo>_<seed>/``: ``model.zip``, ``vecnormalize.pkl`` (observation statistics,
 except for HER), ``replay_buffer.pkl`` (off-policy algos, for --resume), ``run.json`` (the
-arguments, env kwargs included, and the sessions), ``monitor*.csv`` (per episode: return, length,
-is_success), ``progress.csv`` (per evaluation: timesteps, success rate, mean return, mean final lift,
+arguments, env kwargs included, and the sessions), ``*.monitor.csv`` (per episode: return, length,
+is_success; a resumed part's in ``monitor_from_<N>/``), ``progress.csv`` (per evaluation: timesteps, success rate, mean return, mean final lift,
 wall time), ``logs/`` (SB3's logger: ``progress.csv`` and tensorboard events with
 ``rollout/success_rate`` of the training episodes and ``eval/*``; a resumed session writes
 ``progress_from_<N>.csv`` and adds events) and, with ``--checkpoint-every``, ``checkpoints/``.
@@ -52,6 +52,7 @@ from agents.cli import parse_kwarg
 from agents.demos import MAX_DEMOS, add_demonstrations
 from agents.evaluate import evaluate
 from agents.runs import CHECKPOINT_PREFIX, deterministic_policy, load_model, make_env, run_files
+from softgrasp_env.policies._sb3 import saved_timesteps
 from agents.threads import DEFAULT_TORCH_THREADS, set_threads, threads_error
 
 EVAL_EVERY = 10_000  # timesteps between a fresh run's evaluations
@@ -357,8 +358,11 @@ def main(argv: list[str] | None = None) -> int:
     threads = set_threads(ns.torch_threads)
     # "module:id": a worker process imports softgrasp_env (and with it the ids) before gym.make,
     # whatever the main module is (train.main called from a script or a test, not only train.py).
+    # SB3's Monitor opens its file anew: a resumed part writes its episodes to a folder of its own
+    # (monitor_from_<steps>/), or it would wipe the earlier parts' record.
+    monitor_dir = run if files is None else run / f"monitor_from_{saved_timesteps(files.model)}"
     venv = make_vec_env(f"softgrasp_env:{env_id}", n_envs=n_envs, seed=meta["seed"], vec_env_cls=vec_cls, env_kwargs=env_kwargs,
-                        monitor_dir=str(run), monitor_kwargs={"info_keywords": ("is_success",)})  # fmt: skip
+                        monitor_dir=str(monitor_dir), monitor_kwargs={"info_keywords": ("is_success",)})  # fmt: skip
     # Positions (cm), velocities and forces (N) differ by orders of magnitude: normalise the
     # observations. HER relabels goals inside its buffer, so the goal env runs unnormalised.
     norm: VecNormalize | None = None

@@ -38,15 +38,31 @@ def model_class(algo: str):
     return sb3.PPO if algo == "ppo" else sb3.SAC
 
 
-def saved_algo(model: Path) -> str | None:
-    """The SB3 algorithm a model zip was saved by ("ppo" or "sac"), told by the attributes each
-    saves in the zip's ``data`` entry (PPO's clip range, SAC's entropy target); ``None`` when the
-    zip says neither. Reads the zip only: no SB3 needed."""
+def _saved_data(model: Path) -> dict:
+    """The ``data`` entry of an SB3 model zip (JSON: the algorithm's saved attributes)."""
     try:
         with zipfile.ZipFile(model) as archive:
             data = json.loads(archive.read("data"))
     except (OSError, KeyError, zipfile.BadZipFile, json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise ValueError(f"{str(model)!r} is not a model saved by stable-baselines3: {type(exc).__name__}: {exc}") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{str(model)!r} is not a model saved by stable-baselines3: its data entry is not a mapping")
+    return data
+
+
+def saved_timesteps(model: Path) -> int:
+    """The env steps a model zip was trained for (SB3's ``num_timesteps``). Reads the zip only."""
+    steps = _saved_data(model).get("num_timesteps")
+    if not isinstance(steps, int) or steps < 0:
+        raise ValueError(f"{str(model)!r} does not say how many steps it was trained for (num_timesteps: {steps!r})")
+    return steps
+
+
+def saved_algo(model: Path) -> str | None:
+    """The SB3 algorithm a model zip was saved by ("ppo" or "sac"), told by the attributes each
+    saves in the zip's ``data`` entry (PPO's clip range, SAC's entropy target); ``None`` when the
+    zip says neither. Reads the zip only: no SB3 needed."""
+    data = _saved_data(model)
     if "clip_range" in data and "n_epochs" in data:
         return "ppo"
     if "target_entropy" in data:

@@ -138,10 +138,14 @@ def test_resume_continues_model_stats_and_timestep_count(tiny_run, tmp_path):
     first = runs.load_run(run)
     assert first.model.num_timesteps == 64
     count = first.stats.obs_rms.count
+    first_episodes = (run / "0.monitor.csv").read_text()
     assert train.main(["--resume", str(run), "--timesteps", "128", "--eval-every", "64", "--eval-episodes", "1",
                        "--no-progress"]) == 0  # fmt: skip
     resumed = runs.load_run(run)
     assert resumed.model.num_timesteps == 192
+    # The first part's episodes stay; the resumed part's go to a folder of their own.
+    assert (run / "0.monitor.csv").read_text() == first_episodes
+    assert len((run / "monitor_from_64" / "0.monitor.csv").read_text().splitlines()) > 2
     # The statistics went on from the saved ones: the resumed session's first reset, then 128 steps.
     assert resumed.stats.obs_rms.count == pytest.approx(count + 1 + 128)
     meta = json.loads((run / "run.json").read_text())
