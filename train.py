@@ -52,8 +52,8 @@ from agents.cli import parse_kwarg
 from agents.demos import MAX_DEMOS, add_demonstrations
 from agents.evaluate import evaluate
 from agents.runs import CHECKPOINT_PREFIX, deterministic_policy, load_model, make_env, run_files
-from softgrasp_env.policies._sb3 import saved_timesteps
 from agents.threads import DEFAULT_TORCH_THREADS, set_threads, threads_error
+from softgrasp_env.policies._sb3 import saved_timesteps
 
 EVAL_EVERY = 10_000  # timesteps between a fresh run's evaluations
 EVAL_EPISODES = 10
