@@ -264,6 +264,7 @@ def publish(run_dir: Path, *, episodes: int = EPISODES, seed: int = SEED, dest: 
             "diverged": ev.diverged,
         },
         "convergence": convergence(progress, int(loaded.model.num_timesteps)),
+        **({"demonstrations": meta["demonstrations"]} if meta.get("demonstrations") else {}),
         "versions": {"softgrasp_env": softgrasp_env.__version__, "stable_baselines3": stable_baselines3.__version__,
                      "torch": torch.__version__, "numpy": np.__version__, "python": platform.python_version()},
         "machine": "2-core x86-64 CPU, no GPU; two runs trained at a time, one torch thread each",
@@ -320,7 +321,19 @@ def _card_extras(card: dict[str, Any]) -> list[str]:
                        f"{conv['change_points']:+.1f} ± {conv['stderr_points']:.1f} points "
                        f"over the window, {conv['evaluations']} evaluations")  # fmt: skip
         rows.append(f"| convergence | {verdict}; rule: {conv['rule']} |")
+    demos = card.get("demonstrations")
+    if demos:
+        rows.append(f"| demonstrations | {demos['episodes']} episodes of the scripted grasp (seeds {demos['seeds']}; "
+                    f"{demos['successes']} successful, {demos['transitions']:,} transitions) in the replay buffer "
+                    "before training (`--demos`, agents/demos.py) |")  # fmt: skip
     return rows
+
+
+def policy_label(card: dict[str, Any]) -> str:
+    """The learner as the table names it: the algo, and the scripted demonstrations it started from
+    (``her-sac + 100 demos``: a group of its own)."""
+    demos = card.get("demonstrations")
+    return f"{card['algo']} + {demos['episodes']} demos" if demos else card["algo"]
 
 
 def env_label(card: dict[str, Any]) -> str:
@@ -365,7 +378,7 @@ def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True,
         card = read_card(model_dir)
         if versions is not None and card["env_version"] not in versions:
             continue
-        groups.setdefault((card["algo"], env_label(card)), []).append(card)
+        groups.setdefault((policy_label(card), env_label(card)), []).append(card)
     for (algo, env_id), cards in sorted(groups.items()):
         rates = [c["evaluation"]["success_rate"] for c in cards]
         steps = sorted({c["timesteps"] for c in cards})

@@ -103,8 +103,12 @@ def test_training_log_of_a_run_trained_in_parts(tmp_path):
 @pytest.mark.parametrize("model_dir", MODELS, ids=[d.name for d in MODELS])
 def test_card_agrees_with_the_files(model_dir):
     card = cards.read_card(model_dir)
-    assert CARD_KEYS <= set(card) <= CARD_KEYS | {"convergence"}  # issue 22's cards say their convergence
+    # issue 22's cards say their convergence, and the demonstrations a run started from
+    assert CARD_KEYS <= set(card) <= CARD_KEYS | {"convergence", "demonstrations"}
     meta = json.loads((model_dir / "run.json").read_text())
+    assert card.get("demonstrations") == meta.get("demonstrations")
+    if "demonstrations" in card:
+        assert f"--demos {card['demonstrations']['episodes']}" in card["command"]
     assert (card["env"], card["algo"], card["seed"], card["env_kwargs"]) == (
         meta["env"], meta["algo"], meta["seed"], meta.get("env_kwargs", {}))  # fmt: skip
     assert card["env"].endswith(f"-v{card['env_version']}")
@@ -153,13 +157,17 @@ def test_results_table_lists_every_group_with_its_cards_rates():
     text = cards.table(scripted=False)
     for d in MODELS:
         card = cards.read_card(d)
-        row = next(line for line in text.splitlines() if line.startswith(f"| {card['algo']} | {cards.env_label(card)} |"))
+        row = next(line for line in text.splitlines()
+                   if line.startswith(f"| {cards.policy_label(card)} | {cards.env_label(card)} |"))  # fmt: skip
         assert f"{card['evaluation']['success_rate']:.0%}" in row
     v3 = cards.table(scripted=False, versions=(3,)).splitlines()[2:]
     assert v3 and all(line.split(" | ")[1].split()[0].endswith("-v3") for line in v3), v3
-    assert len(v3) == len({(cards.read_card(d)["algo"], cards.env_label(cards.read_card(d))) for d in MODELS
+    assert len(v3) == len({(cards.policy_label(cards.read_card(d)), cards.env_label(cards.read_card(d))) for d in MODELS
                            if cards.read_card(d)["env_version"] == 3})  # fmt: skip
     assert cards.env_label({"env": "SoftGraspGrip-v3", "env_kwargs": {"tactile": None}}) == "SoftGraspGrip-v3 tactile=None"
+    # A run started from scripted demonstrations is a group of its own.
+    demos = {"algo": "her-sac", "demonstrations": {"episodes": 100}}
+    assert cards.policy_label(demos) == "her-sac + 100 demos" and cards.policy_label({"algo": "sac"}) == "sac"
 
 
 def test_learning_curves_are_drawn_from_the_shipped_runs(tmp_path):
