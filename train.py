@@ -1,7 +1,7 @@
 """Train a stable-baselines3 agent on a SoftGrasp environment.
 
     python train.py --env SoftGrasp-v3 --algo sac --timesteps 100000
-    python train.py --env SoftGraspGoal-v3               # HER + SAC by default for the goal env
+    python train.py --env SoftGraspGoal-v4 --demos 100   # HER + SAC by default for the goal env
     python train.py --env SoftGraspRigid-v3 --algo ppo --n-envs 2
     python train.py --env SoftGrasp-v3 --env-kwargs cylinder_mass=0.2 fingers="'segmented'"
     python train.py --resume runs/SoftGrasp-v3_sac_0 --timesteps 50000   # 50k more steps
@@ -310,7 +310,7 @@ def main(argv: list[str] | None = None) -> int:
         run = ns.out / (ns.name or f"{env_id}_{algo}_{seed}")
     goal = default_algo(env_id) == "her-sac"  # the goal-conditioned ids
     if algo == "her-sac" and not goal:
-        parser.error("--algo her-sac needs a goal-conditioned env (SoftGraspGoal-v3 or -v1)")
+        parser.error("--algo her-sac needs a goal-conditioned env (SoftGraspGoal-v4, -v3 or -v1)")
     if algo == "her-sac" and n_envs != 1:
         parser.error("--algo her-sac runs with --n-envs 1")
     if ns.demos is not None and algo == "ppo":

@@ -358,7 +358,7 @@ def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True,
 
     rows = []
     if scripted:
-        for env_id in ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspGoal-v3",
+        for env_id in ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspGoal-v4",
                        "SoftGraspGrip-v3", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3",
                        "SoftGrasp-v2", "SoftGraspRigid-v2", "SoftGrasp-v1", "SoftGraspRigid-v1",
                        "SoftGraspGoal-v1"):  # fmt: skip

@@ -410,13 +410,13 @@ class SoftGraspEnv(gym.Env):
 
 
 class SoftGraspGoalEnv(SoftGraspEnv):
-    """Goal-conditioned SoftGrasp (``SoftGraspGoal-v1``) for hindsight experience replay.
+    """Goal-conditioned SoftGrasp (``SoftGraspGoal-v4``, ``-v3``, ``-v1``) for hindsight experience replay.
 
     As :class:`SoftGraspEnv` (same actions, physics, starting state and time limit; no carry
-    test), with the goal task (softgrasp_env/tasks/goal.py). A knocked-over or pushed-away
-    cylinder does not end the episode (it runs to the time limit at -1 per step: an early end
-    would pay less, and HER + SAC learned to knock the cylinder over for it); only a physics
-    failure does (the cylinder below the ground or flung out, a diverged step).
+    test), with the goal task (softgrasp_env/tasks/goal.py). By default (``SoftGraspGoal-v4``) a
+    knocked-over or pushed-away cylinder does not end the episode (it runs to the time limit at -1
+    per step: an early end would pay less, and HER + SAC learned to knock the cylinder over for
+    it); only a physics failure does (the cylinder below the ground or flung out, a diverged step).
 
     - Observation: ``Dict(observation=Box(23), achieved_goal=Box(3), desired_goal=Box(3))``:
       ``observation`` is SoftGraspEnv's vector, ``achieved_goal`` the cylinder centre [m],
@@ -428,8 +428,8 @@ class SoftGraspGoalEnv(SoftGraspEnv):
       ``compute_reward(...) == 0``.
 
     Extra arguments: ``distance_threshold`` (0.02 m), ``goal_height_range`` ((0.05, 0.08) m),
-    ``end_when_knocked_over`` (False; True on SoftGraspGoal-v1: the lift task's episode ends, as
-    v1's results were made with).
+    ``end_when_knocked_over`` (False; True on SoftGraspGoal-v3 and -v1: the lift task's episode
+    ends, as they were released with).
     """
 
     def __init__(self, render_mode: str | None = None, *, distance_threshold: float = DISTANCE_THRESHOLD,

@@ -36,8 +36,11 @@ _SPECS: dict[str, tuple[str, dict]] = {
     **{f"SoftGrasp-{v}": (_ENV, _kw("tissue", v, reward_type="dense", carry=True)) for v in ("v3", "v2")},
     **{f"SoftGraspRigid-{v}": (_ENV, _kw("rigid", v, reward_type="dense", carry=True)) for v in ("v3", "v2")},
     **{f"SoftGraspSparse-{v}": (_ENV, _kw("tissue", v, reward_type="sparse", carry=True)) for v in ("v3", "v2")},
-    "SoftGraspGoal-v3": (_GOAL, _kw("tissue", "v3")),
-    "SoftGraspGoal-v1": (_GOAL, _kw("tissue", "v1", end_when_knocked_over=True)),  # its episodes end as v1's did
+    # v4: the v3 physics; a knocked-over cylinder no longer ends the episode (tasks/goal.py says
+    # why). v3 and v1 keep the ends they were released with.
+    "SoftGraspGoal-v4": (_GOAL, _kw("tissue", "v3", end_when_knocked_over=False)),
+    "SoftGraspGoal-v3": (_GOAL, _kw("tissue", "v3", end_when_knocked_over=True)),
+    "SoftGraspGoal-v1": (_GOAL, _kw("tissue", "v1", end_when_knocked_over=True)),
     **{f"SoftGraspEasy-{v}": (_ENV, _kw("tissue", v, reward_type="dense", task="easy")) for v in ("v3", "v1")},
     **{f"SoftGraspEasyRigid-{v}": (_ENV, _kw("rigid", v, reward_type="dense", task="easy")) for v in ("v3", "v1")},
     "SoftGraspRigidTorsion-v3": (_ENV, _kw("rigid_torsion", "v3", reward_type="dense", carry=True)),
@@ -54,7 +57,8 @@ ENV_IDS: tuple[str, ...] = tuple(_SPECS)
 away, misaligned fingers, lift, then the arm sways the cylinder for the last 1.5 s, a sway drawn
 per episode; success means held through all of it) with soft fingers and the dense lift reward,
 its rigid-only twin, the sparse-reward variant, the goal-conditioned variant (dict observations,
-``compute_reward`` for HER) and the gentle start (``task="easy"``: the open fingers around the
+``compute_reward`` for HER; SoftGraspGoal-v4 since issue 22: the v3 physics, and a knocked-over
+cylinder no longer ends its episode) and the gentle start (``task="easy"``: the open fingers around the
 cylinder's top, aligned), soft and rigid, for debugging a policy or the physics; the grip-force
 task (SoftGraspGrip-v3, soft / rigid / torsional: the gentle start with the carry, the squeeze as
 the action, mass and friction drawn and not observed, the squeeze charged and success within 2 x

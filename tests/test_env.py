@@ -29,12 +29,14 @@ _INF_BOUND = "observation space m"
 
 
 def test_ids_are_registered_with_time_limits():
-    assert len(ENV_IDS) == 20
+    assert len(ENV_IDS) == 21
     gym.register_envs(softgrasp_env)  # the documented idiom is accepted
     for env_id in ENV_IDS:
         spec = gym.spec(env_id)
         assert spec.max_episode_steps == 100
-        assert spec.kwargs.get("arm", "smooth") == ("smooth" if env_id.endswith("-v3") else "jump")
+        assert spec.kwargs.get("arm", "smooth") == ("smooth" if env_id.endswith(("-v3", "-v4")) else "jump")
+    # SoftGraspGoal-v4 is v3's goal id with its episodes ended by physics failures only (issue 22)
+    assert gym.spec("SoftGraspGoal-v4").kwargs == {**gym.spec("SoftGraspGoal-v3").kwargs, "end_when_knocked_over": False}
     for version, carry in (("v3", True), ("v2", True), ("v1", False)):
         assert gym.spec(f"SoftGrasp-{version}").kwargs["fingers"] == "tissue"
         assert gym.spec(f"SoftGraspRigid-{version}").kwargs["fingers"] == "rigid"

@@ -18,7 +18,7 @@ from agents.baselines import make_model
 from agents.demos import DEMO_SEED_BASE, add_demonstrations, demo_seeds
 from softgrasp_env.tasks.goal import DISTANCE_THRESHOLD
 
-GOAL = "SoftGraspGoal-v3"
+GOAL = "SoftGraspGoal-v4"
 RIGID = "SoftGraspRigidTorsion-v3"  # the scripted grasp holds there (100 % in the results table)
 
 
