@@ -1,9 +1,9 @@
 """Learning curves of the shipped baselines: success rate against env steps, soft vs rigid fingers,
 mean and spread (min-max) over seeds, one panel per algorithm and task version (a row each: v2
-with the carry test, v1 without).
+with the carry test, v1 without), or (``--by kind``) one panel per id name and version, in a row.
 
     PYTHONPATH=. python benchmarks/learning_curves.py --versions v2,v1      # agents/trained/ -> docs/results/
-    PYTHONPATH=. python benchmarks/learning_curves.py --versions v3 --by kind --name learning_curves_v3   # issue 22's
+    PYTHONPATH=. python benchmarks/learning_curves.py --versions v3,v4 --by kind --name learning_curves_v3   # issue 22's
     PYTHONPATH=. python benchmarks/learning_curves.py --models runs --out /tmp/curves
 
 Two measures per run, both from the files train.py writes:
@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from agents.cards import env_label
+from agents.cards import env_label, policy_label
 
 ROOT = Path(__file__).resolve().parents[1]
 FINGERS = {"SoftGrasp": "soft (tissue)", "SoftGraspRigid": "rigid", "SoftGraspGoal": "soft, goal (HER)",
@@ -36,7 +36,7 @@ COLORS = {"SoftGrasp": "tab:blue", "SoftGraspRigid": "tab:red", "SoftGraspGoal":
           "SoftGraspRigidTorsion": "tab:orange", "SoftGraspGrip": "tab:blue", "SoftGraspGripRigid": "tab:red",
           "SoftGraspGripRigidTorsion": "tab:orange"}  # fmt: skip
 ALGO_COLORS = {"ppo": "tab:purple", "sac": "tab:blue", "her-sac": "tab:green"}
-VERSIONS = {"v3": "v3 (the sway band)", "v2": "v2 (carry test)", "v1": "v1 (no carry test)"}
+VERSIONS = {"v4": "v4 (v3, no early end)", "v3": "v3 (the sway band)", "v2": "v2 (carry test)", "v1": "v1 (no carry test)"}
 
 
 def _split(env_id: str) -> tuple[str, str]:
@@ -44,6 +44,11 @@ def _split(env_id: str) -> tuple[str, str]:
     (``"SoftGraspGrip-v3 tactile=None"``, agents.cards.env_label) stay out of it."""
     name, _, version = env_id.split(" ", 1)[0].rpartition("-")
     return name, version
+
+
+def _base(algo: str) -> str:
+    """The algo of a table label (``"her-sac + 100 demos"`` -> ``"her-sac"``)."""
+    return algo.split(" + ", 1)[0]
 
 
 def _variant(env: str) -> str:
@@ -74,7 +79,7 @@ def load_runs(models: Path) -> dict[tuple[str, str], list[dict]]:
         meta = json.loads(meta_path.read_text())
         d = meta_path.parent
         training = _rows(d / "training.csv") or _rows(d / "logs" / "progress.csv")
-        groups.setdefault((meta["algo"], env_label(meta)), []).append({
+        groups.setdefault((policy_label(meta), env_label(meta)), []).append({
             "seed": meta["seed"],
             "train": _series(training, "time/total_timesteps", "rollout/success_rate"),
             "eval": _series(_rows(d / "progress.csv"), "timesteps", "success_rate"),
@@ -117,10 +122,15 @@ def main(argv: list[str] | None = None) -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    algos = sorted({algo for algo, _ in groups}, key=["ppo", "sac", "her-sac"].index)
-    versions = sorted({_split(env)[1] for _, env in groups}, reverse=True)
-    kinds = sorted({_split(env)[0] for _, env in groups}, key=lambda k: list(FINGERS).index(k) if k in FINGERS else 99)
-    columns = algos if ns.by == "algo" else kinds
+    algos = sorted({algo for algo, _ in groups}, key=lambda a: (["ppo", "sac", "her-sac"].index(_base(a)), a))
+    order = list(FINGERS)
+    if ns.by == "algo":  # a row per version, a panel per algo
+        versions = sorted({_split(env)[1] for _, env in groups}, reverse=True)
+        columns = algos
+    else:  # one row, a panel per id name and version (SoftGraspGoal-v4 beside the v3 kinds)
+        versions = [""]
+        columns = sorted({_split(env) for _, env in groups},
+                         key=lambda nv: (order.index(nv[0]) if nv[0] in order else 99, nv[1]))  # fmt: skip
     fig, axes = plt.subplots(len(versions), len(columns), figsize=(5.2 * len(columns), 3.6 * len(versions)),
                              squeeze=False)  # fmt: skip
     table = []
@@ -128,7 +138,7 @@ def main(argv: list[str] | None = None) -> int:
 
         def in_panel(algo: str, env: str, version=version, column=column) -> bool:
             name, v = _split(env)
-            return v == version and (algo if ns.by == "algo" else name) == column
+            return v == version and algo == column if ns.by == "algo" else (name, v) == column
 
         if not any(in_panel(a, env) for a, env in groups):
             ax.set_visible(False)
@@ -141,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
             label = f"{FINGERS.get(name, name)} ({seeds})" if ns.by == "algo" else f"{algo.upper()} ({seeds})"
             if _variant(env):
                 label = f"{label}, {_variant(env)}"
-            color = COLORS.get(name) if ns.by == "algo" else ALGO_COLORS.get(algo)
+            color = COLORS.get(name) if ns.by == "algo" else ALGO_COLORS.get(_base(algo))
             if _variant(env):
                 color = "tab:gray"
             b = band([r["train"] for r in runs])
@@ -159,8 +169,10 @@ def main(argv: list[str] | None = None) -> int:
                     table += [{"algo": algo, "env": env, "measure": f"evaluation, seed {r['seed']}",
                                "steps": f"{s:.0f}", "mean": f"{v:.3f}", "min": "", "max": ""}
                               for s, v in zip(x, y)]  # fmt: skip
-        title = column.upper() if ns.by == "algo" else FINGERS.get(column, column)
-        ax.set_title(f"{title}, {VERSIONS.get(version, version)}")
+        if ns.by == "algo":
+            ax.set_title(f"{column.upper()}, {VERSIONS.get(version, version)}")
+        else:
+            ax.set_title(f"{FINGERS.get(column[0], column[0])}, {VERSIONS.get(column[1], column[1])}")
         ax.set_xlabel("env steps")
         ax.set_ylim(-0.03, 1.03)
         ax.grid(alpha=0.3)
