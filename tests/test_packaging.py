@@ -138,12 +138,13 @@ def test_the_wheel_works_in_a_fresh_venv_without_extras(tmp_path):
     with zipfile.ZipFile(wheel) as z:
         names = z.namelist()
     assert "softgrasp_env/py.typed" in names and any(n.endswith(".dist-info/licenses/LICENSE") for n in names)
-    # the wheel carries the baselines of the current ids (v3); the v1/v2 ones stay in the repository
+    # the wheel carries the baselines of the current ids (v3, the goal id's v4); the v1/v2 ones
+    # stay in the repository
     models = [p.parent.name for p in (ROOT / "softgrasp_env" / "policies" / "trained").glob("*/model.zip")]
-    shipped = sum("-v3_" in m for m in models)
-    assert shipped >= 3 and len(models) - shipped == 25, models  # issue 10's 25 in the repository
+    current = {m for m in models if "-v3_" in m or "-v4_" in m}
+    assert len(current) >= 3 and len(models) - len(current) == 25, models  # issue 10's 25 in the repository
     in_wheel = {n.split("/")[3] for n in names if n.startswith("softgrasp_env/policies/trained/")}
-    assert in_wheel == {m for m in models if "-v3_" in m}, in_wheel
+    assert in_wheel == current, in_wheel
     assert not any(n.startswith("agents/") or "__pycache__" in n or n.endswith((".nbi", ".nbc")) for n in names)
     size_mb = wheel.stat().st_size / 1e6
     assert size_mb < 20, size_mb

@@ -17,7 +17,7 @@ hyperparameters, steps, seed, success over 100 seeded episodes, the command that
 
 They are package data, not downloads (a download would need a server and a network at run
 time): the SAC models are 0.95 MB each, their critics and optimiser state included, so that
-training can go on from them. The wheel carries the baselines of the current ids (v3); the v1/v2
+training can go on from them. The wheel carries the baselines of the current ids (v3; the goal id's v4); the v1/v2
 ones (issue 10's, on the old ids, 15 MB) are in the source repository's folder only, where these
 functions find them from a checkout. The repository's ``agents.cards`` publishes new ones here.
 """

@@ -177,7 +177,7 @@ def test_learning_curves_are_drawn_from_the_shipped_runs(tmp_path):
     assert (tmp_path / "learning_curves.png").stat().st_size > 10_000
     with open(tmp_path / "learning_curves.csv", newline="") as f:
         groups = {(r["algo"], r["env"]) for r in csv.DictReader(f)}
-    assert groups == {(cards.read_card(d)["algo"], cards.env_label(cards.read_card(d))) for d in MODELS}
+    assert groups == {(cards.policy_label(cards.read_card(d)), cards.env_label(cards.read_card(d))) for d in MODELS}
 
 
 def test_learning_curves_by_finger_kind_have_a_panel_per_kind(tmp_path):
@@ -189,7 +189,7 @@ def test_learning_curves_by_finger_kind_have_a_panel_per_kind(tmp_path):
     assert (tmp_path / "by_kind.png").stat().st_size > 10_000
     with open(tmp_path / "by_kind.csv", newline="") as f:
         groups = {(r["algo"], r["env"]) for r in csv.DictReader(f)}
-    assert groups == {(cards.read_card(d)["algo"], cards.env_label(cards.read_card(d))) for d in MODELS}
+    assert groups == {(cards.policy_label(cards.read_card(d)), cards.env_label(cards.read_card(d))) for d in MODELS}
 
 
 
