@@ -29,8 +29,8 @@ import numpy as np
 from agents.cards import env_label, policy_label
 
 ROOT = Path(__file__).resolve().parents[1]
-FINGERS = {"SoftGrasp": "soft (tissue)", "SoftGraspRigid": "rigid", "SoftGraspGoal": "soft, goal (HER)",
-           "SoftGraspRigidTorsion": "rigid + torsional friction", "SoftGraspGrip": "grip force, soft",
+FINGERS = {"SoftGrasp": "soft (tissue)", "SoftGraspRigid": "rigid", "SoftGraspRigidTorsion": "rigid + torsional friction",
+           "SoftGraspGoal": "soft, goal (HER)", "SoftGraspGrip": "grip force, soft",
            "SoftGraspGripRigid": "grip force, rigid", "SoftGraspGripRigidTorsion": "grip force, torsional"}  # fmt: skip
 COLORS = {"SoftGrasp": "tab:blue", "SoftGraspRigid": "tab:red", "SoftGraspGoal": "tab:green",
           "SoftGraspRigidTorsion": "tab:orange", "SoftGraspGrip": "tab:blue", "SoftGraspGripRigid": "tab:red",
