@@ -399,6 +399,29 @@ def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True,
     return "\n".join(out)
 
 
+def runs_table(*, versions: tuple[int, ...] | None = None) -> str:
+    """One row per shipped model (markdown; of ``versions`` if given), ordered by env, algo and
+    seed: steps, success with its Wilson interval, the change over the last 20 % of the budget
+    with its standard error, whether the run converged, wall time."""
+    rows = []
+    for model_dir in shipped():
+        card = read_card(model_dir)
+        if versions is not None and card["env_version"] not in versions:
+            continue
+        ev, conv = card["evaluation"], card.get("convergence") or {}
+        lo, hi = ev.get("wilson95") or wilson(round(ev["success_rate"] * ev["episodes"]), ev["episodes"])
+        change = "-" if conv.get("change_points") is None else f"{conv['change_points']:+.1f} ± {conv['stderr_points']:.1f}"
+        verdict = {True: "yes", False: "no"}.get(conv.get("converged"), "undecided" if conv else "-")
+        minutes = "-" if card["train_seconds"] is None else f"{card['train_seconds'] / 60:.0f}"
+        label = f"{policy_label(card).upper().replace(' DEMOS', ' demos')} {env_label(card)} seed {card['seed']}"
+        row = (f"| {label} | {card['timesteps']:,} | **{ev['success_rate']:.0%}** ({lo:.0%}-{hi:.0%}) | "
+               f"{change.replace('-0.0 ', '+0.0 ')} | {verdict} | {minutes} |")  # fmt: skip
+        rows.append(((env_label(card), card["algo"], card["seed"]), row))
+    head = ["| run | env steps | success (Wilson 95 %) | change over the last 20 % | converged | train min |",
+            "|---|---|---|---|---|---|"]  # fmt: skip
+    return "\n".join(head + [row for _, row in sorted(rows)])
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m agents.cards", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
@@ -411,7 +434,13 @@ def main(argv: list[str] | None = None) -> int:
     tab.add_argument("--no-scripted", action="store_true")
     tab.add_argument("--versions", type=int, nargs="+", default=None, metavar="N",
                      help="only the ids of these versions (default: every shipped one)")  # fmt: skip
+    per_run = sub.add_parser("runs", help="print the per-run table (steps, success, convergence, wall time)")
+    per_run.add_argument("--versions", type=int, nargs="+", default=None, metavar="N",
+                         help="only the ids of these versions (default: every shipped one)")  # fmt: skip
     ns = parser.parse_args(argv)
+    if ns.command == "runs":
+        print(runs_table(versions=None if ns.versions is None else tuple(ns.versions)))
+        return 0
     if ns.command == "publish":
         if ns.episodes < 1:
             parser.error(f"--episodes must be >= 1, got {ns.episodes}")

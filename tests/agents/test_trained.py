@@ -165,6 +165,15 @@ def test_results_table_lists_every_group_with_its_cards_rates():
     assert len(v3) == len({(cards.policy_label(cards.read_card(d)), cards.env_label(cards.read_card(d))) for d in MODELS
                            if cards.read_card(d)["env_version"] == 3})  # fmt: skip
     assert cards.env_label({"env": "SoftGraspGrip-v3", "env_kwargs": {"tactile": None}}) == "SoftGraspGrip-v3 tactile=None"
+    # The per-run table: a row per model, its success and convergence verdict from its card.
+    per_run = cards.runs_table(versions=(3, 4)).splitlines()[2:]
+    current = [cards.read_card(d) for d in MODELS if cards.read_card(d)["env_version"] >= 3]
+    assert len(per_run) == len(current)
+    for card in current:
+        (row,) = [r for r in per_run if f" {cards.env_label(card)} seed {card['seed']} |" in r
+                  and r.startswith(f"| {cards.policy_label(card).upper().replace(' DEMOS', ' demos')} ")]  # fmt: skip
+        verdict = {True: "yes", False: "no"}[card["convergence"]["converged"]]
+        assert f"**{card['evaluation']['success_rate']:.0%}**" in row and f"| {verdict} |" in row
     # A run started from scripted demonstrations is a group of its own.
     demos = {"algo": "her-sac", "demonstrations": {"episodes": 100}}
     assert cards.policy_label(demos) == "her-sac + 100 demos" and cards.policy_label({"algo": "sac"}) == "sac"
