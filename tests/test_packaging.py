@@ -165,7 +165,7 @@ def test_the_wheel_works_in_a_fresh_venv_without_extras(tmp_path):
     result = json.loads(next(line for line in run.stdout.splitlines() if line.startswith("RESULT "))[7:])
     assert result["file"].startswith(str(env_dir)), result  # the installed copy, not the checkout's
     assert result["env"] == "SoftGrasp-v3" and result["steps"] == 100 and result["success"] and result["in_space"]
-    assert result["baselines"] == shipped
+    assert result["baselines"] == len(current)
     assert "softgrasp-env[train]" in result["load_error"]
     assert "not in the wheel" in result["old_error"] and "source repository" in result["old_error"], result
     assert not any(result[m] for m in ("agents", "torch", "stable_baselines3", "matplotlib")), result
