@@ -80,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
           f"tolerance {100 * DISTANCE_THRESHOLD:.0f} cm)")  # fmt: skip
     print(f"{'block':>12}  {'episodes':>8}  {'lift>=1cm':>9}  {'lift>=3cm':>9}  {'steps>=3cm':>10}  {'reached goal':>12}  "
           f"{'top lift':>8}")  # fmt: skip
-    for b, chunk in enumerate(np.array_split(np.arange(len(eps)), ns.blocks)):
+    for chunk in np.array_split(np.arange(len(eps)), ns.blocks):
         if len(chunk) == 0:
             continue
         s = summary([eps[i] for i in chunk])
