@@ -85,3 +85,25 @@ def test_train_records_the_demonstrations_and_refuses_them_where_they_cannot_go(
         with pytest.raises(SystemExit):
             train.main([*bad, *common])
         assert message in capsys.readouterr().err
+
+
+def test_her_exploration_counts_the_lifts_in_a_buffer(tmp_path, capsys):
+    """benchmarks/her_exploration.py on a buffer of two demonstrations: both lift the cylinder
+    past 3 cm and reach their goals."""
+    from stable_baselines3.common.save_util import save_to_pkl
+
+    from benchmarks import her_exploration
+
+    env = DummyVecEnv([lambda: gym.make(GOAL)])
+    model = make_model("her-sac", env, seed=0, buffer_size=1000, learning_starts=10_000)
+    add_demonstrations(model, GOAL, {}, 2, seed=0)
+    save_to_pkl(tmp_path / "buffer.pkl", model.replay_buffer)
+    env.close()
+    assert her_exploration.main([str(tmp_path / "buffer.pkl"), "--blocks", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "2 complete episodes" in out
+    # block, episodes, lift>=1cm, lift>=3cm, steps>=3cm, reached goal, top lift
+    last = out.strip().splitlines()[-1].split()
+    assert last[0] == "all" and last[1:4] == ["2", "2", "2"] and last[5] == "2" and float(last[4].rstrip("%")) > 20
+    with pytest.raises(SystemExit):
+        her_exploration.main([str(tmp_path / "nothing.pkl")])
