@@ -360,7 +360,11 @@ def main(argv: list[str] | None = None) -> int:
     # whatever the main module is (train.main called from a script or a test, not only train.py).
     # SB3's Monitor opens its file anew: a resumed part writes its episodes to a folder of its own
     # (monitor_from_<steps>/), or it would wipe the earlier parts' record.
-    monitor_dir = run if files is None else run / f"monitor_from_{saved_timesteps(files.model)}"
+    try:
+        monitor_dir = run if files is None else run / f"monitor_from_{saved_timesteps(files.model)}"
+    except ValueError as exc:
+        eval_env.close()
+        parser.error(f"--resume: {exc}")
     venv = make_vec_env(f"softgrasp_env:{env_id}", n_envs=n_envs, seed=meta["seed"], vec_env_cls=vec_cls, env_kwargs=env_kwargs,
                         monitor_dir=str(monitor_dir), monitor_kwargs={"info_keywords": ("is_success",)})  # fmt: skip
     # Positions (cm), velocities and forces (N) differ by orders of magnitude: normalise the

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import gymnasium as gym
 import numpy as np
+import pytest
 
 from agents.scripted import ScriptedGraspPolicy
 from tests.helpers import run_episode
@@ -83,3 +84,6 @@ def test_knocking_the_cylinder_over_ends_the_lift_task_but_not_the_goal_episode(
     # SoftGraspGoal-v3 and -v1 keep the ends they were released with.
     for env_id in ("SoftGraspGoal-v3", "SoftGraspGoal-v1"):
         assert _knock_over(make_env(env_id))[-1][1]
+    # a flag, not a truthy value
+    with pytest.raises(TypeError, match="end_when_knocked_over must be True or False"):
+        gym.make("SoftGraspGoal-v4", end_when_knocked_over="yes")
