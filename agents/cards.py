@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from softgrasp_env.policies.baselines import TRAINED  # the package data folder the baselines ship in
+
 EPISODES, SEED = 100, 1000
 HYPERPARAMS_FILE = {"ppo": "agents/hyperparams/ppo.yml", "sac": "agents/hyperparams/sac.yml",
                     "her-sac": "agents/hyperparams/sac.yml"}  # fmt: skip

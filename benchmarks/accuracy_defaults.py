@@ -19,10 +19,9 @@ from __future__ import annotations
 import argparse
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
-
-from dataclasses import replace
 
 from softgrasp_env import accuracy, presets
 from softgrasp_env.accuracy import GraspPlan, coulomb_hold_bound, find_hold_bound, run_grasp
@@ -32,6 +31,7 @@ from softgrasp_env.tissue.builder import build_free_block
 from softgrasp_env.tissue.rigid import empty_colliders
 from softgrasp_env.tissue.solver import TissueSolver
 from softgrasp_env.tissue.state import state_at_rest
+
 
 def kinds(preset: str) -> dict[str, SceneConfig]:
     base = presets.scene_config(preset)

@@ -122,7 +122,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"tissue patch on the cylinder, per finger, mean (min-max) over the hold {kwargs or '(defaults)'}")
     for name, options in GRASPS.items():
         print(f"\n{name}: {options}")
-        for side, figs in zip(("left", "right"), measure(options, steps=ns.steps, **kwargs)):
+        for side, figs in zip(("left", "right"), measure(options, steps=ns.steps, **kwargs), strict=True):
             if not figs:
                 print(f"  {side}: no contact during the hold")
                 continue

@@ -28,6 +28,7 @@ import argparse
 import csv
 import math
 from dataclasses import replace
+from itertools import pairwise
 from pathlib import Path
 
 from softgrasp_env import accuracy, presets
@@ -101,7 +102,7 @@ def compression(sim: SimConfig) -> float:
 def monotone(errors: list[float]) -> bool:
     """Every step toward the finer setting (the list runs coarse to fine) moves |error| down."""
     e = [abs(x) for x in errors]
-    return all(b <= a * (1 + 1e-9) + 1e-12 for a, b in zip(e, e[1:]))
+    return all(b <= a * (1 + 1e-9) + 1e-12 for a, b in pairwise(e))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -154,8 +155,8 @@ def report(rows: list[tuple], out: Path) -> None:
     for (axis, method, metric), pts in series.items():
         pts.sort(key=lambda p: -p[0] if axis == "dt" else p[0])  # coarse first
         vals = [p[1] for p in pts]
-        mono = monotone(vals) if metric != "compression" else all(b <= a for a, b in zip(vals, vals[1:])) or all(
-            b >= a for a, b in zip(vals, vals[1:]))  # fmt: skip
+        mono = monotone(vals) if metric != "compression" else all(b <= a for a, b in pairwise(vals)) or all(
+            b >= a for a, b in pairwise(vals))  # fmt: skip
         unit = "rel" if metric in ("ramp", "slide", "stop", "bound") else "m"
         print(f"  {axis:<10} {method:<17} {metric:<12} [{unit}] " + "  ".join(f"{v:+.4g}" for v in vals)
               + ("   monotone" if mono else "   NOT monotone"))  # fmt: skip

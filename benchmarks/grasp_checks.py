@@ -186,7 +186,7 @@ def main(argv: list[str] | None = None) -> int:
     for version in versions:
         if "mass" in rows:
             for name, kind in kinds.items():
-                def holds(m, kind=kind):
+                def holds(m, kind=kind, version=version):
                     r = scripted_episode(kind, version, options={"cylinder_mass": m})
                     return r["held"] and r["in_hand"] < NO_SLIP
 
@@ -203,7 +203,7 @@ def main(argv: list[str] | None = None) -> int:
                       f"{cyl:.3f} kg with the cylinder's a = {r['cyl_accel']:.2f} ({m / cyl - 1:+.1%})", flush=True)  # fmt: skip
         if "friction" in rows:
             for name, kind in kinds.items():
-                def slips(s, kind=kind):
+                def slips(s, kind=kind, version=version):
                     r = scripted_episode(kind, version, options={"friction_scale": s})
                     return not (r["held"] and r["in_hand"] < NO_SLIP)
 

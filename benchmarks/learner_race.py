@@ -32,7 +32,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
-from learners import LEARNERS, ONE_THREAD, preset
+from learners import LEARNERS, ONE_THREAD, preset  # noqa: E402 (benchmarks/ on the path first)
 
 LEARNING_STARTS = 1000
 """train.py's SAC preset: random env steps before the first gradient step (they count in the budget)."""

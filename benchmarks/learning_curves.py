@@ -134,7 +134,7 @@ def main(argv: list[str] | None = None) -> int:
     fig, axes = plt.subplots(len(versions), len(columns), figsize=(5.2 * len(columns), 3.6 * len(versions)),
                              squeeze=False)  # fmt: skip
     table = []
-    for ax, (version, column) in zip(axes.flat, [(v, c) for v in versions for c in columns]):
+    for ax, (version, column) in zip(axes.flat, [(v, c) for v in versions for c in columns], strict=True):
 
         def in_panel(algo: str, env: str, version=version, column=column) -> bool:
             name, v = _split(env)
@@ -161,14 +161,14 @@ def main(argv: list[str] | None = None) -> int:
                 ax.fill_between(grid, lo, hi, color=color, alpha=0.2, lw=0)
                 table += [{"algo": algo, "env": env, "measure": "training episodes", "steps": f"{s:.0f}",
                            "mean": f"{m:.3f}", "min": f"{lo_:.3f}", "max": f"{hi_:.3f}"}
-                          for s, m, lo_, hi_ in zip(grid[::20], mean[::20], lo[::20], hi[::20])]  # fmt: skip
+                          for s, m, lo_, hi_ in zip(grid[::20], mean[::20], lo[::20], hi[::20], strict=True)]  # fmt: skip
             for r in runs:
                 x, y = r["eval"]
                 if len(x):
                     ax.plot(x, y, "o", ms=3.5, color=color, alpha=0.6)
                     table += [{"algo": algo, "env": env, "measure": f"evaluation, seed {r['seed']}",
                                "steps": f"{s:.0f}", "mean": f"{v:.3f}", "min": "", "max": ""}
-                              for s, v in zip(x, y)]  # fmt: skip
+                              for s, v in zip(x, y, strict=True)]  # fmt: skip
         if ns.by == "algo":
             ax.set_title(f"{column.upper()}, {VERSIONS.get(version, version)}")
         else:

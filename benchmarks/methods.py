@@ -186,7 +186,7 @@ def main() -> None:
     def sweep(prefix: str, key):
         pts = [(key(r), r["pose_rms_mm"]) for r in results if r["method"] == "tissue, thesis"
                and (r["setting"].startswith(prefix) or r["setting"] == "default")]  # fmt: skip
-        return zip(*pts) if pts else ((), ())
+        return zip(*pts, strict=True) if pts else ((), ())
 
     it_x, it_e = sweep("", lambda r: int(r["setting"].split()[0]) if r["setting"].endswith("iterations") else 3)
     dt_x, dt_e = sweep("dt/", lambda r: 1.0 / int(r["setting"][3:]) if r["setting"].startswith("dt/") else 1.0)
@@ -217,10 +217,10 @@ def chart(results: list[dict], path: Path) -> None:
                ("pose_rms_mm", "RMS cylinder position vs converged run [mm]"),
                ("bound_err_pct", "|hold-bound error| [%]")]  # fmt: skip
     families = sorted({r["method"] for r in results})
-    markers = dict(zip(families, "o^sDvP*Xh<>"))
+    markers = dict(zip(families, "o^sDvP*Xh<>", strict=False))
     fig, axes = plt.subplots(2, 2, figsize=(12, 9))
     speed = np.array([r["steps_per_s"] for r in results])
-    for ax, (key, title) in zip(axes.ravel(), metrics):
+    for ax, (key, title) in zip(axes.ravel(), metrics, strict=True):
         err = np.array([abs(r[key]) for r in results], dtype=float)
         # log axis: exact zeros (FEM nodes never inside the cylinder) at the floor; NaN (not
         # measured: the rigid kinds' pose error, the FEM pads' bound) stays off the panel

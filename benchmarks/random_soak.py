@@ -37,7 +37,7 @@ def soak(env_id: str, steps: int, stream: str, *, seed: int = 0, **kwargs) -> di
     tic = time.perf_counter()
     k_episode = 0
     try:
-        for k in range(steps):
+        for _ in range(steps):
             if stream == "uniform":
                 action = env.action_space.sample()
             else:

@@ -139,8 +139,8 @@ def capture_scene() -> tuple[TissueSolver, list[tuple[TissueState, Colliders]], 
 def bench_scene(repeats: int = 7) -> None:
     solver, snaps, _ = capture_scene()
     total = 0.0
-    for k, (state, col) in zip(SNAP_STEPS, snaps):
-        t = time_steps(solver, state, col, 1, 1)  # warm
+    for k, (state, col) in zip(SNAP_STEPS, snaps, strict=True):
+        time_steps(solver, state, col, 1, 1)  # warm
         best = np.inf
         for _ in range(repeats):
             s = state.copy()
@@ -198,7 +198,7 @@ def record(path: Path) -> None:
     out: dict[str, np.ndarray] = {}
     _block_outputs(out)
     solver, snaps, info = capture_scene()
-    for k, (state, col) in zip(SNAP_STEPS, snaps):
+    for k, (state, col) in zip(SNAP_STEPS, snaps, strict=True):
         for f in fields(state):
             out[f"in{k}.state.{f.name}"] = getattr(state, f.name)
         for f in fields(col):

@@ -394,11 +394,11 @@ def main() -> None:
             print(f"\n[{m.name}] {name}: rows {rname}, columns {cname} (2 held, 1 slipped, 0 dropped, -1 diverged, "
                   f"-2 refused; {time.perf_counter() - t0:.0f} s)")  # fmt: skip
             print(" " * 10 + "".join(f"{c:>8.4g}" for c in cvals))
-            for rv, line in zip(rvals, g):
+            for rv, line in zip(rvals, g, strict=True):
                 print(f"{rv:>10.4g}" + "".join(f"{c.outcome:>8d}" for c in line), flush=True)
                 rows_csv += [(m.name, name, rname, _fmt(rv), cname, _fmt(cv), c.outcome, LABELS[c.outcome],
                               f"{c.lift_mm:.1f}", f"{c.tilt_deg:.1f}", f"{c.slide_mm:.2f}")
-                             for cv, c in zip(cvals, line)]  # fmt: skip
+                             for cv, c in zip(cvals, line, strict=True)]  # fmt: skip
     print(f"\n{len(rows_csv)} cells in {time.perf_counter() - t_start:.0f} s")
     with open(args.out / f"{args.name}.csv", "w", newline="") as f:
         w = csv.writer(f)

@@ -24,7 +24,6 @@ from .tasks import GoalTask, Outcome, check_option
 from .tasks.goal import DISTANCE_THRESHOLD, GOAL_HEIGHT_RANGE
 from .validation import check_range
 
-
 OBS_BOUNDS: dict[str, tuple[float, float]] = {
     "cyl_axis": (-1.0, 1.0),  # a unit vector's components, from a unit quaternion
     "force": (0.0, np.inf),  # normal forces only push (pybullet's normalForce, the tissue's lambda >= 0)

@@ -19,7 +19,7 @@ def assert_same(a, b) -> None:
     """Bit-identical (arrays, dicts, sequences, scalars)."""
     if isinstance(a, (tuple, list)):
         assert len(a) == len(b)
-        for x, y in zip(a, b):
+        for x, y in zip(a, b, strict=True):
             assert_same(x, y)
     elif isinstance(a, dict):
         assert a.keys() == b.keys()

@@ -11,7 +11,8 @@ import types
 import numba
 import pytest
 
-from softgrasp_env import _jit_cache, compile as sg_compile
+from softgrasp_env import _jit_cache
+from softgrasp_env import compile as sg_compile
 
 
 @pytest.fixture

@@ -245,7 +245,7 @@ def test_scripted_policy_lifts_and_fingers_press_with_the_motor_force(env_id, ma
     env = make_env(env_id)
     for seed in range(4):
         rewards = []
-        ep = run_episode(env, scripted, seed=seed, on_step=lambda obs, r, term, trunc, info: rewards.append(r))
+        ep = run_episode(env, scripted, seed=seed, on_step=lambda obs, r, term, trunc, info, rewards=rewards: rewards.append(r))
         assert ep.steps == 100 and not ep.terminated  # never knocked over: the time limit ends it
         assert ep.success and ep.successes >= 50
         np.testing.assert_allclose(ep.observation[obs_slice(OBS_NAMES, "force")], 3.0, rtol=0.08)

@@ -12,8 +12,7 @@ import numpy as np
 import pytest
 
 from softgrasp_env import policies
-from softgrasp_env.policies import (ScriptedGraspPolicy, baseline_card, baseline_path, list_baselines,
-                                    load_baseline)  # fmt: skip
+from softgrasp_env.policies import ScriptedGraspPolicy, baseline_card, baseline_path, list_baselines, load_baseline
 from tests.helpers import run_episode
 
 

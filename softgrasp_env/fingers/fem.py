@@ -213,7 +213,7 @@ class FemPads:
         fh = cfg.finger_half_extents
         self.meshes: list[PadMesh] = []
         self.bodies: list[int] = []
-        for link, side in zip(links, (+1, -1)):  # the left core's inner face is +x, the right's -x
+        for link, side in zip(links, (+1, -1), strict=True):  # the left core's inner face is +x, the right's -x
             mesh = pad_mesh(fh, cfg.tissue.extrude, FEM_CELLS_THROUGH[resolution], side=side)
             pos, orn = c.getLinkState(gripper, link)[4:6]  # the link frame (its inertial frame is the same)
             with _quiet_c_stdout():  # bullet prints node/link/face/tet counts on C stdout
@@ -262,7 +262,7 @@ class FemPads:
         pos, orn = c.getBasePositionAndOrientation(self.cylinder)
         rot = np.asarray(c.getMatrixFromQuaternion(orn)).reshape(3, 3)
         pen = intrusion = 0.0
-        for link, mesh, x in zip(self.links, self.meshes, self.node_positions()):
+        for link, mesh, x in zip(self.links, self.meshes, self.node_positions(), strict=True):
             local = (x - np.asarray(pos)) @ rot
             radial = self.cylinder_radius - np.hypot(local[:, 0], local[:, 1])
             axial = self.cylinder_half_height - np.abs(local[:, 2])

@@ -1,7 +1,15 @@
 """The grasp scene: its settings (config.py), the gripper and its control (gripper.py), and the
 scene that builds and steps ground, cylinder, gripper and world (scene.py)."""
 
-from .config import FINGER_DROP, GEOMETRY_MARGIN, PALM_HALF_EXTENTS, SceneConfig, fit_error, geometry_error, scale_friction
+from .config import (
+    FINGER_DROP,
+    GEOMETRY_MARGIN,
+    PALM_HALF_EXTENTS,
+    SceneConfig,
+    fit_error,
+    geometry_error,
+    scale_friction,
+)
 from .gripper import GRIP_TOP, Gripper, GripperActions, GripperControl, Workspace
 from .scene import CYLINDER_SHAPE, SHAPES, SLOTS, GraspScene
 

@@ -16,6 +16,7 @@ from typing import Any
 from ..config import SimConfig, TissueConfig
 from ..fingers import FINGERS, FemConfig, FingerConfig, SegmentedConfig, TissueFingerConfig, finger_config
 from ..validation import accept_old_names, check_choice, check_range, check_type, deprecated
+
 PALM_HALF_EXTENTS = (0.09, 0.03, 0.01)
 """Half extents of the gripper's palm box [m]."""
 FINGER_DROP = 0.04

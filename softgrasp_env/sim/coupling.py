@@ -56,7 +56,7 @@ class ImpulseApplier:
         if free is None:
             free = np.array([r.free_base for r in refs], dtype=np.bool_)
         self._free = np.asarray(free, dtype=np.bool_)
-        self._slots = [(k, r.body, r.link, bool(f)) for (k, r), f in zip(enumerate(refs), self._free)]
+        self._slots = [(k, r.body, r.link, bool(f)) for (k, r), f in zip(enumerate(refs), self._free, strict=True)]
         self._out = np.zeros((len(refs), 10))
 
     def apply(self, x, q, v, w, inv_mass, inv_inertia, impulse, angular_impulse, dt) -> bool:

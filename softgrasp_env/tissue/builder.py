@@ -471,7 +471,7 @@ def build_free_block(
         raise ValueError(f"spacing must be > 0, got {spacing!r}")
     counts = [_count(2 * hh, s) for hh in h]
     check_fits(int(np.prod(counts)), tissue.group_size, what="free block")
-    axes = [((np.arange(c) + 0.5) / c * 2 - 1) * hh for hh, c in zip(h, counts)]
+    axes = [((np.arange(c) + 0.5) / c * 2 - 1) * hh for hh, c in zip(h, counts, strict=True)]
     g = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     n = g.shape[0]
     cell = float(np.prod(2 * h)) / n

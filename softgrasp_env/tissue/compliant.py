@@ -94,7 +94,7 @@ def coupling_substeps(model: TissueModel, core_mass: np.ndarray, dt: float) -> i
     """The fewest steps of dt / n that keep every compliant body's K (dt / n)^2 / m_core at most
     MAX_COUPLING_FOLD; ``core_mass`` (B,) [kg], 0 or inf where a body has no moving core."""
     n = 1
-    for k, m in zip(core_stiffness(model), core_mass):
+    for k, m in zip(core_stiffness(model), core_mass, strict=True):
         if k > 0.0 and 0.0 < m < math.inf:
             n = max(n, math.ceil(dt * math.sqrt(k / (MAX_COUPLING_FOLD * m)) - 1e-9))
     return n

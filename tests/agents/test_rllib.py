@@ -106,7 +106,7 @@ def test_tune_runs_one_trial_per_seed_and_grid_point_in_parallel(tmp_path):
     assert rc == 0
     trials = sorted(p.name for p in (tmp_path / "SoftGraspEasyRigid-v1_rllib-ppo").iterdir() if (p / "run.json").exists())
     assert trials == ["seed_0_lr_0.0001", "seed_1_lr_0.0001"]
-    for name, seed in zip(trials, (0, 1)):
+    for name, seed in zip(trials, (0, 1), strict=True):
         meta = json.loads((tmp_path / "SoftGraspEasyRigid-v1_rllib-ppo" / name / "run.json").read_text())
         assert meta["seed"] == seed and meta["hyperparameters"]["lr"] == 0.0001 and meta["timesteps_trained"] >= 200
 

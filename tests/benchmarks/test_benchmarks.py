@@ -26,10 +26,9 @@ def test_methods_chart_has_every_method_and_ours_converges_with_the_time_step(tm
     out = run("methods.py", "--tiny", "--no-bound", out=tmp_path)
     rows = list(csv.DictReader(open(tmp_path / "methods.csv")))
     assert (tmp_path / "methods.png").stat().st_size > 10_000
+    from benchmarks.methods import TINY_SKIP
     from softgrasp_env.fingers import FINGERS
     from softgrasp_env.presets import PRESETS
-
-    from benchmarks.methods import TINY_SKIP
 
     families = {r["method"] for r in rows}
     assert {k for k in FINGERS if k not in ("tissue", *TINY_SKIP)} <= families and "tissue, thesis" in families

@@ -102,7 +102,7 @@ def test_scene_builds_with_the_pads_on_the_cores_and_they_hang_still(resolution)
         for _ in range(3):
             sc.step()
         pads = sc.fingers.pads
-        for link, mesh, x in zip(pads.links, pads.meshes, pads.node_positions()):
+        for link, mesh, x in zip(pads.links, pads.meshes, pads.node_positions(), strict=True):
             assert len(x) == mesh.node_count
             pos, orn = c.getLinkState(sc.gripper.body, link)[4:6]
             rest = mesh.node_x @ np.asarray(c.getMatrixFromQuaternion(orn)).reshape(3, 3).T + pos

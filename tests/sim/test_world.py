@@ -159,7 +159,7 @@ def test_a_world_without_tissue_reads_rigid_states_when_asked(fingers):
         for a in (col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w):
             a[...] = np.nan
         world.refresh()
-        for a, b in zip(lazy, (col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w)):
+        for a, b in zip(lazy, (col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w), strict=True):
             assert np.array_equal(a, b)
         assert np.isfinite(lazy[0]).all()
     finally:

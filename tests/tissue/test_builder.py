@@ -189,7 +189,7 @@ def test_quat_z_to_maps_z_onto_targets():
     q = quat_z_to(n)
     assert q.shape == (n.shape[0], 4)
     assert np.abs(np.linalg.norm(q, axis=1) - 1.0).max() < 1e-12
-    for qi, ni in zip(q, n):
+    for qi, ni in zip(q, n, strict=True):
         r = quat_to_matrix(qi)
         assert np.abs(r @ [0.0, 0.0, 1.0] - ni).max() < 1e-12
         assert abs(np.linalg.det(r) - 1.0) < 1e-12

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from itertools import pairwise
+
 import numpy as np
 import pytest
 
@@ -137,7 +139,7 @@ def test_warm_start_near_the_answer_converges_linearly():
         e0 = np.linalg.norm(quat_to_matrix(q_near) - r_true)
         errors = [np.linalg.norm(extract(a, q_near, iterations=k, tol=1e-15) - r_true) for k in (2, 5, 10, 30)]
         assert errors[0] < e0
-        assert all(e1 < e0_ for e0_, e1 in zip(errors, errors[1:]))
+        assert all(e1 < e0_ for e0_, e1 in pairwise(errors))
         assert errors[2] < 0.05 * e0
         assert errors[3] < 1e-5 * e0
 
