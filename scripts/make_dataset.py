@@ -1,8 +1,8 @@
-"""Minari datasets (Farama's standard for offline RL) of recorded episodes: the scripted grasp on
-the newest ids (SoftGrasp-v3, SoftGraspRigid-v3, SoftGraspRigidTorsion-v3), and the scripted
-grasp and the best shipped learned baseline on the ids the baselines were trained on
-(SoftGrasp-v2, SoftGraspRigid-v2). No baseline is trained on v3 yet, so its learned datasets are
-left out (asking for one is an error).
+"""Minari datasets (Farama's standard for offline RL) of recorded episodes: the scripted grasp and
+the best shipped learned baseline on the v3 ids (SoftGrasp-v3, SoftGraspRigid-v3,
+SoftGraspRigidTorsion-v3: issue 22's SAC models) and on the v2 ids issue 10's baselines were
+trained on (SoftGrasp-v2, SoftGraspRigid-v2). An id with no shipped baseline has no learned
+dataset (asking for one is an error).
 
     .venv/bin/python scripts/make_dataset.py                                   # 100 episodes each
     .venv/bin/python scripts/make_dataset.py --episodes 3 --out datasets/minari --force   # the shipped sample
