@@ -150,7 +150,9 @@ class TissueFingers(FingerKind):
                                               grid.half_width, grid.half_height)  # fmt: skip
         params = grid.params()
         core_rigid = col.shape_rigid[m.body_core_shape]
-        tissue_loads(*sv.last_contacts(), m.particle_body, m.particle_rest_x, self._footprint, col.rigid_q, core_rigid,
+        lc = sv.last_contacts()
+        tissue_loads(lc.count, lc.particle, lc.inner, lc.normal_lambda, lc.normal, lc.friction, lc.patch, lc.patch_slide,
+                     lc.patch_change, m.particle_body, m.particle_rest_x, self._footprint, col.rigid_q, core_rigid,
                      sv.sim.dt, params, out)  # fmt: skip
         tissue_shear(w.state.particle_x, m.particle_rest_x, self._footprint, m.particle_attached,
                      m.body_particle_offsets, col.rigid_x, col.rigid_q, core_rigid, params, out)  # fmt: skip

@@ -107,6 +107,8 @@ class LastContacts(NamedTuple):
     """(P,) bool: the patch slides (kinetic friction, half of it applied on velocities)."""
     patch_change: np.ndarray
     """(P,) bool: the sliding patch stops within the step."""
+    shape: np.ndarray
+    """(C,) the rigid shape of each contact (the scene's shape index: colliders' order)."""
 
 
 # =================================================================================================
@@ -465,7 +467,7 @@ class TissueSolver:
         the next step): what a tactile reading bins (fingers/tactile.py)."""
         sc = self._scratch
         return LastContacts(int(self._counts[0]), sc["c_particle"], sc["c_inner"], sc["c_lambda"], sc["c_normal"],
-                            sc["c_friction"], sc["c_patch"], sc["patch_slide"], sc["patch_change"])  # fmt: skip
+                            sc["c_friction"], sc["c_patch"], sc["patch_slide"], sc["patch_change"], sc["c_shape"])  # fmt: skip
 
     def contact_normal_force(self, shape: int) -> np.ndarray:
         """Normal force each tissue body pressed on shape ``shape`` with during the last step [N],
