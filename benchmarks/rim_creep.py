@@ -16,8 +16,9 @@ downward force its contacts on the cylinder's top face and rim edge put on the c
 
 The cause (measured with ``--particle-density``): each tissue particle meets a rigid shape as a
 sphere of its support radius along the contact normal (Mueller & Chentanez 2011 sec. 5), and the
-normal is the cylinder's at the closest point. A surface particle reaches half the particle
-spacing within the pad's plane (7.9 mm at the default 4000 per m^2), so a particle whose centre
+normal is the cylinder's at the closest point. A surface particle reaches about half the
+particle spacing within the pad's plane (its ellipsoid's radii: 8.5-8.8 mm in the plane, 3 mm
+across, at the default 4000 per m^2), so a particle whose centre
 sits up to that far above the rim, squeezed inward, lands on the rim edge or the top face: the
 contact pushes it up and the cylinder down, turning the squeeze into load. The push and the creep
 scale with the spacing and vanish as the tissue is refined: a discretisation error at sharp

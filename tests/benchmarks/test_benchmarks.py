@@ -352,7 +352,7 @@ def test_rim_creep_centre_grips_hold_under_palm_noise_and_the_peer_holds_high():
 
 def test_rim_creep_is_a_discretisation_error_that_refines_away():
     """Why the high grip creeps: surface particles, spheres of their support radius along the
-    contact normal (Mueller & Chentanez 2011 sec. 5), reach half the particle spacing over the
+    contact normal (Mueller & Chentanez 2011 sec. 5), reach about half the particle spacing over the
     cylinder's rim and press its top face and edge down. Halving the spacing (4000 -> 16000
     particles per m^2) must shrink that push and the creep it causes about in proportion (first
     order: to ~0.5; measured 0.32-0.39 for the push, 0.38-0.43 for the creep, 10 and 3 seeds),
