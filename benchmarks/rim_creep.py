@@ -54,7 +54,8 @@ top face or its rim edge: it pushes the cylinder down."""
 def watch_rim_push(scene) -> list[float]:
     """Hook the tissue solver of ``scene``: after every world step, append the downward force [N]
     the tissue's contacts on the cylinder's top face and rim edge put on the cylinder (their
-    normal multipliers lambda n over dt^2, Mueller et al. 2020 eq. 6). Empty for rigid kinds."""
+    normal multipliers lambda n over dt^2, Mueller et al. 2020 eq. 6). Rigid kinds have no tissue
+    contacts: their pushes are 0 (or none)."""
     pushes: list[float] = []
     solver = getattr(scene.world, "solver", None)
     if solver is None:
