@@ -1,6 +1,6 @@
 """Learning curves of the shipped baselines: success rate against env steps, soft vs rigid fingers,
 mean and spread (min-max) over seeds, one panel per algorithm and task version (a row each: v2
-with the carry test, v1 without), or (``--by kind``) one panel per id name and version, in a row.
+with the carry test, v1 without), or (``--by kind``) one panel per id name and version, in rows of four.
 
     PYTHONPATH=. python benchmarks/learning_curves.py --versions v2,v1      # agents/trained/ -> docs/results/
     PYTHONPATH=. python benchmarks/learning_curves.py --versions v3,v4 --by kind --name learning_curves_v3   # issue 22's
@@ -101,6 +101,14 @@ def band(curves: list[tuple[np.ndarray, np.ndarray]], points: int = 200):
     return grid, ys.mean(0), ys.min(0), ys.max(0)
 
 
+def grid_shape(panels: int, per_row: int) -> tuple[int, int]:
+    """(rows, columns) for ``panels`` panels, at most ``per_row`` to a row: 7 by 4 -> (2, 4)."""
+    if panels < 1 or per_row < 1:
+        raise ValueError(f"need at least one panel and one per row, got panels={panels}, per_row={per_row}")
+    columns = min(per_row, panels)
+    return -(-panels // columns), columns
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--models", type=Path, default=ROOT / "agents" / "trained")
@@ -110,7 +118,11 @@ def main(argv: list[str] | None = None) -> int:
                              "(lines: algorithms; issue 22's v3 figure)")  # fmt: skip
     parser.add_argument("--name", default="learning_curves", help="file name of the .png and .csv")
     parser.add_argument("--versions", default=None, help="only these env versions, e.g. v3 or v2,v1 (default: all)")
+    parser.add_argument("--per-row", type=int, default=4,
+                        help="with --by kind: at most this many panels per row (default 4)")  # fmt: skip
     ns = parser.parse_args(argv)
+    if ns.per_row < 1:
+        parser.error(f"--per-row must be at least 1, got {ns.per_row}")
     groups = load_runs(ns.models)
     if ns.versions:
         keep = set(ns.versions.split(","))
@@ -127,14 +139,18 @@ def main(argv: list[str] | None = None) -> int:
     if ns.by == "algo":  # a row per version, a panel per algo
         versions = sorted({_split(env)[1] for _, env in groups}, reverse=True)
         columns = algos
-    else:  # one row, a panel per id name and version (SoftGraspGoal-v4 beside the v3 kinds)
-        versions = [""]
+        cells = [(v, c) for v in versions for c in columns]
+        shape = (len(versions), len(columns))
+    else:  # a panel per id name and version (SoftGraspGoal-v4 beside the v3 kinds), rows of --per-row
         columns = sorted({_split(env) for _, env in groups},
                          key=lambda nv: (order.index(nv[0]) if nv[0] in order else 99, nv[1]))  # fmt: skip
-    fig, axes = plt.subplots(len(versions), len(columns), figsize=(5.2 * len(columns), 3.6 * len(versions)),
-                             squeeze=False)  # fmt: skip
+        cells = [("", c) for c in columns]
+        shape = grid_shape(len(cells), ns.per_row)
+    fig, axes = plt.subplots(*shape, figsize=(5.2 * shape[1], 3.6 * shape[0]), squeeze=False)
+    for ax in axes.flat[len(cells):]:  # the last row's empty places
+        ax.set_visible(False)
     table = []
-    for ax, (version, column) in zip(axes.flat, [(v, c) for v in versions for c in columns], strict=True):
+    for ax, (version, column) in zip(axes.flat, cells, strict=False):
 
         def in_panel(algo: str, env: str, version=version, column=column) -> bool:
             name, v = _split(env)

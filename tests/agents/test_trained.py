@@ -201,6 +201,18 @@ def test_learning_curves_by_finger_kind_have_a_panel_per_kind(tmp_path):
     assert groups == {(cards.policy_label(cards.read_card(d)), cards.env_label(cards.read_card(d))) for d in MODELS}
 
 
+def test_learning_curves_by_kind_wrap_into_rows():
+    from benchmarks import learning_curves
+
+    assert learning_curves.grid_shape(7, 4) == (2, 4)
+    assert learning_curves.grid_shape(4, 4) == (1, 4)
+    assert learning_curves.grid_shape(3, 4) == (1, 3)
+    assert learning_curves.grid_shape(5, 1) == (5, 1)
+    with pytest.raises(ValueError, match="per_row=0"):
+        learning_curves.grid_shape(3, 0)
+    with pytest.raises(SystemExit):
+        learning_curves.main(["--by", "kind", "--per-row", "0"])
+
 
 def test_learning_curves_draw_a_variant_by_env_kwargs_as_a_group_of_its_own(tmp_path):
     """The grip task with and without taxels: one id, two groups (the second by its env kwargs)."""
