@@ -128,7 +128,7 @@ print("RESULT " + json.dumps(out))
 def test_the_wheel_works_in_a_fresh_venv_without_extras(tmp_path):
     """Build the wheel, install it (no extras) in a new venv, and use it from a folder outside the
     checkout: the numba cache is cold there, as after any pip install. Measured here: the wheel
-    6.6 MB (with the v3 baselines), the install 10 s from pip's cache, the first gym.make 35 s (the
+    6.6 MB with the first v3 baselines, 21.2 MB with issue 22's 29, the install 10 s from pip's cache, the first gym.make 35 s (the
     compile), then reset 0.03 s and the first step 0.004 s."""
     dist = tmp_path / "dist"
     tic = time.perf_counter()
@@ -146,8 +146,11 @@ def test_the_wheel_works_in_a_fresh_venv_without_extras(tmp_path):
     in_wheel = {n.split("/")[3] for n in names if n.startswith("softgrasp_env/policies/trained/")}
     assert in_wheel == current, in_wheel
     assert not any(n.startswith("agents/") or "__pycache__" in n or n.endswith((".nbi", ".nbc")) for n in names)
+    # A shipped model (weights, card, log) compresses to 0.6-0.9 MB (the grip ids' 171 inputs are
+    # the largest); a replay buffer or a numba cache swept in would cost tens of MB. Measured: 21.2
+    # MB for 29 models (issue 22's); a fixed 20 MB bound no longer fit the baselines themselves.
     size_mb = wheel.stat().st_size / 1e6
-    assert size_mb < 20, size_mb
+    assert size_mb < 1.0 * len(current) + 1, (size_mb, len(current))
 
     env_dir = tmp_path / "venv"
     venv.EnvBuilder(with_pip=True, clear=True).create(env_dir)  # a truly fresh venv: no system site-packages
