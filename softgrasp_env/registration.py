@@ -10,15 +10,10 @@ from gymnasium.envs.registration import WrapperSpec
 MAX_EPISODE_STEPS = 100
 """5 s at the default 20 Hz control frequency."""
 
-_OLD = {"arm": "jump", "carry_frequency": 2.0, "carry_acceleration": None, "carry_amplitude": 0.01,
-        "carry_direction": "across", "carry_slide_limit": None, "friction_dynamic": 0.7, "tissue_material": "per_step"}
-"""The v1/v2 ids keep the arm, the carry test, the tissue's two-coefficient friction and its
-per-step material their results were made with (issue 19); the v3 ids take EnvArguments'
-defaults."""
 GRIP_TASK = {"finger_action": "force", "finger_force": 6.0, "cylinder_mass": 0.17, "cylinder_mass_range": 0.75,
              "friction_range": 0.45, "squeeze_weight": 0.5, "squeeze_factor": 2.0, "tactile": (4, 4),
              "observe_object": False}
-"""The grip-force task's settings (issue 21; softgrasp_env/tasks/grip.py): the squeeze as the action,
+"""The grip-force task's settings (softgrasp_env/tasks/grip.py): the squeeze as the action,
 mass 0.04-0.30 kg and mu_s 0.50-1.31 drawn per episode (the least force that holds spans 0.16-3.0
 N, 18-fold), the squeeze charged in the reward and bounded at twice the least in the success, a
 4 x 4 taxel grid on each pad, and the cylinder's pose and motion left out of the observation: with
@@ -28,49 +23,59 @@ tissue holds at 8 N without tearing (8 mm deviation at most, no intrusion)."""
 _ENV, _GOAL = "softgrasp_env.env:SoftGraspEnv", "softgrasp_env.env:SoftGraspGoalEnv"
 
 
-def _kw(fingers: str, version: str, **kwargs) -> dict:
-    return {"fingers": fingers, **kwargs, **({} if version == "v3" else _OLD)}
-
-
 _SPECS: dict[str, tuple[str, dict]] = {
-    **{f"SoftGrasp-{v}": (_ENV, _kw("tissue", v, reward_type="dense", carry=True)) for v in ("v3", "v2")},
-    **{f"SoftGraspRigid-{v}": (_ENV, _kw("rigid", v, reward_type="dense", carry=True)) for v in ("v3", "v2")},
-    **{f"SoftGraspSparse-{v}": (_ENV, _kw("tissue", v, reward_type="sparse", carry=True)) for v in ("v3", "v2")},
+    "SoftGrasp-v3": (_ENV, {"fingers": "tissue", "reward_type": "dense", "carry": True}),
+    "SoftGraspRigid-v3": (_ENV, {"fingers": "rigid", "reward_type": "dense", "carry": True}),
+    "SoftGraspSparse-v3": (_ENV, {"fingers": "tissue", "reward_type": "sparse", "carry": True}),
     # v4: the v3 physics; a knocked-over cylinder no longer ends the episode (tasks/goal.py says
-    # why). v3 and v1 keep the ends they were released with.
-    "SoftGraspGoal-v4": (_GOAL, _kw("tissue", "v3", end_when_knocked_over=False)),
-    "SoftGraspGoal-v3": (_GOAL, _kw("tissue", "v3", end_when_knocked_over=True)),
-    "SoftGraspGoal-v1": (_GOAL, _kw("tissue", "v1", end_when_knocked_over=True)),
-    **{f"SoftGraspEasy-{v}": (_ENV, _kw("tissue", v, reward_type="dense", task="easy")) for v in ("v3", "v1")},
-    **{f"SoftGraspEasyRigid-{v}": (_ENV, _kw("rigid", v, reward_type="dense", task="easy")) for v in ("v3", "v1")},
-    "SoftGraspRigidTorsion-v3": (_ENV, _kw("rigid_torsion", "v3", reward_type="dense", carry=True)),
-    "SoftGraspEasyRigidTorsion-v3": (_ENV, _kw("rigid_torsion", "v3", reward_type="dense", task="easy")),
-    **{f"SoftGraspGrip{name}-v3": (_ENV, _kw(kind, "v3", reward_type="dense", task="easy", carry=True, **GRIP_TASK))
+    # why). v3 keeps the end it was released with.
+    "SoftGraspGoal-v4": (_GOAL, {"fingers": "tissue", "end_when_knocked_over": False}),
+    "SoftGraspGoal-v3": (_GOAL, {"fingers": "tissue", "end_when_knocked_over": True}),
+    "SoftGraspEasy-v3": (_ENV, {"fingers": "tissue", "reward_type": "dense", "task": "easy"}),
+    "SoftGraspEasyRigid-v3": (_ENV, {"fingers": "rigid", "reward_type": "dense", "task": "easy"}),
+    "SoftGraspRigidTorsion-v3": (_ENV, {"fingers": "rigid_torsion", "reward_type": "dense", "carry": True}),
+    "SoftGraspEasyRigidTorsion-v3": (_ENV, {"fingers": "rigid_torsion", "reward_type": "dense", "task": "easy"}),
+    **{f"SoftGraspGrip{name}-v3": (_ENV, {"fingers": kind, "reward_type": "dense", "task": "easy", "carry": True,
+                                          **GRIP_TASK})
        for name, kind in (("", "tissue"), ("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion"))},
-    "SoftGrasp-v1": (_ENV, _kw("tissue", "v1", reward_type="dense", carry=False)),
-    "SoftGraspRigid-v1": (_ENV, _kw("rigid", "v1", reward_type="dense", carry=False)),
-    "SoftGraspSparse-v1": (_ENV, _kw("tissue", "v1", reward_type="sparse", carry=False)),
 }
 
 ENV_IDS: tuple[str, ...] = tuple(_SPECS)
-"""v3 (the current physics, issue 19): the reach task with the carry test (approach from above and
-away, misaligned fingers, lift, then the arm sways the cylinder for the last 1.5 s, a sway drawn
-per episode; success means held through all of it) with soft fingers and the dense lift reward,
-its rigid-only twin, the sparse-reward variant, the goal-conditioned variant (dict observations,
-``compute_reward`` for HER; SoftGraspGoal-v4 since issue 22: the v3 physics, and a knocked-over
-cylinder no longer ends its episode) and the gentle start (``task="easy"``: the open fingers around the
-cylinder's top, aligned), soft and rigid, for debugging a policy or the physics; the grip-force
-task (SoftGraspGrip-v3, soft / rigid / torsional: the gentle start with the carry, the squeeze as
-the action, mass and friction drawn and not observed, the squeeze charged and success within 2 x
-the least that holds, 4 x 4 taxels per pad, the cylinder's pose and motion not observed:
-softgrasp_env/tasks/grip.py). The arm moves
-the palm at the action's velocity along a smooth path (at most 0.15 m/s and 1.5 m/s^2).
+"""The registered ids, per family the latest version and the one before it. v3: the reach task
+with the carry test (approach from above and away, misaligned fingers, lift, then the arm sways the
+cylinder for the last 1.5 s, a sway drawn per episode; success means held through all of it) with
+soft fingers and the dense lift reward, its rigid-only twin, the torsional rigid peer, the
+sparse-reward variant, the goal-conditioned variant (dict observations, ``compute_reward`` for HER;
+SoftGraspGoal-v4: the v3 physics, and a knocked-over cylinder no longer ends its episode) and the
+gentle start (``task="easy"``: the open fingers around the cylinder's top, aligned) for debugging a
+policy or the physics; the grip-force task (SoftGraspGrip-v3, soft / rigid / torsional: the gentle
+start with the carry, the squeeze as the action, mass and friction drawn and not observed, the
+squeeze charged and success within 2 x the least that holds, 4 x 4 taxels per pad, the cylinder's
+pose and motion not observed: softgrasp_env/tasks/grip.py). The arm moves the palm at the action's
+velocity along a smooth path (at most 0.15 m/s and 1.5 m/s^2). Older versions live in the tagged
+release that last registered them (:data:`RETIRED`)."""
 
-v2 and v1 (the carry test of 1 cm at 2 Hz, success at its end; v1 without it) reproduce their
-published results bit for bit, with the arm they were made with (the action moves a target the
-palm's constraint chases); their baselines ship in softgrasp_env.policies. v0 (the gentle start
-as the only task, on the physics before the accuracy work) is gone: its results cannot be
-reproduced by this code."""
+RETIRED: dict[str, str] = {
+    **{f"SoftGrasp{family}-{v}": "0.6.0" for family in ("", "Rigid", "Sparse") for v in ("v1", "v2")},
+    **{f"SoftGrasp{family}-v1": "0.6.0" for family in ("Goal", "Easy", "EasyRigid")},
+}
+"""Retired id -> the last release that registers it. ``gym.make`` of one raises
+:class:`gymnasium.error.DeprecatedEnv` naming that release (:func:`retired_env`); they are not in
+:data:`ENV_IDS`."""
+
+
+def retired_message(env_id: str) -> str:
+    """What ``gym.make(env_id)`` says for a retired id: the release (and its git tag) that has it."""
+    release = RETIRED[env_id]
+    current = [i for i in ENV_IDS if i.rsplit("-", 1)[0] == env_id.rsplit("-", 1)[0]]
+    return (f"{env_id} was retired; `pip install softgrasp-env=={release}` (git tag v{release}) reproduces its "
+            f"results" + (f". This release registers {', '.join(current)}" if current else ""))  # fmt: skip
+
+
+def retired_env(*, env_id: str, **kwargs: object) -> gym.Env:
+    """The entry point of every id in :data:`RETIRED`: raises :class:`gymnasium.error.DeprecatedEnv`
+    naming the release that has ``env_id`` (any other keyword is ignored)."""
+    raise gym.error.DeprecatedEnv(retired_message(env_id))
 
 
 def steps_to_succeed(env: gym.Env) -> int | None:
@@ -114,7 +119,12 @@ CHECK_TIME_LIMIT = WrapperSpec("CheckTimeLimit", f"{__name__}:check_time_limit",
 
 
 def register_envs() -> None:
-    """Register every id in :data:`ENV_IDS` (idempotent: ids already registered are left alone)."""
+    """Register every id in :data:`ENV_IDS`, and every id in :data:`RETIRED` with :func:`retired_env`
+    as its entry point (idempotent: ids already registered are left alone)."""
+    for env_id in RETIRED:
+        if env_id not in gym.registry:
+            gym.register(id=env_id, entry_point=f"{__name__}:retired_env", kwargs={"env_id": env_id},
+                         disable_env_checker=True)  # fmt: skip
     for env_id, (entry_point, kwargs) in _SPECS.items():
         if env_id not in gym.registry:
             # disable_env_checker: gymnasium 1.4.0's PassiveEnvChecker, when the first reset raises
