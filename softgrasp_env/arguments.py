@@ -21,7 +21,7 @@ from .fingers import FINGERS, FemConfig, FingerConfig, TissueFingerConfig, finge
 from .fingers.tactile import MAX_TAXELS, TaxelGrid
 from .observation import CARRY_OBS_NAMES, OBS_NAMES, tactile_names, without_object
 from .scene import GRIP_TOP, GripperActions, SceneConfig, Workspace, fit_error, geometry_error
-from .scene.gripper import FINGER_ACTIONS
+from .scene.gripper import FINGER_ACTIONS, VelocityActions
 from .tasks import TASKS, CarryTest, LeastSqueeze, StartRanges, Task
 from .tasks.carry import (
     CARRY_ACCELERATION_RANGE,
@@ -32,7 +32,7 @@ from .tasks.carry import (
     sway_limits_error,
 )
 from .tasks.reach import APPROACH
-from .validation import check_bool, check_choice, check_int, check_range, check_type, deprecated
+from .validation import check_bool, check_choice, check_int, check_range, check_type, deprecated, retired_choice
 
 MAX_ARM_STEP = 1.0 / 120.0
 """Farthest the arm's target may move in one physics step, gripper_speed * dt [m]: 3.3 cm tore
@@ -42,6 +42,16 @@ GRIP_TOP_MARGIN = 0.01
 """The start's grip point stays this far below the top of the arm's workspace [m]."""
 MIN_CYLINDER_RADIUS = 0.005
 """The smallest cylinder radius a draw may reach [m] (SceneConfig's lower end)."""
+
+
+RETIRED_CHOICES: tuple[tuple[str, Any, tuple[Any, ...]], ...] = (
+    ("arm", "smooth", ("jump",)),
+    ("tissue_material", "compliant", ("per_step",)),
+    ("carry_direction", "any", ("across",)),
+)
+"""Keywords removed after 0.6.0 because one choice is left: (name, the choice left, the retired
+ones). The one left is accepted with a DeprecationWarning, a retired one is a ValueError naming
+0.6.0 (:meth:`EnvArguments.from_kwargs`)."""
 
 
 def _arg(default: Any, doc: str, *, type_: str) -> Any:
@@ -67,23 +77,17 @@ class EnvArguments:
     reward_type: str = _arg("dense", "'dense' (lift + reach) or 'sparse' (1 while held)", type_="str")
     control_frequency: float = _arg(20.0, "Env steps per second [Hz]; must divide the physics rate 1 / sim.dt",
                                     type_="float")
-    arm: str = _arg("smooth", "'smooth' (v3: the action's x, y, z are the palm's velocity, followed along a speed- "
-        "and acceleration-limited path) or 'jump' (v1/v2: they move the arm's target, which the palm's constraint "
-        "chases, with kicks of 86 m/s² at each control step)", type_="str")
-    gripper_speed: float = _arg(0.15, "Arm speed at full action [m/s] (the smooth arm's speed limit; the jump arm "
-        "moves its target gripper_speed / control_frequency per step), at most 2 and at most 1/120 m per physics "
+    gripper_speed: float = _arg(0.15, "Arm speed at full action [m/s]: the action's x, y, z are the palm's "
+        "velocity, followed along a speed- and acceleration-limited path; at most 2 and at most 1/120 m per physics "
         "step (gripper_speed * sim.dt)", type_="float")
-    arm_acceleration: float = _arg(1.5, "arm='smooth': largest acceleration of the arm's path [m/s²]; the palm "
-        "starts and stops smoothly, the same at every dt", type_="float")
+    arm_acceleration: float = _arg(1.5, "Largest acceleration of the arm's path [m/s²]; the palm starts and stops "
+        "smoothly, the same at every dt", type_="float")
     particle_density: float | None = _arg(None, "Tissue particles per m² of core surface (None: the preset's, "
         "4,000); `tissue_density` before 0.3", type_="float")
     friction_static: float | None = _arg(None, "μ_s of the finger surface (None: the preset's, 0.9; the rigid "
         "kinds' pybullet coefficient)", type_="float")
-    friction_dynamic: float | None = _arg(None, "μ_k of the tissue (None: the preset's: equal to μ_s, one "
-        "coefficient as pybullet's rigid contacts have; v1/v2: 0.7)", type_="float")
-    tissue_material: str | None = _arg(None, "The tissue's elasticity: 'compliant' (v3: a shear modulus in Pa, the "
-        "same material at every dt) or 'per_step' (v1/v2: a fraction of the way to the goal per step, the thesis'); "
-        "None: the preset's, 'compliant'", type_="str")
+    friction_dynamic: float | None = _arg(None, "μ_k of the tissue, at most μ_s (None: the preset's: equal to μ_s, "
+        "one coefficient as pybullet's rigid contacts have)", type_="float")
     tissue_contact_cone: bool | None = _arg(None, "Coulomb's cone on every tissue contact as well as on each pad's "
         "patch (True) or on the patch alone (False: a pad squeezed on the way down can hold the cylinder after the "
         "squeeze is gone; TissueConfig.contact_cone says why the cones are not the default yet); None: the "
@@ -106,18 +110,14 @@ class EnvArguments:
     carry_start: float = _arg(CARRY_START, "When the carry begins after reset [s]", type_="float")
     carry_duration: float = _arg(CARRY_DURATION, "How long the arm carries [s]", type_="float")
     carry_frequency: float | tuple[float, float] = _arg(CARRY_FREQUENCY_BAND, "The sway's frequency [Hz], or a "
-        "(low, high) band drawn per episode (v3: 1.2-3.0, around the two-point grasp's ~1.9 Hz pendulum; v1/v2: 2.0)",
+        "(low, high) band drawn per episode (1.2-3.0, around the two-point grasp's ~1.9 Hz pendulum)",
         type_="float or (float, float)")
-    carry_acceleration: float | tuple[float, float] | None = _arg(CARRY_ACCELERATION_RANGE, "The sway's peak "
-        "acceleration [m/s²], or a (low, high) range drawn per episode; the amplitude is a / (2 pi f)² (v3: "
-        "0.5-1.0). None: carry_amplitude instead", type_="float or (float, float)")
-    carry_amplitude: float | None = _arg(None, "A fixed amplitude of the sway [m] instead of carry_acceleration "
-        "(v1/v2: 0.01)", type_="float")
-    carry_direction: str = _arg("any", "'any' horizontal direction, drawn per episode (v3), or 'across' the jaw "
-        "(v1/v2)", type_="str")
-    carry_slide_limit: float | None = _arg(CARRY_SLIDE_LIMIT, "Success needs the cylinder held at every step of "
-        "the carry and its in-hand slide at most this [m] (v3: 0.005); None: held once the carry is over (v1/v2)",
-        type_="float")
+    carry_acceleration: float | tuple[float, float] = _arg(CARRY_ACCELERATION_RANGE, "The sway's peak "
+        "acceleration [m/s²], or a (low, high) range drawn per episode; the amplitude is a / (2 pi f)² (0.5-1.0); "
+        "the direction is any horizontal one, drawn per episode (reset option carry_direction fixes it)",
+        type_="float or (float, float)")
+    carry_slide_limit: float = _arg(CARRY_SLIDE_LIMIT, "Success needs the cylinder held at every step of the carry "
+        "and its in-hand slide at most this [m]", type_="float")
     cylinder_position_range: float | None = _arg(None, "Cylinder at U(±range) in x and y [m] (None: the task's, "
         "0.07 reach / 0.01 easy)", type_="float")
     lateral_offset_range: float = _arg(0.005, "Palm offset along the faces, U(±range) [m]", type_="float")
@@ -203,7 +203,6 @@ class EnvArguments:
         object.__setattr__(self, "fingers", fingers)
         check_choice("reward_type", self.reward_type, ("dense", "sparse"))
         check_range("control_frequency", self.control_frequency, 0.5, 240.0)
-        check_choice("arm", self.arm, ("smooth", "jump"))
         check_choice("finger_action", self.finger_action, FINGER_ACTIONS)
         check_range("gripper_speed", self.gripper_speed, 0.0, 2.0, lo_open=True)
         check_range("arm_acceleration", self.arm_acceleration, 0.0, 50.0, lo_open=True)
@@ -259,12 +258,11 @@ class EnvArguments:
         check_type("tissue", tissue, TissueConfig)
         if self.tissue is not None and None not in (tissue.friction_dynamic, self.friction_dynamic) \
                 and tissue.friction_dynamic != self.friction_dynamic:  # fmt: skip
-            raise ValueError(f"friction_dynamic={self.friction_dynamic!r} (the v1/v2 ids give 0.7) and "
+            raise ValueError(f"friction_dynamic={self.friction_dynamic!r} and "
                              f"tissue.friction_dynamic={tissue.friction_dynamic!r} disagree: give one of them")
         overrides = {k: v for k, v in (("particle_density", self.particle_density),
                                        ("friction_static", self.friction_static),
                                        ("friction_dynamic", self.friction_dynamic),
-                                       ("material", self.tissue_material),
                                        ("contact_cone", self.tissue_contact_cone),
                                        ("shear_modulus", self.shear_modulus)) if v is not None}  # fmt: skip
         self._set("tissue", replace(tissue, **overrides))  # validated by TissueConfig
@@ -291,8 +289,7 @@ class EnvArguments:
                                  f"{MAX_ARM_STEP * 100:.2f} cm")  # fmt: skip
 
     def _check_carry(self) -> None:
-        """The carry's settings, each on its own, then the sway's corners against the smooth arm's
-        limits (the jump arm chases any target, as v1/v2 did)."""
+        """The carry's settings, each on its own, then the sway's corners against the arm's limits."""
         for name in ("carry_frequency", "carry_acceleration"):
             value = getattr(self, name)
             if isinstance(value, list):
@@ -307,32 +304,22 @@ class EnvArguments:
                 if value[0] > value[1]:
                     raise ValueError(f"{name} must be (low, high) with low <= high, got {value!r}")
                 object.__setattr__(self, name, tuple(float(v) for v in value))
-            elif value is not None or name == "carry_frequency":
+            else:
                 check_range(name, value, 0.0, 10.0 if name == "carry_frequency" else 50.0,
                             lo_open=name == "carry_frequency")  # fmt: skip
-        if (self.carry_amplitude is None) == (self.carry_acceleration is None):
-            raise ValueError("give exactly one of carry_acceleration and carry_amplitude (the other None), got "
-                             f"carry_acceleration={self.carry_acceleration!r}, "
-                             f"carry_amplitude={self.carry_amplitude!r}")  # fmt: skip
-        if self.carry_amplitude is not None:
-            check_range("carry_amplitude", self.carry_amplitude, 0.0, 0.05)
-        check_choice("carry_direction", self.carry_direction, ("any", "across"))
-        if self.carry_slide_limit is not None:
-            check_range("carry_slide_limit", self.carry_slide_limit, 0.0, 0.1, lo_open=True)
-        if self.carry and self.arm == "smooth":
+        check_range("carry_slide_limit", self.carry_slide_limit, 0.0, 0.1, lo_open=True)
+        if self.carry:
             for f, amplitude in self._carry_corners():
                 problem = sway_limits_error(f, amplitude=amplitude, speed=self.gripper_speed,
                                             arm_acceleration=self.arm_acceleration)  # fmt: skip
                 if problem:
                     raise ValueError(f"the carry's sway at {f:g} Hz ({amplitude * 100:.3g} cm) {problem}: lower "
-                                     "carry_acceleration / carry_amplitude or carry_frequency")  # fmt: skip
+                                     "carry_acceleration or carry_frequency")  # fmt: skip
 
     def _carry_corners(self) -> list[tuple[float, float]]:
         """(frequency, amplitude) at the corners of the sway's ranges: its peak speed and
         acceleration are largest at one of them."""
         fs = self.carry_frequency if isinstance(self.carry_frequency, tuple) else (self.carry_frequency,)
-        if self.carry_amplitude is not None:
-            return [(f, self.carry_amplitude) for f in fs]
         accels = self.carry_acceleration if isinstance(self.carry_acceleration, tuple) else (self.carry_acceleration,)
         return [(f, a / (2.0 * math.pi * f) ** 2) for f in fs for a in accels]
 
@@ -360,7 +347,7 @@ class EnvArguments:
         base = SceneConfig(fingers=self.fingers, cylinder_radius=self.cylinder_radius,
                            cylinder_height=self.cylinder_height, cylinder_mass=self.cylinder_mass,
                            finger_force=self.finger_force, tissue=self.tissue, sim=self.sim,
-                           start_height=start_height, arm=self.arm, arm_speed=self.gripper_speed,
+                           start_height=start_height, arm_speed=self.gripper_speed,
                            arm_acceleration=self.arm_acceleration)  # fmt: skip
         self._set("scene", base)
         if self.cylinder_radius - self.cylinder_radius_range < MIN_CYLINDER_RADIUS:
@@ -431,9 +418,8 @@ class EnvArguments:
         if not self.carry:
             return start
         carry = CarryTest(start, dt=self.sim.dt, workspace=self.workspace, start=self.carry_start,
-                          duration=self.carry_duration, amplitude=self.carry_amplitude,
-                          frequency=self.carry_frequency, acceleration=self.carry_acceleration,
-                          direction=self.carry_direction, slide_limit=self.carry_slide_limit,
+                          duration=self.carry_duration, frequency=self.carry_frequency,
+                          acceleration=self.carry_acceleration, slide_limit=self.carry_slide_limit,
                           arm_speed=self.gripper_speed, arm_acceleration=self.arm_acceleration)  # fmt: skip
         if self.squeeze_weight == 0.0 and self.squeeze_factor is None:
             return carry
@@ -441,9 +427,8 @@ class EnvArguments:
                             finger_force=self.finger_force)  # fmt: skip
 
     def make_actions(self) -> GripperActions:
-        return GripperActions.of(self.arm, self.gripper_speed, self.control_frequency, self.workspace,
-                                 self.scene.finger_travel, finger=self.finger_action,
-                                 max_force=self.scene.finger_force)  # fmt: skip
+        return VelocityActions(self.gripper_speed, self.control_frequency, self.workspace, self.scene.finger_travel,
+                               finger=self.finger_action, max_force=self.scene.finger_force)  # fmt: skip
 
     # --- construction from gym.make's kwargs -----------------------------------------------------
 
@@ -451,7 +436,20 @@ class EnvArguments:
     def from_kwargs(cls, **kwargs: Any) -> EnvArguments:
         """The arguments from ``gym.make``'s keywords: unknown names are a TypeError listing the
         known ones; the spellings of 0.2 (``soft=``, ``tissue_density=``) keep working with a
-        DeprecationWarning."""
+        DeprecationWarning, and so do the choices that are the only ones left since 0.7
+        (``arm="smooth"``, ``tissue_material="compliant"``, ``carry_direction="any"``); the retired
+        ones (``arm="jump"``, ``tissue_material="per_step"``, ``carry_direction="across"``,
+        ``carry_amplitude``, ``carry_slide_limit=None``) are a ValueError naming 0.6.0, the last
+        release that has them."""
+        for name, kept, gone in RETIRED_CHOICES:
+            retired_choice(kwargs, name, kept=kept, gone=gone, release="0.6.0", stacklevel=5)
+        if "carry_amplitude" in kwargs:
+            raise ValueError(f"carry_amplitude={kwargs['carry_amplitude']!r} was retired; `pip install "
+                             "softgrasp-env==0.6.0` (git tag v0.6.0) has it. Give the sway's peak acceleration "
+                             "instead: carry_acceleration = amplitude * (2 pi carry_frequency)^2 [m/s^2]")  # fmt: skip
+        if "carry_slide_limit" in kwargs and kwargs["carry_slide_limit"] is None:
+            raise ValueError("carry_slide_limit=None (success once the carry is over) was retired; `pip install "
+                             "softgrasp-env==0.6.0` (git tag v0.6.0) has it. Give a slide limit in m")  # fmt: skip
         if "soft" in kwargs:
             soft = kwargs.pop("soft")
             deprecated("the soft= argument", "fingers='tissue' or fingers='rigid'", stacklevel=5)

@@ -13,20 +13,15 @@ import warnings
 from dataclasses import dataclass, fields, replace
 from typing import Literal
 
-from .validation import accept_old_names, check_bool, check_choice, check_int, check_range
+from .validation import accept_old_names, check_bool, check_int, check_range, retired_choice
 
 CouplingMode = Literal["thesis", "consistent"]
-MATERIALS: tuple[str, ...] = ("compliant", "per_step")
 DEFAULT_SHEAR_MODULUS = 4_000.0
 """The compliant tissue's shear modulus when none is given [Pa]."""
 DEFAULT_MAX_DEVIATION = 0.02
 """The compliant tissue's strain limit when none is given [m] (TissueConfig.max_deviation)."""
-DEFAULT_STEP_STIFFNESS = 0.5
-"""The per-step material's stiffness when none is given (v1/v2)."""
 COMPLIANT_DAMPING = 300.0
 """SimConfig.damping for the compliant tissue when none is given [1/s]."""
-STEP_DAMPING = 0.5
-"""SimConfig.damping for the per-step tissue when none is given [1/s] (v1/v2)."""
 COUPLING_MODES: tuple[str, ...] = ("thesis", "consistent")
 
 
@@ -35,7 +30,14 @@ class TissueConfig:
     """Soft tissue wrapped around a rigid core (thesis 5.1.1 and 5.2.1).
 
     The core's surface is sampled with *attached* particles; each gets one *outer* partner pushed
-    out by ``extrude`` along the direction from the core's centre of mass.
+    out by ``extrude`` along the direction from the core's centre of mass. The shape matching's
+    elasticity (Mueller & Chentanez 2011 sec. 4) is a material in SI, ``shear_modulus`` [Pa],
+    projected as XPBD compliance (Macklin, Mueller & Chentanez 2016) with the attached particles
+    held by their cores inside the solve: the pad compresses the same under a load at every dt and
+    iteration count (tissue/compliant.py). ``material="compliant"`` (when there was a second
+    material) is accepted with a DeprecationWarning; ``material="per_step"`` and ``stiffness``
+    (the thesis' fraction of the way to the goal per step, a different material at every dt) are a
+    ValueError naming 0.6.0, the last release that has them.
     """
 
     particle_density: float = 4_000.0
@@ -58,32 +60,18 @@ class TissueConfig:
     tore in 2 of 3 random-action episodes, 1e5 in every episode, scripted ones too; 1e4 ran all.
     Tissue lighter than foam (2 and 13 kg/m^3) tore in two of the fuzzed settings, and setting
     that alone back to 1,000 made both run."""
-    material: str = "compliant"
-    """How the shape matching's elasticity is defined (Mueller & Chentanez 2011 sec. 4):
-    ``"compliant"`` (v3) - a material in SI, ``shear_modulus`` [Pa], projected as XPBD compliance
-    (Macklin, Mueller & Chentanez 2016) with the attached particles held by their cores inside the
-    solve: the pad compresses the same under a load at every dt and iteration count;
-    ``"per_step"`` (v1/v2, the thesis) - ``stiffness``, the fraction of the way to the goal a
-    particle moves per step, which is a different material at every dt (issue 19: the pad
-    compressed 0.64 mm under 3 N at 1/1000 s and 11 mm, crushed, at 1/120 s)."""
     shear_modulus: float | None = None
-    """The compliant material's shear modulus G [Pa], 1e3 to 1e6; None: the default,
+    """The tissue's shear modulus G [Pa], 1e3 to 1e6; None: the default,
     DEFAULT_SHEAR_MODULUS. Each implicit group's shape matching is an elastic energy
     G V e^2 / l^2 (V a member's volume, l the group's radius of gyration), so a group's stiffness
     per unit mass is kappa = G / (rho l^2): its shear wave across the group (builder.group_kappa)."""
     max_deviation: float | None = None
-    """The compliant material's strain limit [m], 1 mm to 3 cm: the farthest a particle may be pulled
+    """The tissue's strain limit [m], 1 mm to 3 cm: the farthest a particle may be pulled
     from the spot its core carries it to (a deformation constraint, Provot 1995, projected after
     friction: tissue/anchors.py, limit_deviation); None: DEFAULT_MAX_DEVIATION. A particle snagged
     on the cylinder's top face is pulled through the cylinder by its group and held there by its
     own friction; without the limit the tissue tore (past the 3 cm divergence limit) 5 times in
     2 x 10^5 random-action env steps."""
-    stiffness: float | None = None
-    """The per-step material's shape-matching stiffness k in [0.1, 1] per *step* (``material=
-    "per_step"`` only); None: 0.5. Made iteration-independent (Mueller 2007), not dt-independent.
-    Slacker tissue does not follow its core under the arm's shoves: at 0.001 every episode tore past
-    the divergence limit by the second step, at 0.01 one of three random-action episodes, at 0.03
-    one of five (issue 12's extremes probe and tests/test_extremes.py)."""
     radius_scale: float = 0.6
     """Tangential ellipsoid radius as a fraction of the particle spacing (>0.5 closes gaps)."""
     normal_radius: float = 0.003
@@ -95,9 +83,9 @@ class TissueConfig:
     friction_dynamic: float | None = None
     """Coulomb dynamic (kinetic) friction coefficient mu_k of the tissue surface [-]; None: equal to
     mu_s, one coefficient, the law of pybullet's rigid contacts, so that every finger kind is
-    compared under the same friction (issue 19: with mu_k = 0.7 < mu_s the soft grasp lifted at
-    0.230 x the default friction where Coulomb needs 0.209 x, with mu_k = mu_s at 0.212 x; it held
-    0.427 kg against 0.439 kg). A number below mu_s gives the two-coefficient law (v1/v2: 0.7)."""
+    compared under the same friction (with mu_k = 0.7 < mu_s the soft grasp lifted at 0.230 x the
+    default friction where Coulomb needs 0.209 x, with mu_k = mu_s at 0.212 x; it held 0.427 kg
+    against 0.439 kg). A number below mu_s gives the two-coefficient law."""
     contact_cone: bool = False
     """Coulomb per contact as well as per patch (tissue/friction.py, _apply_with_cones): each tissue
     contact's friction at most mu_s times its normal force, what that sheds handed to the patch's
@@ -118,28 +106,11 @@ class TissueConfig:
         check_range("extrude", self.extrude, 0.0, 0.1, lo_open=True, owner=o)
         check_int("group_size", self.group_size, 4, 16, owner=o)
         check_range("mass_density", self.mass_density, 100.0, 1e4, owner=o)
-        check_choice("material", self.material, MATERIALS, owner=o)
         check_bool("contact_cone", self.contact_cone, owner=o)
-        if self.material == "compliant":
-            if self.stiffness is not None:
-                raise ValueError(
-                    f"TissueConfig.stiffness={self.stiffness!r} is the per-step material's fraction; with "
-                    "material='compliant' the tissue's elasticity is shear_modulus [Pa] (or pass material='per_step')")
-            if self.shear_modulus is not None:
-                check_range("shear_modulus", self.shear_modulus, 1e3, 1e6, owner=o)
-            if self.max_deviation is not None:
-                check_range("max_deviation", self.max_deviation, 1e-3, 0.03, owner=o)
-        else:
-            if self.max_deviation is not None:
-                raise ValueError(
-                    f"TissueConfig.max_deviation={self.max_deviation!r} is the compliant material's strain limit; "
-                    "material='per_step' has none")
-            if self.shear_modulus is not None:
-                raise ValueError(
-                    f"TissueConfig.shear_modulus={self.shear_modulus!r} is the compliant material's; with "
-                    "material='per_step' the tissue's elasticity is stiffness (a fraction per step)")
-            if self.stiffness is not None:
-                check_range("stiffness", self.stiffness, 0.1, 1.0, owner=o)
+        if self.shear_modulus is not None:
+            check_range("shear_modulus", self.shear_modulus, 1e3, 1e6, owner=o)
+        if self.max_deviation is not None:
+            check_range("max_deviation", self.max_deviation, 1e-3, 0.03, owner=o)
         check_range("radius_scale", self.radius_scale, 0.0, 2.0, lo_open=True, owner=o)
         check_range("normal_radius", self.normal_radius, 0.0, 0.1, lo_open=True, owner=o)
         check_range("friction_static", self.friction_static, 0.0, 10.0, owner=o)
@@ -158,21 +129,13 @@ class TissueConfig:
 
     @property
     def modulus(self) -> float:
-        """G [Pa] as the compliant material uses it: ``shear_modulus``, or the default."""
+        """G [Pa] as the solver uses it: ``shear_modulus``, or the default."""
         return DEFAULT_SHEAR_MODULUS if self.shear_modulus is None else self.shear_modulus
 
     @property
     def deviation_limit(self) -> float:
-        """The strain limit as the solver uses it [m]: ``max_deviation``, or the default; inf (none)
-        for the per-step material."""
-        if self.material != "compliant":
-            return math.inf
+        """The strain limit as the solver uses it [m]: ``max_deviation``, or the default."""
         return DEFAULT_MAX_DEVIATION if self.max_deviation is None else self.max_deviation
-
-    @property
-    def step_stiffness(self) -> float:
-        """k as the per-step material uses it: ``stiffness``, or 0.5."""
-        return DEFAULT_STEP_STIFFNESS if self.stiffness is None else self.stiffness
 
     @property
     def spacing(self) -> float:
@@ -188,7 +151,7 @@ class SimConfig:
     """Physics step [s], at most 1/60 s; one tissue step and one pybullet step per world step.
     Longer steps tear the tissue in the grasp (the contact and coupling corrections grow with dt
     squared): 1/40 s in 1 of 2 scripted episodes, 1/20 s in every episode at its second step;
-    1/60 s ran every episode of the extremes probe (issue 12)."""
+    1/60 s ran every episode of the extremes probe (tests/test_extremes.py)."""
     iterations: int = 3
     """Gauss-Seidel iterations over the shape-matching groups and contacts per step. Measured on the
     scripted grasp at the default tissue (deepest penetration over every step, thesis coupling):
@@ -207,8 +170,7 @@ class SimConfig:
     """Damping rate of each tissue body's deviation from its rigid motion [1/s] (Mueller et al.
     2007 sec. 3.5): the deviation's velocity shrinks by exp(-damping * dt) per step, the same rate
     at every dt; rigid motion, so momentum and angular momentum, are kept. 0 disables it; None:
-    the material's, COMPLIANT_DAMPING (300/s) for the compliant tissue, 0.5/s for the per-step one
-    (v1/v2). The compliant pad is stiff enough to ring: its finger core, pushed on by the pad a
+    COMPLIANT_DAMPING (300/s). The pad is stiff enough to ring: its finger core, pushed on by the pad a
     step late and held back by its motor's speed limit, swung 0.6 mm in a steady 20 Hz cycle under
     a 3 N squeeze at 0.5/s; 300/s (a ratio of about 0.8 of critical for the pad's own ~180 rad/s
     mode) settles it within a few steps."""
@@ -245,7 +207,19 @@ class SimConfig:
         check_range("contact_margin", self.contact_margin, 0.0, 0.1, owner=o)
 
 
-accept_old_names(TissueConfig, {"density": "particle_density", "tissue_density": "mass_density"})
+def _retired_material(kwargs: dict) -> dict:
+    """``material="compliant"`` (the only material since 0.7) is dropped with a DeprecationWarning;
+    ``material="per_step"`` and the per-step ``stiffness`` are a ValueError naming 0.6.0."""
+    retired_choice(kwargs, "material", kept="compliant", gone=("per_step",), release="0.6.0", owner="TissueConfig")
+    if "stiffness" in kwargs:
+        raise ValueError(f"TissueConfig.stiffness={kwargs['stiffness']!r} (the per-step material's fraction) was "
+                         "retired; `pip install softgrasp-env==0.6.0` (git tag v0.6.0) has it. The tissue's "
+                         "elasticity is shear_modulus [Pa]")  # fmt: skip
+    return kwargs
+
+
+accept_old_names(TissueConfig, {"density": "particle_density", "tissue_density": "mass_density"},
+                 translate=_retired_material)  # fmt: skip
 """Before 0.3 ``density`` (particles per m^2) and ``tissue_density`` (kg/m^3) - while gym.make's
 ``tissue_density`` meant particles per m^2: one word, two meanings. The old names keep working."""
 

@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from .accuracy import GraspPlan, run_grasp
-from .config import MATERIALS, SimConfig, TissueConfig
+from .config import SimConfig, TissueConfig
 from .scene import GraspScene, SceneConfig
 
 _OLD_FLAGS = {"particle_density": "--density", "mass_density": "--tissue-density"}
@@ -59,9 +59,6 @@ def main(argv: list[str] | None = None) -> int:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     parser.add_argument("--rigid", action="store_true", help="rigid-only fingers (no tissue)")
     parser.add_argument("--coupling", choices=["thesis", "consistent"], default=None, help="core-tissue coupling")
-    parser.add_argument("--material", choices=MATERIALS, default=None,
-                        help="the tissue's material: compliant (a shear modulus in Pa, the default) or per_step "
-                             "(v1/v2: a stiffness per step)")  # fmt: skip
     parser.add_argument("--gui", action="store_true", help="open the pybullet GUI (needs a display)")
     parser.add_argument("--hold", type=float, default=GraspPlan().hold, help="seconds to hold the lifted cylinder")
     _add_dataclass_flags(parser, TissueConfig)
@@ -71,8 +68,6 @@ def main(argv: list[str] | None = None) -> int:
     ns = parser.parse_args(argv)
     try:
         tissue_kw = _collect(ns, TissueConfig)
-        if ns.material:
-            tissue_kw["material"] = ns.material
         tissue = TissueConfig(**tissue_kw)
         sim_kw = _collect(ns, SimConfig)
         if ns.coupling:

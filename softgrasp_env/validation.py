@@ -76,6 +76,26 @@ def deprecated(old: str, new: str, *, stacklevel: int = 3) -> None:
     warnings.warn(f"{old} is deprecated, use {new}", DeprecationWarning, stacklevel=stacklevel)
 
 
+def retired_choice(kwargs: dict, name: str, *, kept: Any, gone: Iterable[Any], release: str, owner: str | None = None,
+                   stacklevel: int = 4) -> None:  # fmt: skip
+    """A keyword removed because only one of its choices is left: ``kwargs[name] == kept`` is
+    dropped from ``kwargs`` with a DeprecationWarning (it is what happens anyway); a value in
+    ``gone`` is a ValueError naming ``release``, the last release that has it; anything else a
+    ValueError naming the field. Nothing happens if ``name`` is not in ``kwargs``."""
+    if name not in kwargs:
+        return
+    value, label = kwargs[name], _label(owner, name)
+    if any(value == v and type(value) is type(v) for v in (kept,)):
+        del kwargs[name]
+        warnings.warn(f"{label}={kept!r} is deprecated: it is the only choice left, give no {name}", DeprecationWarning,
+                      stacklevel=stacklevel)  # fmt: skip
+        return
+    if any(value == v and type(value) is type(v) for v in gone):
+        raise ValueError(f"{label}={value!r} was retired; `pip install softgrasp-env=={release}` (git tag v{release}) "
+                         f"has it. This release has only {label}={kept!r}, the default: give no {name}")  # fmt: skip
+    raise ValueError(f"{label} is no longer an argument (only {kept!r} is left), got {value!r}")
+
+
 def accept_old_names(cls: type, renames: dict[str, str], *, translate: Callable[[dict], dict] | None = None) -> type:
     """Let a frozen dataclass take renamed fields by their old names: ``cls(old=v)`` means
     ``cls(new=v)`` with a DeprecationWarning, and ``obj.old`` reads ``obj.new`` (warned too).
@@ -108,4 +128,4 @@ def accept_old_names(cls: type, renames: dict[str, str], *, translate: Callable[
 
 
 __all__ = ["accept_old_names", "check_bool", "check_choice", "check_int", "check_range", "check_type", "deprecated",
-           "is_real"]  # fmt: skip
+           "is_real", "retired_choice"]  # fmt: skip

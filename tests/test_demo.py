@@ -1,5 +1,5 @@
 """The main job's flags (``python -m softgrasp_env.demo``): every number of TissueConfig and
-SimConfig, the optional ones included, and the material; a wrong combination is the parser's
+SimConfig, the optional ones included; a wrong combination is the parser's
 error, naming the fix. (The scene is captured, not simulated: tests/test_policies.py and the
 grasp tests run the grasp itself.)"""
 
@@ -27,16 +27,15 @@ def built(monkeypatch):
 
 
 def test_the_material_flags_reach_the_scene(built):
-    for argv in (["--shear-modulus", "8000", "--damping", "50"], ["--material", "per_step", "--stiffness", "0.7"]):
-        with pytest.raises(_Built):
+    with pytest.raises(_Built):
+        demo.main(["--shear-modulus", "8000", "--damping", "50", "--max-deviation", "0.01"])
+    (cfg,) = built
+    assert cfg.tissue.modulus == 8000.0 and cfg.tissue.deviation_limit == 0.01 and cfg.sim.damping == 50.0
+
+
+def test_the_retired_material_flags_are_gone(built, capsys):
+    for argv in (["--material", "per_step"], ["--stiffness", "0.7"]):
+        with pytest.raises(SystemExit):
             demo.main(argv)
-    compliant, per_step = built
-    assert compliant.tissue.material == "compliant" and compliant.tissue.modulus == 8000.0
-    assert compliant.sim.damping == 50.0
-    assert per_step.tissue.material == "per_step" and per_step.tissue.step_stiffness == 0.7
-
-
-def test_a_per_step_stiffness_on_the_compliant_material_is_refused(built, capsys):
-    with pytest.raises(SystemExit):
-        demo.main(["--stiffness", "0.7"])
-    assert "shear_modulus" in capsys.readouterr().err and not built
+        assert "unrecognized arguments" in capsys.readouterr().err
+    assert not built

@@ -1,15 +1,14 @@
-"""Seeded trajectories of every registered id (and of the finger kinds reached only through
-kwargs), recorded through the public API alone: ``gym.make``, ``reset``, ``step`` and the scripted
-policy. ``tests/data/trajectories.npz`` holds the v1/v2 ids as recorded before issue 18's
-restructuring, ``tests/data/trajectories_v3.npz`` the v3 ids as 0.5.0 shipped them (recorded
-before issue 20's speed work); ``tests/test_trajectories.py`` replays them and asserts
-bit-identical observations, rewards and flags, so a refactor or a speed-up that changes behaviour
-cannot land quietly.
+"""Seeded trajectories of the registered ids (and of the settings reached only through kwargs),
+recorded through the public API alone: ``gym.make``, ``reset``, ``step`` and the scripted policy.
+``tests/data/trajectories_v3.npz`` holds the v3 ids as 0.5.0 shipped them; ``tests/test_trajectories.py``
+replays them and asserts bit-identical observations, rewards and flags, so a refactor or a speed-up
+that changes behaviour cannot land quietly. (The v1/v2 ids' recording went with them: release 0.6.0
+replays it.)
 
 Record again (only when behaviour is meant to change, with the ids moving version, or the change
 named and measured):
 
-    python -m tests.trajectories [--set v1v2 | v3]
+    python -m tests.trajectories
 """
 
 from __future__ import annotations
@@ -21,7 +20,6 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
-DATA = Path(__file__).parent / "data" / "trajectories.npz"
 DATA_V3 = Path(__file__).parent / "data" / "trajectories_v3.npz"
 
 INFO_FLAGS = ("is_success", "held", "carrying", "diverged", "action_clipped")
@@ -29,35 +27,18 @@ INFO_FLAGS = ("is_success", "held", "carrying", "diverged", "action_clipped")
 
 # (case name, env id, gym.make kwargs, policy, steps). "random" draws actions in [-1.2, 1.2]
 # (clipping exercised) and resets after an episode ends; "scripted" runs the scripted policy.
-CASES: tuple[tuple[str, str, dict, str, int], ...] = (
-    *((f"{env_id}/random", env_id, {}, "random", 130) for env_id in (
-        "SoftGrasp-v2", "SoftGraspRigid-v2", "SoftGraspSparse-v2", "SoftGrasp-v1", "SoftGraspRigid-v1",
-        "SoftGraspSparse-v1", "SoftGraspGoal-v1", "SoftGraspEasy-v1", "SoftGraspEasyRigid-v1")),
-    *((f"{env_id}/scripted", env_id, {}, "scripted", 100) for env_id in (
-        "SoftGrasp-v2", "SoftGraspRigid-v2", "SoftGraspSparse-v2", "SoftGrasp-v1", "SoftGraspRigid-v1",
-        "SoftGraspSparse-v1", "SoftGraspGoal-v1", "SoftGraspEasy-v1", "SoftGraspEasyRigid-v1")),
-    ("segmented/scripted", "SoftGraspEasy-v1", {"fingers": "segmented"}, "scripted", 60),
-    ("segmented/random", "SoftGrasp-v2", {"fingers": "segmented"}, "random", 40),
-    ("fem/scripted", "SoftGraspEasy-v1", {"fingers": "fem"}, "scripted", 12),
-    ("tissue-all-consistent/random", "SoftGrasp-v2",
-     {"tissue_faces": "all", "sim": "consistent"}, "random", 40),
-    ("fast-preset/scripted", "SoftGrasp-v2", {"preset": "fast"}, "scripted", 60),
-    ("ranges/random", "SoftGraspRigid-v2",
-     {"friction_range": 0.3, "cylinder_mass_range": 0.5, "cylinder_radius_range": 0.005}, "random", 60),
-)  # fmt: skip
-
 V3_IDS = ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspSparse-v3", "SoftGraspGoal-v3", "SoftGraspEasy-v3",
           "SoftGraspEasyRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspEasyRigidTorsion-v3")
 V3_CASES: tuple[tuple[str, str, dict, str, int], ...] = (
     *((f"{env_id}/random", env_id, {}, "random", 130) for env_id in V3_IDS),
     *((f"{env_id}/scripted", env_id, {}, "scripted", 100) for env_id in V3_IDS),  # through the carry (3.5-5 s)
     ("v3-consistent/scripted", "SoftGrasp-v3", {"sim": "consistent"}, "scripted", 100),
-    ("v3-per-step/random", "SoftGrasp-v3", {"tissue_material": "per_step"}, "random", 60),
     ("v3-dt1000/scripted", "SoftGraspEasy-v3", {"sim": "dt1000"}, "scripted", 40),
     ("v3-dt120/scripted", "SoftGraspEasy-v3", {"sim": "dt120"}, "scripted", 60),
 )  # fmt: skip
-"""The v3 ids (issue 19's physics) and the settings a speed-up might treat differently: the
-consistent coupling, the per-step material, one world substep (1/1000 s) and four (1/120 s)."""
+"""The v3 ids and the settings a speed-up might treat differently: the consistent coupling, one
+world substep (1/1000 s) and four (1/120 s). (The recording also holds a case of the per-step
+material, retired after 0.6.0; it is no longer replayed.)"""
 
 
 def _kwargs(kwargs: dict) -> dict:
@@ -136,17 +117,14 @@ def fingerprint() -> str:
             f"numba {numba.__version__} pybullet {pybullet.getAPIVersion()}")  # fmt: skip
 
 
-SETS = {"v1v2": (CASES, DATA), "v3": (V3_CASES, DATA_V3)}
-
-
 def main(argv: list[str] | None = None) -> None:
     import argparse
 
     import softgrasp_env  # noqa: F401  (registers the ids)
 
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--set", choices=sorted(SETS), default="v1v2")
-    cases, path = SETS[parser.parse_args(argv).set]
+    parser.parse_args(argv)
+    cases, path = V3_CASES, DATA_V3
     out: dict[str, np.ndarray] = {"fingerprint": np.array(fingerprint())}
     for name, env_id, kwargs, policy, steps in cases:
         for key, arr in record(env_id, kwargs, policy, steps).items():

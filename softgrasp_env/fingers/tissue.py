@@ -42,10 +42,6 @@ particles overhang the cores' edges (a face is 4 cm wide) and catch on the cylin
 3.5-6.7 cm tore the tissue within 10-50 random-action steps, 2.0 cm (900 per m^2) in one of five
 random-action episodes (issue 12's probe and the extremes tests); the `fast` preset's 1.2 cm
 (2,500 per m^2) and the default's 0.95 cm run."""
-MAX_TISSUE_SAG = 0.006
-"""Largest equilibrium sag g dt^2 / k of the tissue under gravity accepted [m]. Issue 12's probe:
-0.54-0.57 cm ran its five episodes (0.57 cm, stiffness 0.03 at 1/240 s, snagged once in eight
-more: stiffness now starts at 0.1), 1.7 cm tore one in three, more tore all."""
 MAX_PARTICLE_SPEED = 20.0
 """A particle faster than this [m/s] has diverged (as a rigid body faster than 20 m/s)."""
 MAX_DEVIATION = 0.03
@@ -92,16 +88,6 @@ class TissueFingers(FingerKind):
                 f"{sim.dt:g} s pushes {impulse:.3g} N s per step into the tissue, more than "
                 f"{MAX_CONSISTENT_SQUEEZE_IMPULSE:g} N s; at this dt finger_force must be at most "
                 f"{MAX_CONSISTENT_SQUEEZE_IMPULSE / sim.dt:.3g} N (or use coupling='thesis')")  # fmt: skip
-        # Shape matching pulls a particle a fraction k of the way to its goal per step
-        # (Mueller 2005, alpha = k), so gravity's g dt^2 per step settles at a sag of
-        # g dt^2 / k (MAX_TISSUE_SAG: at 1.7 cm the probe's tissue tore one episode in three).
-        sag = sim.gravity * sim.dt**2 / tissue.step_stiffness
-        if tissue.material == "per_step" and sag > MAX_TISSUE_SAG:
-            raise ValueError(
-                f"SceneConfig: the tissue is too slack for the time step: gravity={sim.gravity:g} m/s^2 "
-                f"times dt={sim.dt:g} s squared over stiffness={tissue.step_stiffness:g} sags it "
-                f"{sag * 100:.2f} cm, more than {MAX_TISSUE_SAG * 100:g} cm; raise the stiffness to at least "
-                f"{sim.gravity * sim.dt**2 / MAX_TISSUE_SAG:.3g} or shorten dt")  # fmt: skip
         # Coarse pads of wide particles overhang the core's edges and catch on the cylinder.
         reach = tissue.radius_scale * tissue.spacing
         if reach > MAX_PARTICLE_RADIUS:
@@ -113,8 +99,8 @@ class TissueFingers(FingerKind):
 
     @property
     def world_substeps(self) -> int:
-        """World steps per physics step for the compliant material (the per-step one takes 1): the
-        fewest that keep its groups within compliant.MAX_STEP_STIFFNESS and the pad's stiffness
+        """World steps per physics step for the tissue's material: the fewest that keep its groups
+        within compliant.MAX_STEP_STIFFNESS and the pad's stiffness
         against its core within compliant.MAX_COUPLING_FOLD."""
         return world_substeps(self.scene_config)
 
@@ -187,10 +173,7 @@ class TissueFingers(FingerKind):
 
 def world_substeps(scene_config) -> int:
     """World steps per physics step of ``scene_config`` with tissue fingers (TissueFingers.world_substeps):
-    compliant.world_substeps on the pads mount() builds, on cores of ``finger_mass``; 1 for the
-    per-step material."""
-    if scene_config.tissue.material != "compliant":
-        return 1
+    compliant.world_substeps on the pads mount() builds, on cores of ``finger_mass``."""
     return _world_substeps(scene_config.tissue, tuple(scene_config.finger_half_extents), scene_config.fingers.faces,
                            scene_config.finger_mass, scene_config.sim.dt)  # fmt: skip
 
@@ -211,7 +194,6 @@ def _world_substeps(tissue: TissueConfig, half_extents: tuple[float, float, floa
 __all__ = [
     "MAX_CONSISTENT_SQUEEZE_IMPULSE",
     "MAX_PARTICLE_RADIUS",
-    "MAX_TISSUE_SAG",
     "TISSUE_FACES",
     "TissueFingerConfig",
     "TissueFingers",

@@ -3,8 +3,8 @@
 Move the grip point over the cylinder (horizontally first: from above, the open fingers would
 otherwise come down on its top), down onto its centre, close the fingers, and once both fingers
 press on the cylinder, lift to a little above the success height and hold there. Works for the vector
-observation of SoftGrasp-v2 / SoftGraspRigid-v2 / SoftGraspSparse-v2 (and their v1) and for the ``observation``
-entry of SoftGraspGoal-v1's dict.
+observation of every SoftGrasp id (with or without the carry test's clock and taxels) and for the
+``observation`` entry of the goal ids' dict.
 
 Part of the installed package (``from softgrasp_env.policies import ScriptedGraspPolicy``); the
 repository's ``agents.scripted`` is the same class under its old name.
@@ -16,11 +16,11 @@ import numpy as np
 
 from ..fingers.tactile import TAXEL_CHANNELS
 from ..observation import CARRY_OBS_NAMES, OBS_NAMES
-from ..validation import check_choice
+from ..validation import retired_choice
 
 _I = {name: k for k, name in enumerate(OBS_NAMES)}
 _SIZES = (len(OBS_NAMES), len(CARRY_OBS_NAMES))
-"""Without and with the carry test's clock (the v1 and v2 ids); the policy does not read the clock:
+"""Without and with the carry test's clock (``carry=False`` / ``True``); the policy does not read the clock:
 it holds on from the grasp to the episode's end either way."""
 _PER_TAXEL = 2 * len(TAXEL_CHANNELS)
 """An env made with ``tactile=(rows, cols)`` appends 2 x rows x cols x channels entries, which this
@@ -38,20 +38,22 @@ class ScriptedGraspPolicy:
     also has SB3's ``predict`` (batched observations too), so tools that evaluate an SB3 model
     (``stable_baselines3.common.evaluation.evaluate_policy``, agents.evaluate) evaluate it alike.
 
-    ``arm`` is the env's (``EnvArguments.arm``; :meth:`for_env` reads it and the rest from an
-    env). The smooth arm's actions are velocities (``speed`` at full action, the env's
-    ``gripper_speed``): the policy asks for the speed that, held for a control step
-    (``control_period``) and then braked at the arm's acceleration ``arm_acceleration``, stops
-    within the distance left, so it does not overshoot. The jump arm's actions move the target by
-    ``speed * control_period`` at full action (7.5 mm by default); the policy asks for the whole
-    way, clipped. ``grip_force`` is the per-finger normal force [N] above which the cylinder counts
+    The arm's actions are velocities (``speed`` at full action, the env's ``gripper_speed``
+    [m/s]): the policy asks for the speed that, held for a control step (``control_period`` [s])
+    and then braked at the arm's acceleration ``arm_acceleration`` [m/s^2], stops within the
+    distance left, so it does not overshoot (:meth:`for_env` reads these from an env).
+    ``grip_force`` is the per-finger normal force [N] above which the cylinder counts
     as gripped; ``lift_to`` the lift height it holds [m]; ``descend_tolerance`` how near the
     cylinder's axis the grip must be horizontally before it comes down from above [m]."""
 
-    def __init__(self, *, arm: str = "smooth", speed: float = 0.15, arm_acceleration: float = 1.5,
-                 control_period: float = 0.05, grip_force: float = 0.5, lift_to: float = 0.065,
-                 align_tolerance: float = 0.004, descend_tolerance: float = 0.01) -> None:  # fmt: skip
-        self.arm = check_choice("arm", arm, ("smooth", "jump"), owner="ScriptedGraspPolicy")
+    def __init__(self, *, speed: float = 0.15, arm_acceleration: float = 1.5, control_period: float = 0.05,
+                 grip_force: float = 0.5, lift_to: float = 0.065, align_tolerance: float = 0.004,
+                 descend_tolerance: float = 0.01, **retired: str) -> None:  # fmt: skip
+        # arm="smooth" (before 0.7, when the arm had two kinds) warns; arm="jump" names 0.6.0
+        retired_choice(retired, "arm", kept="smooth", gone=("jump",), release="0.6.0", owner="ScriptedGraspPolicy",
+                       stacklevel=3)  # fmt: skip
+        if retired:
+            raise TypeError(f"ScriptedGraspPolicy got unexpected keyword argument(s) {sorted(retired)}")
         self.descend_tolerance = float(descend_tolerance)
         self.speed = float(speed)
         self.arm_acceleration = float(arm_acceleration)
@@ -59,17 +61,15 @@ class ScriptedGraspPolicy:
         self.grip_force = float(grip_force)
         self.lift_to = float(lift_to)
         self.align_tolerance = float(align_tolerance)
-        self.step_length = self.speed * self.control_period
-        """The jump arm's target displacement at full action [m]."""
 
     @classmethod
     def for_env(cls, env, **kwargs) -> ScriptedGraspPolicy:
-        """The policy for ``env`` (a SoftGrasp env, wrapped or not): its arm, arm speed and
-        acceleration and control period; ``kwargs`` set the other parameters."""
+        """The policy for ``env`` (a SoftGrasp env, wrapped or not): its arm speed and acceleration
+        and control period; ``kwargs`` set the other parameters."""
         args = getattr(env.unwrapped, "args", None)
         if args is None:
             raise TypeError(f"ScriptedGraspPolicy.for_env needs a SoftGrasp env, got {env!r}")
-        return cls(arm=args.arm, speed=args.gripper_speed, arm_acceleration=args.arm_acceleration,
+        return cls(speed=args.gripper_speed, arm_acceleration=args.arm_acceleration,
                    control_period=1.0 / args.control_frequency, **kwargs)  # fmt: skip
 
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
@@ -98,8 +98,6 @@ class ScriptedGraspPolicy:
         lift = obs[_I["lift"]]
         action = np.zeros(4, dtype=np.float32)
         gripped = bool((forces >= self.grip_force).all())
-        if self.arm == "jump":
-            return self._jump(rel, forces, lift, gripped, action)
         if gripped:
             action[:3] = self.toward(np.array([0.0, 0.0, self.lift_to - lift]))
             action[3] = 1.0
@@ -108,19 +106,6 @@ class ScriptedGraspPolicy:
         if np.hypot(rel[0], rel[1]) > self.descend_tolerance and rel[2] < 0.0:
             move[2] = 0.0  # above it and not yet over it: no lower until over it
         action[:3] = self.toward(move)
-        aligned = bool(np.abs(rel).max() <= self.align_tolerance)
-        action[3] = 1.0 if aligned or (forces > 0.0).any() else -1.0
-        return action
-
-    def _jump(self, rel, forces, lift, gripped, action) -> np.ndarray:
-        """The jump arm's action (as the v1/v2 policy computed it, to the bit)."""
-        if gripped:
-            action[2] = np.clip((self.lift_to - lift) / self.step_length, -1.0, 1.0)
-            action[3] = 1.0
-            return action
-        action[:3] = np.clip(rel / self.step_length, -1.0, 1.0)
-        if np.hypot(rel[0], rel[1]) > self.descend_tolerance and rel[2] < 0.0:
-            action[2] = 0.0  # above it and not yet over it: no lower until over it
         aligned = bool(np.abs(rel).max() <= self.align_tolerance)
         action[3] = 1.0 if aligned or (forces > 0.0).any() else -1.0
         return action

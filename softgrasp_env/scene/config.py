@@ -15,7 +15,7 @@ from typing import Any
 
 from ..config import SimConfig, TissueConfig
 from ..fingers import FINGERS, FemConfig, FingerConfig, SegmentedConfig, TissueFingerConfig, finger_config
-from ..validation import accept_old_names, check_choice, check_range, check_type, deprecated
+from ..validation import accept_old_names, check_choice, check_range, check_type, deprecated, retired_choice
 
 PALM_HALF_EXTENTS = (0.09, 0.03, 0.01)
 """Half extents of the gripper's palm box [m]."""
@@ -27,7 +27,7 @@ GEOMETRY_MARGIN = 0.001
 
 
 ARM_PUSH = 40.0
-"""What the smooth arm pushes or pulls with beyond carrying the gripper's weight [N]."""
+"""What the arm pushes or pulls with beyond carrying the gripper's weight [N]."""
 
 
 @dataclass(frozen=True)
@@ -69,28 +69,22 @@ class SceneConfig:
     palm_mass: float = 0.5
     """Mass of the gripper palm [kg]."""
     palm_force: float | None = None
-    """Force limit of the constraint that drives the palm, the arm's strength [N]; None: for the
-    smooth arm the gripper's weight (palm and cores) plus :data:`ARM_PUSH` (40 N), as an arm
-    that compensates gravity and pushes or pulls with at most 40 N more; 200 N for the jump arm
-    (v1/v2). 40 N carries the heaviest cylinder the grasp holds (0.5 kg at the lift's 1.5 m/s^2:
+    """Force limit of the constraint that drives the palm, the arm's strength [N]; None: the
+    gripper's weight (palm and cores) plus :data:`ARM_PUSH` (40 N), as an arm that compensates
+    gravity and pushes or pulls with at most 40 N more. 40 N carries the heaviest cylinder the grasp holds (0.5 kg at the lift's 1.5 m/s^2:
     6 N) with room to spare; 200 N pressed the tissue onto the cylinder's rim hard enough to tear
     it, 4 times in 10^5 noisy scripted steps (benchmarks/random_soak.py), once at 40 N."""
     finger_stop: str | None = None
     """Where the fingers' closing travel ends: ``"pads"`` when the two pads' surfaces meet (each core
     face stops a pad thickness from the centre), ``"faces"`` when the bare cores' inner faces meet
-    (the pads, if any, crushed to nothing between them); None: "pads" with the smooth arm, "faces"
-    with the jump arm (v1/v2). Fingers closing on nothing crushed the tissue between the cores and
+    (the pads, if any, crushed to nothing between them); None: "pads". Fingers closing on nothing crushed the tissue between the cores and
     tore it (tests/test_extremes.py's fuzz); a real gripper's jaws stop on their pads."""
-    arm: str = "smooth"
-    """How the arm moves the palm's constraint pivot: ``"smooth"`` along a speed- and
-    acceleration-limited path, one physics step at a time (softgrasp_env/scene/gripper.py,
-    PalmPath; the v3 ids); ``"jump"`` straight to each new target, which the constraint then
-    chases (the v1/v2 ids, kept so they reproduce: 86 m/s^2 kicks at 1/240 s, issue 19)."""
     arm_speed: float = 0.15
-    """Fastest the smooth arm moves the palm [m/s]: its setpoint follows the commanded target or
-    velocity at no more than this speed."""
+    """Fastest the arm moves the palm [m/s]: its setpoint (the palm constraint's pivot) follows the
+    commanded target or velocity along a path (softgrasp_env/scene/gripper.py, PalmPath) at no
+    more than this speed."""
     arm_acceleration: float = 1.5
-    """Largest acceleration of the smooth arm's setpoint [m/s^2]: the palm starts, stops and turns
+    """Largest acceleration of the arm's setpoint [m/s^2]: the palm starts, stops and turns
     smoothly, the same at every dt (a target that jumped once per control step, closed ~20 % per
     physics step by the constraint, kicked the palm at 86 m/s^2 at 1/240 s and 500 at 1/1000)."""
     ground_friction: float = 0.5
@@ -121,7 +115,7 @@ class SceneConfig:
     @property
     def finger_travel(self) -> float:
         """Each finger's closing travel from fully open to its stop [m] (``finger_stop``)."""
-        stop = self.finger_stop or ("pads" if self.arm == "smooth" else "faces")
+        stop = self.finger_stop or "pads"
         return self.finger_max_opening - (self.pad_thickness if stop == "pads" else 0.0)
 
     @property
@@ -129,8 +123,6 @@ class SceneConfig:
         """The palm constraint's force limit [N]: ``palm_force``, or the arm's default."""
         if self.palm_force is not None:
             return self.palm_force
-        if self.arm == "jump":
-            return 200.0
         return ARM_PUSH + (self.palm_mass + 2.0 * self.finger_mass) * self.sim.gravity
 
     def __post_init__(self) -> None:
@@ -151,7 +143,6 @@ class SceneConfig:
         check_range("palm_mass", self.palm_mass, 0.01, 100.0, owner=o)
         if self.palm_force is not None:
             check_range("palm_force", self.palm_force, 0.0, 1e4, lo_open=True, owner=o)
-        check_choice("arm", self.arm, ("smooth", "jump"), owner=o)
         if self.finger_stop is not None:
             check_choice("finger_stop", self.finger_stop, ("pads", "faces"), owner=o)
         check_range("arm_speed", self.arm_speed, 0.0, 2.0, lo_open=True, owner=o)
@@ -275,7 +266,10 @@ _LEGACY_FIELDS: dict[str, tuple[type[FingerConfig], str]] = {
 def _translate_legacy(kwargs: dict) -> dict:
     """``SceneConfig(fingers="segmented", finger_segments=4)`` (0.2) as
     ``SceneConfig(fingers=SegmentedConfig(segments=4))``, with a DeprecationWarning; a setting of
-    another kind than ``fingers`` is an error, as it would be lost."""
+    another kind than ``fingers`` is an error, as it would be lost. ``arm="smooth"`` (before 0.7,
+    when the arm had two kinds) is dropped with a DeprecationWarning, ``arm="jump"`` a ValueError
+    naming the release that has it."""
+    retired_choice(kwargs, "arm", kept="smooth", gone=("jump",), release="0.6.0", owner="SceneConfig", stacklevel=4)
     legacy = {k: kwargs.pop(k) for k in list(kwargs) if k in _LEGACY_FIELDS}
     if not legacy:
         return kwargs

@@ -214,9 +214,8 @@ class Gripper:
         self._orientation = c.getQuaternionFromEuler([0.0, 0.0, self.yaw])
         self.control = GripperControl(np.array(start_palm, dtype=np.float64), 0.0)
         """The control applied last."""
-        self.path = None if cfg.arm == "jump" else PalmPath(self.control.palm_target, v_max=cfg.arm_speed,
-                                                             a_max=cfg.arm_acceleration, dt=cfg.sim.dt)  # fmt: skip
-        """The smooth arm's path to the target (None: the jump arm)."""
+        self.path = PalmPath(self.control.palm_target, v_max=cfg.arm_speed, a_max=cfg.arm_acceleration, dt=cfg.sim.dt)
+        """The arm's path to the target."""
         self._set_palm_target(self.control.palm_target)
         self._set_finger_closing(0.0)
 
@@ -227,18 +226,13 @@ class Gripper:
 
     def apply(self, control: GripperControl, palm) -> None:
         """Follow ``control`` for the coming physics step; ``palm`` is where the palm's centre is
-        now. The smooth arm moves its setpoint one step along its path toward the target (the palm
-        keeps the start yaw); the jump arm sets the target itself when it is new. The finger motors
+        now. The arm moves its setpoint one step along its path toward the target or at the
+        commanded velocity (the palm keeps the start yaw). The finger motors
         get a new target when it changed. Runs every physics step. A control is a value: it is kept
         as given, so its arrays must not be changed afterwards."""
         last = self.control
-        if self.path is not None:
-            if self.path.step(control, palm):
-                self._set_palm_target(self.path.x)
-        elif control is last:  # the jump arm: the same control for every physics step of an env step
-            return
-        elif control.palm_target is not None and control.palm_target is not last.palm_target:
-            self._set_palm_target(control.palm_target)  # (setting an equal target again changes nothing)
+        if self.path.step(control, palm):
+            self._set_palm_target(self.path.x)
         if control.finger_closing != last.finger_closing or control.finger_force != last.finger_force:
             self._set_finger_closing(control.finger_closing, control.finger_force)
         self.control = control
@@ -246,10 +240,9 @@ class Gripper:
     @property
     def setpoint(self) -> np.ndarray:
         """Where the arm has the palm's centre now (the constraint's pivot) [m]."""
-        return np.array(self.path.x if self.path is not None else self._pivot, dtype=np.float64)
+        return np.array(self.path.x, dtype=np.float64)
 
     def _set_palm_target(self, pos) -> None:
-        self._pivot = pos
         self.client.changeConstraint(self.palm_constraint, jointChildPivot=[float(v) for v in pos],
                                      jointChildFrameOrientation=self._orientation,
                                      maxForce=self.config.arm_force)  # fmt: skip
@@ -309,8 +302,8 @@ squeezing with the scene's finger_force at most; or the squeeze force itself."""
 
 class GripperActions:
     """The env's action, ``Box(-1, 1, (4,))``, as a gripper control: x, y, z move the grip point,
-    kept in the workspace; the last entry commands the fingers. What x, y, z mean depends on the
-    arm (``SceneConfig.arm``), see :meth:`of`. The last entry: with ``finger="position"`` the
+    kept in the workspace; the last entry commands the fingers. How x, y, z move the arm is the
+    subclass's (:class:`VelocityActions`). The last entry: with ``finger="position"`` the
     closing travel (-1 fully open, +1 the faces meeting), the motors limited to the scene's
     ``finger_force``; with ``finger="force"`` the squeeze, 0 at -1 to ``max_force`` at +1, the
     motors driving the fingers closed with that force (they close until they meet resistance and
@@ -331,14 +324,6 @@ class GripperActions:
         self.finger = finger
         self.max_force = None if max_force is None else float(max_force)
 
-    @staticmethod
-    def of(arm: str, speed: float, control_frequency: float, workspace: Workspace, finger_max_opening: float, *,
-           finger: str = "position", max_force: float | None = None) -> GripperActions:  # fmt: skip
-        """The actions for ``arm``: :class:`VelocityActions` for the smooth arm, :class:`TargetActions`
-        for the jump arm."""
-        kind = {"smooth": VelocityActions, "jump": TargetActions}[arm]
-        return kind(speed, control_frequency, workspace, finger_max_opening, finger=finger, max_force=max_force)
-
     def closing(self, action: np.ndarray) -> float:
         """The finger closing for ``action``'s last entry [m] (fully closed when it sets the force)."""
         if self.finger == "force":
@@ -357,7 +342,7 @@ class GripperActions:
 
 
 class VelocityActions(GripperActions):
-    """The smooth arm's actions (v3): x, y, z are the palm's velocity, ``speed`` at full action
+    """The arm's actions: x, y, z are the palm's velocity, ``speed`` at full action
     (the vector capped at ``speed`` by the arm); the arm reaches it with its acceleration limit and
     brakes before the workspace's walls."""
 
@@ -367,18 +352,5 @@ class VelocityActions(GripperActions):
                               palm_box=(ws.low + g2p, ws.high + g2p), finger_force=self.squeeze(action))  # fmt: skip
 
 
-class TargetActions(GripperActions):
-    """The jump arm's actions (v1/v2): x, y, z displace the arm's target by up to
-    ``speed / control_frequency`` per env step, the target kept in the workspace and within
-    ``MAX_LEAD`` of the palm; the palm's constraint chases the target."""
-
-    def control(self, action: np.ndarray, scene: PalmReadout) -> GripperControl:
-        ws, g2p, palm = self.workspace, scene.grip_to_palm(), scene.palm_state()[0]
-        step = self.speed / self.control_frequency  # as v1/v2 computed it, to the bit
-        target_grip = ws.clip((scene.palm_target - g2p) + action[:3] * step)
-        target = np.clip(target_grip + g2p, palm - MAX_LEAD, palm + MAX_LEAD)
-        return GripperControl(target, self.closing(action), finger_force=self.squeeze(action))
-
-
-__all__ = ["FINGER_ACTIONS", "GRIP_TOP", "Gripper", "GripperActions", "GripperControl", "PalmPath", "TargetActions",
-           "VelocityActions", "Workspace"]
+__all__ = ["FINGER_ACTIONS", "GRIP_TOP", "Gripper", "GripperActions", "GripperControl", "PalmPath", "VelocityActions",
+           "Workspace"]

@@ -6,26 +6,19 @@ The policy's finger command still acts, its arm command is ignored meanwhile. Th
 gains the time since reset: the carry comes at a fixed time, and a policy that cannot see the
 clock would face a task that is not Markov.
 
-**v3 (the smooth arm)**: every episode draws its sway: the frequency f from a band from below to
-above the two-point grasp's pendulum frequency (about 1.9 Hz with the cylinder's own inertia,
-issue 19), the peak acceleration a = A (2 pi f)^2 from a range (the amplitude follows), and the
-direction, any horizontal one (across the jaw, where a two-point grasp swings about the line
-through its contacts, along the closing axis, or between). The sway ramps in over its first
-period (``A (t f) sin(2 pi f t)``: it starts at rest, as the arm's path must) and keeps within
-the arm's speed and acceleration (checked when the env is made). Success needs the cylinder held
-at every env step of the carry and its in-hand slide (the cylinder's move relative to the grip
-point since the carry began) at most ``slide_limit``, not only at the last step: a grasp that
-swings out and back, or ratchets, has not held. ``reset(options=...)`` fixes ``carry_frequency``,
-``carry_acceleration`` and ``carry_direction`` (rad from across the jaw) for one episode.
+Every episode draws its sway: the frequency f from a band from below to above the two-point
+grasp's pendulum frequency (about 1.9 Hz with the cylinder's own inertia), the peak acceleration
+a = A (2 pi f)^2 from a range (the amplitude follows), and the direction, any horizontal one
+(across the jaw, where a two-point grasp swings about the line through its contacts, along the
+closing axis, or between). The sway ramps in over its first period (``A (t f) sin(2 pi f t)``: it
+starts at rest, as the arm's path must) and keeps within the arm's speed and acceleration (checked
+when the env is made). Success needs the cylinder held at every env step of the carry and its
+in-hand slide (the cylinder's move relative to the grip point since the carry began) at most
+``slide_limit``, not only at the last step: a grasp that swings out and back, or ratchets, has not
+held. ``reset(options=...)`` fixes ``carry_frequency``, ``carry_acceleration`` and
+``carry_direction`` (rad from across the jaw) for one episode.
 
-**v1/v2 (the jump arm)**: 1 cm at 2 Hz across the jaw, about the policy's target, and success
-if held once the carry is over, as their results were made (measured with the v1 baselines,
-seeds 1000-1029: scripted soft 30 / 30 held, SAC soft 26 / 26, scripted rigid 0 / 12, SAC rigid
-5 / 28; 2 Hz sits on the rigid grasp's resonance, issue 19).
-
-Both from 3.5 s (step 70 of the 100 at 20 Hz) for 1.5 s. The scripted policy holds the cylinder
-5 cm up after 1.85 s (median) and 2.5 s at the latest over seeds 1000-1099 (v2), so it has a
-second to spare.
+The carry runs from 3.5 s (step 70 of the 100 at 20 Hz) for 1.5 s.
 """
 
 from __future__ import annotations
@@ -47,33 +40,29 @@ if TYPE_CHECKING:
 CARRY_START = 3.5
 """The carry begins this long after reset [s]."""
 CARRY_DURATION = 1.5
-"""How long the arm carries [s]: three periods at CARRY_FREQUENCY, ending where it began."""
-CARRY_AMPLITUDE = 0.01
-"""The v1/v2 sway's amplitude [m]."""
-CARRY_FREQUENCY = 2.0
-"""The v1/v2 sway's frequency [Hz]."""
+"""How long the arm carries [s]."""
 CARRY_FREQUENCY_BAND = (1.2, 3.0)
-"""The v3 sway's frequency band [Hz]: 0.6 to 1.6 times the two-point pendulum's ~1.9 Hz."""
+"""The sway's frequency band [Hz]: 0.6 to 1.6 times the two-point pendulum's ~1.9 Hz."""
 CARRY_ACCELERATION_RANGE = (0.5, 1.0)
-"""The v3 sway's peak acceleration [m/s^2]: at 1.2 Hz 1.0 m/s^2 is 0.13 m/s at most, within the
+"""The sway's peak acceleration [m/s^2]: at 1.2 Hz 1.0 m/s^2 is 0.13 m/s at most, within the
 arm's 0.15 m/s; the arm's 1.5 m/s^2 leaves room for the path's corrections."""
 CARRY_SLIDE_LIMIT = 0.005
-"""The v3 success's largest in-hand slide during the carry [m]: the soft grasp slides 0.14 mm, aligned
+"""The success's largest in-hand slide during the carry [m]: the soft grasp slides 0.14 mm, aligned
 rigid fingers 0.2-0.5 mm, a rigid two-point grasp swinging 5-37 deg 3-18 mm (scripted, 1 m/s^2 at
-1.2-3 Hz, issue 19)."""
+1.2-3 Hz)."""
 CARRY_OPTIONS = ("carry_frequency", "carry_acceleration", "carry_direction")
-"""Reset options that fix the v3 sway for one episode."""
+"""Reset options that fix the sway for one episode."""
 RAMP_ACCELERATION_FACTOR = math.sqrt(1.0 + 1.0 / math.pi**2)
-"""The v3 sway's peak acceleration while it ramps in, over its steady peak (sway_limits_error)."""
+"""The sway's peak acceleration while it ramps in, over its steady peak (sway_limits_error)."""
 RAMP_SPEED_FACTOR = math.sqrt(1.0 + 1.0 / (4.0 * math.pi**2))
-"""The v3 sway's peak speed while it ramps in, over its steady peak (sway_limits_error)."""
+"""The sway's peak speed while it ramps in, over its steady peak (sway_limits_error)."""
 _EPS = 1e-9
 """Slack on the carry's time window [s]: physics steps land on its ends up to rounding."""
 
 
 def sway_limits_error(frequency: float, *, amplitude: float | None = None, acceleration: float | None = None,
                       speed: float, arm_acceleration: float) -> str | None:  # fmt: skip
-    """What is wrong with a sway the smooth arm cannot follow (None: it can): its peak speed or
+    """What is wrong with a sway the arm cannot follow (None: it can): its peak speed or
     acceleration above the arm's ``speed`` / ``arm_acceleration``, the ramp over the first period
     included (:meth:`CarryTest.steer`: x = A (f t) sin(w t), w = 2 pi f, so x'' = A w (2 f cos -
     f t w sin) peaks at up to A w^2 sqrt(1 + 1/pi^2), 4.9 % above the steady A w^2, and x' at up
@@ -99,22 +88,20 @@ def _value(option: str, value: float, lo: float, hi: float) -> float:
 
 
 class CarryTest(TaskWrapper):
-    """``task`` with the carry test after it (see the module docstring). ``frequency`` and
-    ``acceleration`` are a value or a (low, high) band drawn per episode; ``amplitude`` fixes the
-    amplitude instead of ``acceleration`` (the v1/v2 sway); ``direction`` is ``"across"`` the jaw
-    or ``"any"`` horizontal one (drawn); ``slide_limit`` None keeps the v1/v2 success (held once
-    the carry is over), a number asks for the whole carry (module docstring). ``arm_speed`` and
-    ``arm_acceleration`` are the smooth arm's limits a reset option's sway is checked against."""
+    """``task`` with the carry test after it (see the module docstring), from ``start`` for
+    ``duration`` [s]. ``frequency`` [Hz] and ``acceleration`` [m/s^2, peak] are a value or a
+    (low, high) band drawn per episode, the direction any horizontal one, drawn; success needs the
+    cylinder held at every step of the carry and its in-hand slide at most ``slide_limit`` [m].
+    ``arm_speed`` [m/s] and ``arm_acceleration`` [m/s^2] are the arm's limits a reset option's sway
+    is checked against (EnvArguments checks the bands against them when the env is made)."""
 
     def __init__(self, task: Task, *, dt: float, workspace: Workspace, start: float = CARRY_START,
-                 duration: float = CARRY_DURATION, amplitude: float | None = CARRY_AMPLITUDE,
-                 frequency: float | tuple[float, float] = CARRY_FREQUENCY,
-                 acceleration: float | tuple[float, float] | None = None, direction: str = "across",
-                 slide_limit: float | None = None, arm_speed: float = math.inf,
+                 duration: float = CARRY_DURATION,
+                 frequency: float | tuple[float, float] = CARRY_FREQUENCY_BAND,
+                 acceleration: float | tuple[float, float] = CARRY_ACCELERATION_RANGE,
+                 slide_limit: float = CARRY_SLIDE_LIMIT, arm_speed: float = math.inf,
                  arm_acceleration: float = math.inf) -> None:  # fmt: skip
         super().__init__(task)
-        if (amplitude is None) == (acceleration is None):
-            raise ValueError("CarryTest needs exactly one of amplitude and acceleration")
         self.observation_extras = task.observation_extras + ("time",)
         self.reset_options = task.reset_options + CARRY_OPTIONS
         self.dt = float(dt)
@@ -122,13 +109,11 @@ class CarryTest(TaskWrapper):
         self.start, self.duration = float(start), float(duration)
         self.frequency_band = frequency
         self.acceleration_band = acceleration
-        self.direction = direction
-        self.slide_limit = slide_limit
+        self.slide_limit = float(slide_limit)
         self.arm_speed, self.arm_acceleration = float(arm_speed), float(arm_acceleration)
-        self._fixed_amplitude = amplitude
-        # this episode's sway (draw() sets it; a fixed one is set here too)
+        # this episode's sway (draw() sets it)
         self.frequency = float(frequency) if not isinstance(frequency, tuple) else float(np.mean(frequency))
-        self.amplitude = float(amplitude) if amplitude is not None else 0.0
+        self.amplitude = 0.0
         self.angle = 0.0
         """The sway's direction from across the jaw toward the closing axis [rad]."""
         self._anchor: np.ndarray | None = None
@@ -149,16 +134,15 @@ class CarryTest(TaskWrapper):
         self._first, self._last = first, last
 
     def draw(self, rng: np.random.Generator, options: Mapping[str, Any], base: SceneConfig) -> SceneConfig:
-        """The wrapped task's draw, then this episode's sway: frequency, peak acceleration and
-        direction, in that order, each drawn only if it is a band (so a fixed sway draws nothing);
-        a reset option replaces the drawn value."""
+        """The wrapped task's draw, then this episode's sway: frequency and peak acceleration, each
+        drawn only if it is a band, then the direction; a reset option replaces the drawn value."""
         mine = {k: options[k] for k in CARRY_OPTIONS if k in options}
         cfg = self.task.draw(rng, {k: v for k, v in options.items() if k not in mine}, base)
         f = self.frequency_band
         f = float(rng.uniform(*f)) if isinstance(f, tuple) else float(f)
         a = self.acceleration_band
-        a = float(rng.uniform(*a)) if isinstance(a, tuple) else (None if a is None else float(a))
-        angle = float(rng.uniform(0.0, math.pi)) if self.direction == "any" else 0.0
+        a = float(rng.uniform(*a)) if isinstance(a, tuple) else float(a)
+        angle = float(rng.uniform(0.0, math.pi))
         if "carry_frequency" in mine:
             f = _value("carry_frequency", mine["carry_frequency"], 0.05, 10.0)
         if "carry_acceleration" in mine:
@@ -166,8 +150,8 @@ class CarryTest(TaskWrapper):
         if "carry_direction" in mine:
             angle = _value("carry_direction", mine["carry_direction"], -math.pi, math.pi)
         omega = 2.0 * math.pi * f
-        amplitude = self._fixed_amplitude if a is None else a / (omega * omega)
-        if mine and base.arm == "smooth":
+        amplitude = a / (omega * omega)
+        if mine:
             problem = sway_limits_error(f, amplitude=amplitude, speed=self.arm_speed,
                                         arm_acceleration=self.arm_acceleration)  # fmt: skip
             if problem:
@@ -205,13 +189,6 @@ class CarryTest(TaskWrapper):
         yaw = scene.config.yaw
         across = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
         omega = 2.0 * math.pi * self.frequency
-        if scene.config.arm == "jump":  # v1/v2: about the policy's target, which the palm chases
-            if self._anchor is None:
-                self._anchor = np.asarray(control.palm_target, dtype=np.float64).copy()
-            target = self._anchor + across * (self.amplitude * math.sin(omega * t))
-            grip_to_palm = scene.grip_to_palm()
-            return GripperControl(self.workspace.clip(target - grip_to_palm) + grip_to_palm, control.finger_closing,
-                                  finger_force=control.finger_force)  # fmt: skip
         if self._anchor is None:  # where the arm has the palm when the carry begins
             self._anchor = scene.palm_setpoint
         c, s = math.cos(self.angle), math.sin(self.angle)
@@ -229,8 +206,6 @@ class CarryTest(TaskWrapper):
         out = self.task.evaluate(reading, scene)
         steps = scene.steps
         over = self.over(steps)
-        if self.slide_limit is None:  # v1/v2: held once the carry is over
-            return replace(out, success=out.held and over, carrying=self.carrying(steps))
         if self.phase(steps) is not None:  # held at every step of the carry, its ends included
             if self._rel0 is None:
                 self._rel0 = np.array(reading.cyl_rel, dtype=np.float64)
@@ -241,5 +216,4 @@ class CarryTest(TaskWrapper):
         return replace(out, success=success, carrying=self.carrying(steps))
 
 
-__all__ = ["CARRY_ACCELERATION_RANGE", "CARRY_AMPLITUDE", "CARRY_DURATION", "CARRY_FREQUENCY", "CARRY_FREQUENCY_BAND",
-           "CARRY_OPTIONS", "CARRY_SLIDE_LIMIT", "CARRY_START", "CarryTest", "sway_limits_error"]
+__all__ = ["CARRY_ACCELERATION_RANGE", "CARRY_DURATION", "CARRY_FREQUENCY_BAND", "CARRY_OPTIONS", "CARRY_SLIDE_LIMIT", "CARRY_START", "CarryTest", "sway_limits_error"]

@@ -37,7 +37,7 @@ def _project_anchor(i, r, slack, rest_x, xp, inv_mass, rig_x, rig_q, rig_inv_mas
     """Particle i within ``slack`` of its spot on core r [m], as a zero-compliance XPBD constraint
     whose denominator holds the core's generalised inverse mass (Mueller et al. 2020; Bender's
     PositionBasedDynamics, solve_RigidBodyParticleBallJoint): the consistent coupling's attachment
-    (slack 0), and the compliant material's strain limit (limit_deviation)."""
+    (slack 0), and the material's strain limit (limit_deviation)."""
     bx = (rig_x[r, 0], rig_x[r, 1], rig_x[r, 2])
     bq = (rig_q[r, 0], rig_q[r, 1], rig_q[r, 2], rig_q[r, 3])
     arm = qrotate(bq, (rest_x[i, 0], rest_x[i, 1], rest_x[i, 2]))
@@ -77,7 +77,7 @@ def project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_r
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def limit_deviation(rest_x, inv_mass, attached, p_body, body_core_shape, body_max_deviation, shape_rigid, xp, rig_x,
                     rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt):  # fmt: skip
-    """The compliant material's strain limit: every free particle back within its body's
+    """The material's strain limit: every free particle back within its body's
     ``body_max_deviation`` of the spot its core carries it to, the core taking the reaction (a
     deformation constraint, Provot 1995, between particle and core; _project_anchor with slack).
 
@@ -147,10 +147,10 @@ def snap_attached(
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
-def mark_fixed(attached, p_body, body_compliant, body_core_shape, fixed):
-    """fixed[i]: particle i is held by its core inside the compliant group solve
-    (compliant.project_group): attached, of a compliant body with a core. Under the thesis coupling it does not move (the core is infinitely heavy in
+def mark_fixed(attached, p_body, body_core_shape, fixed):
+    """fixed[i]: particle i is held by its core inside the group solve (compliant.project_group):
+    attached, of a body with a core. Under the thesis coupling it does not move (the core is infinitely heavy in
     the solve), under the consistent one it moves with its core along the core's joint."""
     for i in range(attached.shape[0]):
         b = p_body[i]
-        fixed[i] = attached[i] and body_compliant[b] and body_core_shape[b] >= 0
+        fixed[i] = attached[i] and body_core_shape[b] >= 0

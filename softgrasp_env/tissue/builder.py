@@ -330,9 +330,7 @@ def _single_body_model(
 ) -> TissueModel:
     offsets, members, rest_offset = build_groups(rest_x, mass, partner, tissue.group_size)
     n = rest_x.shape[0]
-    compliant = tissue.material == "compliant"
-    kappa = group_kappa(offsets, members, rest_offset, mass, tissue.modulus, tissue.mass_density) if compliant \
-        else np.zeros(n)  # fmt: skip
+    kappa = group_kappa(offsets, members, rest_offset, mass, tissue.modulus, tissue.mass_density)
     return TissueModel(
         particle_rest_x=np.ascontiguousarray(rest_x, dtype=np.float64),
         particle_rest_q=np.ascontiguousarray(rest_q, dtype=np.float64),
@@ -347,9 +345,7 @@ def _single_body_model(
         group_rest_offset=rest_offset,
         body_particle_offsets=np.array([0, n], dtype=np.int32),
         body_core_shape=np.array([-1], dtype=np.int32),
-        body_stiffness=np.array([tissue.step_stiffness]),
         body_friction=np.array([[tissue.friction_static, tissue.friction_kinetic]]),
-        body_compliant=np.array([compliant]),
         group_kappa=kappa,
         body_max_deviation=np.array([tissue.deviation_limit]),
         body_contact_cone=np.array([tissue.contact_cone]),

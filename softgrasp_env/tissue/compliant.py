@@ -1,12 +1,12 @@
-"""The compliant material: shape matching whose stiffness is a modulus in Pa, solved as the implicit
-step it stands for, the same material at every dt and iteration count (issue 19).
+"""The tissue's material: shape matching whose stiffness is a modulus in Pa, solved as the implicit
+step it stands for, the same material at every dt and iteration count.
 
 Shape matching (Mueller & Chentanez 2011 sec. 4) is the gradient of an energy: a group's fit - its
 centre of mass c and rotation R (shape_matching._fit_group) - minimises
 E = sum_j kappa m_j |x_j - g_j|^2 / 2, g_j = R q_j + c, so dE/dx_j = kappa m_j e_j, e_j = x_j - g_j.
-With kappa = G / (rho l^2) (builder.group_kappa) that is an elastic force in N. The per-step
-material moves each member a fraction k of the way to its goal per step: a spring kappa = k / dt^2,
-a different material at every dt. Here each group's part of the implicit (backward Euler) step,
+With kappa = G / (rho l^2) (builder.group_kappa) that is an elastic force in N. (Moving each
+member a fraction k of the way to its goal per step, as the thesis does, is a spring
+kappa = k / dt^2: a different material at every dt.) Here each group's part of the implicit (backward Euler) step,
 m (x - x*) = -dt^2 dE/dx, is solved by a Newton step per group and pass (the primal form of XPBD,
 Macklin, Mueller & Chentanez 2016), Gauss-Seidel over the groups:
 
@@ -22,13 +22,13 @@ s / (1 + s) a pass, so the world runs in steps short enough that s <= MAX_STEP_S
 (substeps_for; world_substeps also keeps a pad's force on a light core, handed to pybullet a step
 late, from ringing: MAX_COUPLING_FOLD).
 
-An attached particle of a compliant body sits on its core through the solve (thesis 5.1.3, "the
+An attached particle sits on its core through the solve (thesis 5.1.3, "the
 core infinitely heavy inside the solve", taken literally): a group's force on it is an impulse on
 the core at its spot. Under the consistent coupling the core slides inside the solve, and the
-group's Newton step moves it (project_group's core unknown). The per-step material of v1/v2
-instead moved attached particles with their own mass inside the solve and handed the error over
-afterwards (anchors.snap_attached): an impulse m e / dt that can carry at most about m e / dt^2,
-a force that falls with dt^2 (issue 19: pads crushed at 1/120 s and stiff at 1/1000 s).
+group's Newton step moves it (project_group's core unknown). Moving attached particles with their
+own mass inside the solve and handing the error over afterwards (anchors.snap_attached) gives an
+impulse m e / dt that can carry at most about m e / dt^2, a force that falls with dt^2 (pads
+crushed at 1/120 s and stiff at 1/1000 s).
 """
 
 from __future__ import annotations
@@ -64,24 +64,22 @@ box in tissue on every face (K 3,800 N/m) at 1.3 grew a mode from round-off to 3
 
 
 def substeps_for(model: TissueModel, dt: float) -> int:
-    """The fewest steps of dt / n that keep every compliant group's s = kappa (dt / n)^2 at most
-    MAX_STEP_STIFFNESS (1 for the per-step material, whose stiffness is a fraction per step)."""
-    if not model.body_compliant.any() or model.group_kappa.size == 0:
+    """The fewest steps of dt / n that keep every group's s = kappa (dt / n)^2 at most
+    MAX_STEP_STIFFNESS."""
+    if model.group_kappa.size == 0:
         return 1
     kappa = float(model.group_kappa.max())
     return max(1, math.ceil(dt * math.sqrt(kappa / MAX_STEP_STIFFNESS) - 1e-9))
 
 
 def core_stiffness(model: TissueModel) -> np.ndarray:
-    """(B,) each compliant body's stiffness against its core [N/m]: its groups as springs in
+    """(B,) each body's stiffness against its core [N/m]: its groups as springs in
     parallel, sum_i kappa_i m_fix m_free / M over the groups with attached and free members (a
     group of attached members, mass m_fix, and free ones, m_free, is a spring kappa m_fix m_free / M
     between them: project_group's column). 1,310 N/m for a default pad (G 4,000 Pa), against
     G A / extrude = 1,520 N/m for the layer it stands for."""
     out = np.zeros(model.body_count)
     for b in range(model.body_count):
-        if not model.body_compliant[b]:
-            continue
         for i in range(int(model.body_particle_offsets[b]), int(model.body_particle_offsets[b + 1])):
             members = model.group_members[model.group_offsets[i]:model.group_offsets[i + 1]]
             m = model.particle_mass[members]
@@ -91,7 +89,7 @@ def core_stiffness(model: TissueModel) -> np.ndarray:
 
 
 def coupling_substeps(model: TissueModel, core_mass: np.ndarray, dt: float) -> int:
-    """The fewest steps of dt / n that keep every compliant body's K (dt / n)^2 / m_core at most
+    """The fewest steps of dt / n that keep every body's K (dt / n)^2 / m_core at most
     MAX_COUPLING_FOLD; ``core_mass`` (B,) [kg], 0 or inf where a body has no moving core."""
     n = 1
     for k, m in zip(core_stiffness(model), core_mass, strict=True):
@@ -107,16 +105,14 @@ def world_substeps(model: TissueModel, core_mass: np.ndarray, dt: float) -> int:
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
-def compliant_sweep(iterations, rot_iters, body_off, body_compliant, group_kappa, dt, g_off, g_mem, g_pack, frame,
+def compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, frame,
                     attached, fixed, rest_q, rest_moment, xs, xp, qp, group_q, moment, g_u, g_raw, mass,
                     body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
                     imp_lin, imp_ang, coupling_imp):  # fmt: skip
-    """One Gauss-Seidel sweep over the groups of every compliant body (project_group). A group's
+    """One Gauss-Seidel sweep over the groups of every body (project_group). A group's
     centre turns toward quat(R) q_bar by s / (1 + s) a step (the same implicit spring on its
     orientation, Mueller & Chentanez 2011 sec. 4.3's goal), spread over the iterations."""
     for b in range(body_off.shape[0] - 1):
-        if not body_compliant[b]:
-            continue
         cs = body_core_shape[b]
         core = shape_rigid[cs] if cs >= 0 else -1
         m_att = 0.0

@@ -46,29 +46,20 @@ class TissueModel:
     """(B + 1,) int32 particle ranges of each tissue body."""
     body_core_shape: np.ndarray
     """(B,) int32 index of the body's core among the world's collision shapes, -1 for free tissue."""
-    body_stiffness: np.ndarray
-    """(B,) shape-matching stiffness k in (0, 1] per step."""
     body_friction: np.ndarray
     """(B, 2) Coulomb friction coefficients (static, dynamic) of the tissue surface."""
-    body_compliant: np.ndarray | None = None
-    """(B,) bool: the body's shape matching is the compliant material (XPBD, ``group_kappa``) rather
-    than the per-step fraction ``body_stiffness``; None: all False (per-step)."""
-    group_kappa: np.ndarray | None = None
+    group_kappa: np.ndarray
     """(N,) stiffness per unit mass of each group's shape matching, kappa = G / (rho l^2) [1/s^2]
-    (compliant bodies; see builder.group_kappa); None: all 0 (per-step bodies)."""
+    (builder.group_kappa; compliant.py solves it)."""
     body_max_deviation: np.ndarray | None = None
     """(B,) the strain limit of each body [m]: the farthest a free particle may be from the spot its
-    core carries it to (compliant bodies; anchors.limit_deviation); None: all inf (none)."""
+    core carries it to (anchors.limit_deviation); None: all inf (none)."""
     body_contact_cone: np.ndarray | None = None
     """(B,) bool: besides its patch's bound on what the patch transmits, each contact's friction is
     bounded by its own cone, mu_s lambda_n (friction.friction_patches; TissueConfig.contact_cone);
     None: all False (the patch bound alone, the default law)."""
 
     def __post_init__(self) -> None:
-        if self.body_compliant is None:
-            object.__setattr__(self, "body_compliant", np.zeros(self.body_core_shape.shape[0], dtype=np.bool_))
-        if self.group_kappa is None:
-            object.__setattr__(self, "group_kappa", np.zeros(self.particle_mass.shape[0]))
         if self.body_max_deviation is None:
             object.__setattr__(self, "body_max_deviation", np.full(self.body_core_shape.shape[0], np.inf))
         if self.body_contact_cone is None:
@@ -128,9 +119,7 @@ def concatenate(models: list[TissueModel]) -> TissueModel:
         group_rest_offset=cat("group_rest_offset"),
         body_particle_offsets=np.concatenate(body_offsets).astype(np.int32),
         body_core_shape=cat("body_core_shape"),
-        body_stiffness=cat("body_stiffness"),
         body_friction=cat("body_friction"),
-        body_compliant=cat("body_compliant"),
         group_kappa=cat("group_kappa"),
         body_max_deviation=cat("body_max_deviation"),
         body_contact_cone=cat("body_contact_cone"),

@@ -7,12 +7,13 @@ A_j = (m_j / 5) R_j diag(a^2, b^2, c^2) R_bar_j^T (eq. 9); its rotation R is ext
 Mueller et al. 2016 ("A Robust Method to Extract the Rotational Part of Deformations"), warm-started
 from the group's last rotation, and every member moves toward its goal g_j = R q_j + c (thesis
 eq. 4.8). Only the centre particle turns, toward quat(R) q_bar_i (the paper's goal orientation,
-sec. 4.3). Stiffness per iteration k' = 1 - (1 - k)^(1/n) (Mueller et al. 2007 sec. 3.3).
+sec. 4.3). How far the members move toward their goals is the material's (compliant.py: the
+implicit step of a shear modulus in Pa); this module holds the fit and the orientations.
 
-The projection exerts a torque (A carries the particles' own moments) that the goal orientation
-takes up nowhere: a freely spinning block lost 23 % of its angular momentum in 1,000 steps. So
-each group's corrections of a step are made torque-free (_shape_match_group, balance_torques),
-and the particles' spin is carried as angular momentum (integrate.update_velocities). (An earlier
+The centre's turn changes its spin with nothing to balance it: a freely spinning block lost 23 %
+of its angular momentum in 1,000 steps. So each group is turned back by that spin after the step's
+last sweep (balance_torques), and the particles' spin is carried as angular momentum
+(integrate.update_velocities). (An earlier
 'reaction' rule turned every member by the spin that takes up the torque: it conserved angular
 momentum only to first order, and with spinning particles and no damping its energy grew 10-fold
 in 1,000 steps; it was removed.)
@@ -110,13 +111,13 @@ def _spin_gained(i, q_pred, qp, inertia, spin_kick):
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
-def group_frames(g_off, g_mem, mass, xs, frame, torque):
+def group_frames(g_off, g_mem, mass, xs, frame):
     """What each group's torque balance needs from the step's start positions xs, once per step
     (they do not change over the iterations): frame[i] = [cs (3), I^-1 (6: xx, xy, xz, yy, yz,
     zz), M], the group's centre of mass at the start, the inverse of its inertia about it (0 if
-    singular: a degenerate group gets no balance) and its mass. Clears the groups' torque sums."""
+    singular: a degenerate group gets no balance) and its mass."""
     for i in range(g_off.shape[0] - 1):
-        # unsigned indices: no negative-index wraparound per access (as in _shape_match_group)
+        # unsigned indices: no negative-index wraparound per access
         i = np.uint64(i)
         start = np.uint64(g_off[i])
         end = np.uint64(g_off[i + 1])
@@ -172,16 +173,16 @@ def group_frames(g_off, g_mem, mass, xs, frame, torque):
         frame[i, 7] = inv * c12
         frame[i, 8] = inv * c22
         frame[i, 9] = msum
-        torque[i, 0] = 0.0
-        torque[i, 1] = 0.0
-        torque[i, 2] = 0.0
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _fit_group(i, rot_iters, g_off, g_mem, g_pack, xp, group_q, moment):
-    """Group i's rigid fit to the predicted positions (Mueller & Chentanez 2011 eq. 10, see
-    _shape_match_group): its centre of mass c and rotation R = rot(A), warm-started from and
-    stored in ``group_q[i]``. Returns (quat(R), c). Shared by both materials."""
+    """Group i's rigid fit to the predicted positions (Mueller & Chentanez 2011 eq. 10,
+    A = sum_j (A_j + m_j x_j x_bar_j^T) - M c c_bar^T, written with rest offsets
+    q_j = x_bar_j - c_bar, sum_j m_j q_j = 0, as c = sum_j (m_j / M) x_j and
+    A = sum_j (A_j + x_j (m_j q_j)^T): no division and no mass product per member): its centre of
+    mass c and rotation R = rot(A) (Mueller et al. 2016), warm-started from and stored in
+    ``group_q[i]``. Returns (quat(R), c)."""
     start = np.uint64(g_off[i])
     end = np.uint64(g_off[i + 1])
     cx = 0.0
@@ -224,93 +225,15 @@ def _fit_group(i, rot_iters, g_off, g_mem, g_pack, xp, group_q, moment):
     return qr, cx, cy, cz
 
 
-@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def _shape_match_group(i, k_iter, rot_iters, g_off, g_mem, g_pack, frame, torque, xs, xp, group_q, moment):
-    """Project implicit group i (centred on particle i) toward its goal shape, on precomputed rest
-    data (see group_pack), without a net torque over the step.
-
-    Mueller & Chentanez 2011 eq. (10): A = sum_j (A_j + m_j x_j x_bar_j^T) - M c c_bar^T, written
-    with rest offsets q_j = x_bar_j - c_bar (sum_j m_j q_j = 0) as c = sum_j (m_j / M) x_j and
-    A = sum_j (A_j + x_j (m_j q_j)^T), so no division and no mass product per member. R = rot(A)
-    (Mueller et al. 2016), goals g_j = R q_j + c (eq. 4.8 of the thesis), corrections
-    dx_j = k (g_j - x_j); sum_j m_j dx_j = 0, so linear momentum is kept exactly. The centre turns
-    toward quat(R) q_bar_i (_turn_centre, called by the sweep with the R returned).
-
-    Internal forces must not turn a body, but these corrections do: A carries the particles' own
-    moments, so R is not the rotation that fits the positions alone, and the centre's turn changes
-    its spin with nothing to balance it. A free block lost 23 % of its angular momentum in 1,000
-    steps, and a block resting on the ground kept turning. So the step's corrections of each group
-    are made torque-free: its torque T = sum_j m_j r_j x dx_j (r_j = xs_j - cs about the group's
-    centre of mass at the step's start) is summed over the iterations, and after the last one
-    balance_torques adds the centre's spin change and turns the group back. Position-based dynamics differences positions against the step's
-    start, v = (x - xs) / dt, so the angular momentum a step leaves is sum m xs x v, and torque-free
-    about xs is what conserves it."""
-    i = np.uint64(i)
-    start = np.uint64(g_off[i])
-    end = np.uint64(g_off[i + 1])
-    qr, cx, cy, cz = _fit_group(i, rot_iters, g_off, g_mem, g_pack, xp, group_q, moment)
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = qmat(qr)
-    csx, csy, csz = frame[i, 0], frame[i, 1], frame[i, 2]
-    tx = ty = tz = 0.0  # sum_j (m_j / M) r_j x dx_j
-    for e in range(start, end):
-        j = np.uint64(g_mem[e])
-        q0 = g_pack[e, 4]
-        q1 = g_pack[e, 5]
-        q2 = g_pack[e, 6]
-        dx = k_iter * (r00 * q0 + r01 * q1 + r02 * q2 + cx - xp[j, 0])
-        dy = k_iter * (r10 * q0 + r11 * q1 + r12 * q2 + cy - xp[j, 1])
-        dz = k_iter * (r20 * q0 + r21 * q1 + r22 * q2 + cz - xp[j, 2])
-        xp[j, 0] += dx
-        xp[j, 1] += dy
-        xp[j, 2] += dz
-        w = g_pack[e, 0]
-        rx = xs[j, 0] - csx
-        ry = xs[j, 1] - csy
-        rz = xs[j, 2] - csz
-        tx += w * (ry * dz - rz * dy)
-        ty += w * (rz * dx - rx * dz)
-        tz += w * (rx * dy - ry * dx)
-    msum = frame[i, 9]
-    tx = torque[i, 0] + msum * tx
-    ty = torque[i, 1] + msum * ty
-    tz = torque[i, 2] + msum * tz
-    torque[i, 0] = tx
-    torque[i, 1] = ty
-    torque[i, 2] = tz
-    return qr
-
-
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
-def shape_match_sweep(iterations, rot_iters, body_off, body_stiffness, body_compliant, g_off, g_mem, g_pack, frame, torque,
-                      attached, rest_q, rest_moment, xs, xp, qp, group_q, moment):  # fmt: skip
-    """One Gauss-Seidel sweep over the implicit groups of every per-step body (the compliant ones:
-    compliant.compliant_sweep), body by body. Stiffness per iteration
-    k' = 1 - (1 - k)^(1/n) makes the per-step stiffness independent of the iteration count (Mueller
-    et al. 2007 sec. 3.3). A function of its own so the sweep can be timed alone; as fast as the
-    same loop written inside _step (measured)."""
-    for b in range(body_off.shape[0] - 1):
-        if body_compliant[b]:
-            continue  # compliant.compliant_sweep
-        k_it = 1.0 - (1.0 - body_stiffness[b]) ** (1.0 / iterations)
-        for i in range(body_off[b], body_off[b + 1]):
-            qr = _shape_match_group(i, k_it, rot_iters, g_off, g_mem, g_pack, frame, torque, xs, xp, group_q, moment)
-            if not attached[i]:
-                # An attached centre is tied to its core and keeps the core's orientation (the snap
-                # sets it so after the solve anyway); only the tissue's own particles turn.
-                _turn_centre(i, qr, k_it, rest_q, qp, rest_moment, moment)
-
-
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
-def balance_torques(g_off, g_mem, frame, torque, attached, fixed, inertia, xs, xp, qp, q_pred, spin_kick):
+def balance_torques(g_off, g_mem, frame, attached, fixed, inertia, xs, xp, qp, q_pred, spin_kick):
     """After the step's last sweep: give each group's centre the spin of its turns (_spin_gained)
-    and turn each group back by dth = I^-1 T, T its summed torque plus that spin (I its inertia
-    about cs, frame): x_j -= dth x r_j, r_j = xs_j - cs. Then every group's corrections of the step
-    together exert no torque (_shape_match_group). One turn by the summed torque is the sum of the
-    turns of each iteration: the lever arms r_j do not change over the step. (In the sweep itself,
-    this branch made every sweep 50 % slower.) A group with a member held by its core (``fixed``,
-    the compliant material) is left: the core takes its torque through that member; the compliant
-    groups' own passes are free of torque already (compliant._apply_deformation), so for them
-    only the centre's spin is balanced here."""
+    and turn the group back by dth = I^-1 T, T that spin (I the group's inertia about cs, frame):
+    x_j -= dth x r_j, r_j = xs_j - cs. The groups' own passes are free of torque already
+    (compliant._apply_deformation); the centre's turn is not, and nothing else balances it. One
+    turn by the step's summed spin is the sum of the turns of each iteration: the lever arms r_j do
+    not change over the step. A group with a member held by its core (``fixed``) is left: the core
+    takes its torque through that member."""
     for i in range(g_off.shape[0] - 1):
         i = np.uint64(i)  # unsigned indices: no negative-index wraparound per access
         held = False
@@ -318,7 +241,7 @@ def balance_torques(g_off, g_mem, frame, torque, attached, fixed, inertia, xs, x
             held = held or fixed[np.uint64(g_mem[e])]
         if held:
             continue
-        tx, ty, tz = torque[i, 0], torque[i, 1], torque[i, 2]
+        tx = ty = tz = 0.0
         if not attached[i]:
             kx, ky, kz = _spin_gained(i, q_pred, qp, inertia, spin_kick)
             tx += kx

@@ -9,22 +9,21 @@ Alg. 1), reads as a recipe (see :func:`_step`):
         shape-match every implicit group          # Mueller & Chentanez 2011 sec. 4
         project contacts (two-way, mass-weighted) # XPBD rigid bodies, Mueller et al. 2020 sec. 3.3
         friction per contact patch, with anchors  # position level, Mueller et al. 2020 sec. 3.5
-        [compliant material: strain limit]        # a particle within reach of its core, Provot 1995
+        strain limit                              # a particle within reach of its core, Provot 1995
         [consistent coupling: project anchors]    # generalised inverse mass of the core
     couple: anchor error -> impulse on the core, snap attached particles back   # thesis 5.1.3
     update velocities from positions, angular velocities from q* q^-1 (short arc)
     kinetic friction's velocity half; keep the friction anchors for the next step
 
-The compliant material (compliant.py, the default since v3) changes three lines: the members
-attached to a core are held by it through the solve (the thesis coupling snaps them onto their
-cores' spots before every sweep, not only after the last); the group solve is a Newton step of the
-implicit step with a shear modulus in Pa; and after friction a strain limit keeps every particle
-within reach of its core (anchors.limit_deviation). Where the material is too stiff for dt, the
-world runs in shorter steps (compliant.world_substeps).
+The material (compliant.py) is a shear modulus in Pa: the members attached to a core are held by
+it through the solve (the thesis coupling snaps them onto their cores' spots before every sweep,
+not only after the last); the group solve is a Newton step of the implicit step; and after
+friction a strain limit keeps every particle within reach of its core (anchors.limit_deviation).
+Where the material is too stiff for dt, the world runs in shorter steps (compliant.world_substeps).
 
 Each line is one module's kernel: rigid.py (rigid bodies as the tissue sees them, their prediction),
 integrate.py (particle prediction and velocity update), contacts.py (collection and projection),
-shape_matching.py (the per-step group solve), compliant.py (the compliant one),
+shape_matching.py (the groups' fit and orientations), compliant.py (the group solve),
 friction.py, anchors.py (the attachment to the core). This module holds only the recipe and its
 Python front end, which owns the scratch buffers.
 
@@ -41,7 +40,7 @@ from typing import NamedTuple
 import numba as nb
 import numpy as np
 
-from ..config import COMPLIANT_DAMPING, STEP_DAMPING, SimConfig
+from ..config import COMPLIANT_DAMPING, SimConfig
 from .anchors import (
     COUPLING_CONSISTENT,
     COUPLING_THESIS,
@@ -63,7 +62,7 @@ from .friction import friction_pairs, friction_patches, friction_velocity_pass, 
 from .integrate import predict_particles, update_velocities
 from .model import TissueModel
 from .rigid import Colliders, predict_rigid
-from .shape_matching import balance_torques, group_frames, group_pack, rest_moments, shape_match_sweep
+from .shape_matching import balance_torques, group_frames, group_pack, rest_moments
 from .state import TissueState
 
 
@@ -118,7 +117,7 @@ class LastContacts(NamedTuple):
 # float64 scratch, by size: per particle, per contact, per pair, per shape, per patch
 _F_SCRATCH = (
     ("xp", "n", 3), ("qp", "n", 4), ("q_pred", "n", 4), ("vd", "n", 3), ("wd", "n", 3), ("moment", "n", 9),
-    ("spin_kick", "n", 3), ("g_frame", "n", 10), ("g_torque", "n", 3),
+    ("spin_kick", "n", 3), ("g_frame", "n", 10),
     ("c_lambda", "contacts", 0), ("c_normal", "contacts", 3), ("c_rn", "contacts", 0), ("c_friction", "contacts", 3),
     ("c_friction_goal", "contacts", 3), ("c_anchor", "contacts", 3), ("c_point", "contacts", 3),
     ("pair_lambda", "pairs", 0), ("pair_lambda_t", "pairs", 0), ("pair_normal", "pairs", 3),
@@ -133,29 +132,29 @@ _B_SCRATCH = (("c_inner", "contacts", 0), ("patch_slide", "patches", 0), ("patch
 # the model's arrays, copied in once (TissueModel is frozen; the solver reads it at construction,
 # as it does for the rest moments and group data it derives from it)
 _F_MODEL = (("rest_x", "n", 3), ("rest_q", "n", 4), ("rest_moment", "n", 9), ("inertia", "n", 3), ("radii", "n", 3),
-            ("mass", "n", 0), ("inv_mass", "n", 0), ("g_pack", "members", 8), ("body_stiffness", "bodies", 0),
+            ("mass", "n", 0), ("inv_mass", "n", 0), ("g_pack", "members", 8),
             ("body_friction", "bodies", 2), ("group_kappa", "n", 0), ("body_max_deviation", "bodies", 0))  # fmt: skip
 _I_MODEL = (("p_body", "n", 0), ("g_off", "groups", 0), ("g_mem", "members", 0), ("body_off", "body_offsets", 0),
             ("body_core_shape", "bodies", 0))  # fmt: skip
-_B_MODEL = (("attached", "n", 0), ("body_compliant", "bodies", 0), ("body_contact_cone", "bodies", 0))
+_B_MODEL = (("attached", "n", 0), ("body_contact_cone", "bodies", 0))
 _F_PACK = _F_SCRATCH + _F_MODEL
 _I_PACK = _I_SCRATCH + _I_MODEL
 _B_PACK = _B_SCRATCH + _B_MODEL
 _PACK = _F_PACK + _I_PACK + _B_PACK
 # their rows in `layout` (numba reads module-level ints as compile-time constants)
-(_XP, _QP, _Q_PRED, _VD, _WD, _MOMENT, _SPIN_KICK, _G_FRAME, _G_TORQUE, _C_LAMBDA, _C_NORMAL, _C_RN, _C_FRICTION,
+(_XP, _QP, _Q_PRED, _VD, _WD, _MOMENT, _SPIN_KICK, _G_FRAME, _C_LAMBDA, _C_NORMAL, _C_RN, _C_FRICTION,
  _C_FRICTION_GOAL, _C_ANCHOR, _C_POINT, _PAIR_LAMBDA, _PAIR_LAMBDA_T, _PAIR_NORMAL, _SHAPE_POSE, _PATCH,
  _G_U, _G_RAW,
- _REST_X, _REST_Q, _REST_MOMENT, _INERTIA, _RADII, _MASS, _INV_MASS, _G_PACK, _BODY_STIFFNESS, _BODY_FRICTION,
+ _REST_X, _REST_Q, _REST_MOMENT, _INERTIA, _RADII, _MASS, _INV_MASS, _G_PACK, _BODY_FRICTION,
  _GROUP_KAPPA, _BODY_MAX_DEVIATION,
  _C_PARTICLE, _C_SHAPE, _C_PATCH, _PAIR_I, _PAIR_J,
  _P_BODY, _G_OFF, _G_MEM, _BODY_OFF, _BODY_CORE_SHAPE,
  _C_INNER, _PATCH_SLIDE, _PATCH_CHANGE, _C_SLIP, _FIXED,
- _ATTACHED, _BODY_COMPLIANT, _BODY_CONTACT_CONE) = range(len(_PACK))  # fmt: skip
+ _ATTACHED, _BODY_CONTACT_CONE) = range(len(_PACK))  # fmt: skip
 assert [name for name, _, _ in _PACK][_ATTACHED] == "attached" and _PACK[_P_BODY][0] == "p_body"
 assert _PACK[_G_RAW][0] == "g_raw" and _PACK[_GROUP_KAPPA][0] == "group_kappa"
 assert _PACK[_BODY_MAX_DEVIATION][0] == "body_max_deviation"
-assert _PACK[_PAIR_J][0] == "pair_j" and _PACK[_FIXED][0] == "fixed" and _PACK[_BODY_COMPLIANT][0] == "body_compliant"
+assert _PACK[_PAIR_J][0] == "pair_j" and _PACK[_FIXED][0] == "fixed" and _PACK[_G_FRAME][0] == "g_frame"
 assert _PACK[_BODY_CONTACT_CONE][0] == "body_contact_cone"
 
 
@@ -180,21 +179,18 @@ def _view1(buf, layout, k):
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
-def _sweep(it, iterations, rot_iters, body_off, body_stiffness, body_compliant, group_kappa, dt, g_off, g_mem, g_pack,
-           g_frame, g_torque, attached, fixed, rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q,
-           moment, g_u, g_raw, mass, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
+def _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
+           rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
            rig_axis, rig_move, imp_lin, imp_ang, coupling_imp):  # fmt: skip
-    """One shape-matching sweep over both materials' bodies, and after the last one each group's
-    torque of the step turned back."""
-    shape_match_sweep(iterations, rot_iters, body_off, body_stiffness, body_compliant, g_off, g_mem, g_pack, g_frame,
-                      g_torque, attached, rest_q, rest_moment, x, xp, qp, group_q, moment)  # fmt: skip
-    compliant_sweep(iterations, rot_iters, body_off, body_compliant, group_kappa, dt, g_off, g_mem, g_pack, g_frame,
+    """One shape-matching sweep over every body's groups, and after the last one each group's
+    spin of the step turned back."""
+    compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame,
                     attached, fixed, rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass,
                     body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
                     imp_lin, imp_ang, coupling_imp)  # fmt: skip
     if it == iterations - 1:
-        # internal forces exert no torque: each group's corrections of the step, turned back
-        balance_torques(g_off, g_mem, g_frame, g_torque, attached, fixed, inertia, x, xp, qp, q_pred, spin_kick)
+        # internal forces exert no torque: each group's spin of the step, turned back
+        balance_torques(g_off, g_mem, g_frame, attached, fixed, inertia, x, xp, qp, q_pred, spin_kick)
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -217,17 +213,17 @@ def _step(
     rest_x, rest_q = _view(f_pack, layout, _REST_X), _view(f_pack, layout, _REST_Q)
     rest_moment, inertia = _view(f_pack, layout, _REST_MOMENT), _view(f_pack, layout, _INERTIA)
     radii, mass, inv_mass = _view(f_pack, layout, _RADII), _view1(f_pack, layout, _MASS), _view1(f_pack, layout, _INV_MASS)
-    g_pack, body_stiffness = _view(f_pack, layout, _G_PACK), _view1(f_pack, layout, _BODY_STIFFNESS)
+    g_pack = _view(f_pack, layout, _G_PACK)
     body_friction, group_kappa = _view(f_pack, layout, _BODY_FRICTION), _view1(f_pack, layout, _GROUP_KAPPA)
     body_max_deviation = _view1(f_pack, layout, _BODY_MAX_DEVIATION)
     p_body, g_off, g_mem = _view1(i_pack, layout, _P_BODY), _view1(i_pack, layout, _G_OFF), _view1(i_pack, layout, _G_MEM)
     body_off, body_core_shape = _view1(i_pack, layout, _BODY_OFF), _view1(i_pack, layout, _BODY_CORE_SHAPE)
-    attached, body_compliant = _view1(b_pack, layout, _ATTACHED), _view1(b_pack, layout, _BODY_COMPLIANT)
+    attached = _view1(b_pack, layout, _ATTACHED)
     body_contact_cone = _view1(b_pack, layout, _BODY_CONTACT_CONE)
     xp, qp, q_pred = _view(f_pack, layout, _XP), _view(f_pack, layout, _QP), _view(f_pack, layout, _Q_PRED)
     vd, wd, moment = _view(f_pack, layout, _VD), _view(f_pack, layout, _WD), _view(f_pack, layout, _MOMENT)
     spin_kick, g_frame = _view(f_pack, layout, _SPIN_KICK), _view(f_pack, layout, _G_FRAME)
-    g_torque, c_lambda = _view(f_pack, layout, _G_TORQUE), _view1(f_pack, layout, _C_LAMBDA)
+    c_lambda = _view1(f_pack, layout, _C_LAMBDA)
     c_normal, c_rn = _view(f_pack, layout, _C_NORMAL), _view1(f_pack, layout, _C_RN)
     c_friction, c_friction_goal = _view(f_pack, layout, _C_FRICTION), _view(f_pack, layout, _C_FRICTION_GOAL)
     c_anchor, c_point = _view(f_pack, layout, _C_ANCHOR), _view(f_pack, layout, _C_POINT)
@@ -240,9 +236,6 @@ def _step(
     c_inner, patch_slide = _view1(b_pack, layout, _C_INNER), _view1(b_pack, layout, _PATCH_SLIDE)
     patch_change, fixed = _view1(b_pack, layout, _PATCH_CHANGE), _view1(b_pack, layout, _FIXED)
     c_slip = _view1(b_pack, layout, _C_SLIP)
-    compliant = False
-    for b in range(body_compliant.shape[0]):
-        compliant = compliant or body_compliant[b]
     # --- predict rigid bodies: semi-implicit Euler, as pybullet will integrate them (thesis 5.2.2)
     predict_rigid(rig_x0, rig_q0, rig_v, rig_w, rig_gravity, rig_move, rig_inv_mass, rig_force, gx, gy, gz, dt, rig_x,
                   rig_q, imp_lin, imp_ang, coupling_imp)  # fmt: skip
@@ -251,7 +244,7 @@ def _step(
     #     q* = [w_hat sin(|w| dt / 2), cos(|w| dt / 2)] q
     predict_particles(x, v, q, omega, group_q, mass, inertia, body_off, rest_moment, gx, gy, gz, damping, dt, xp, qp,
                       q_pred, vd, wd, moment)  # fmt: skip
-    group_frames(g_off, g_mem, mass, x, g_frame, g_torque)  # the groups' start-of-step torque balance data
+    group_frames(g_off, g_mem, mass, x, g_frame)  # the groups' start-of-step torque balance data
     # --- contact candidates, against predicted rigid poses
     nc = collect_contacts(xp, x, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid,
                           shape_local_x, shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner,
@@ -266,23 +259,20 @@ def _step(
     ns = shape_kind.shape[0]
     load_anchors(nc, c_particle, c_shape, c_inner, x, p_body, shape_rigid, shape_local_x, shape_local_q, rig_x0, rig_q0,
                  anchor_shape, anchor_x, anchor_slide, ns, c_anchor, c_patch, patch_slide, patch_change)  # fmt: skip
-    if compliant:
-        # The compliant material (compliant.py): the members attached to a core are held by it
-        # through the solve (anchors.mark_fixed), and each group's displacement field starts at zero.
-        mark_fixed(attached, p_body, body_compliant, body_core_shape, fixed)
-        g_u[...] = 0.0
-    # --- Gauss-Seidel iterations. Stiffness per iteration k' = 1 - (1 - k)^(1/n) makes the
-    #     per-step stiffness independent of the iteration count (Mueller et al. 2007 sec. 3.3).
+    # The material (compliant.py): the members attached to a core are held by it through the solve
+    # (anchors.mark_fixed), and each group's displacement field starts at zero.
+    mark_fixed(attached, p_body, body_core_shape, fixed)
+    g_u[...] = 0.0
+    # --- Gauss-Seidel iterations
     for it in range(iterations):
-        if compliant and coupling == COUPLING_THESIS:
+        if coupling == COUPLING_THESIS:
             # attached particles onto their cores' predicted spots before the groups take them as
             # held there: first their prediction error, then whatever a contact moved them by, the
             # core taking it as an impulse (the thesis coupling's snap, 5.1.3, each iteration)
             snap_attached(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x, rig_q,
                           imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
-        _sweep(it, iterations, rot_iters, body_off, body_stiffness, body_compliant, group_kappa, dt, g_off, g_mem,
-               g_pack, g_frame, g_torque, attached, fixed, rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick,
-               group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass,
+        _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
+               rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass,
                rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp)  # fmt: skip
         project_shape_contacts(nc, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass,
                                shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
@@ -298,9 +288,8 @@ def _step(
                          patch, patch_slide, patch_change, it == iterations - 1, body_contact_cone, c_slip)  # fmt: skip
         friction_pairs(npairs, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, x, xp, inv_mass, p_body,
                        body_friction)  # fmt: skip
-        if compliant:
-            # the strain limit, after friction: what a snagged particle's friction gives way to
-            limit_deviation(rest_x, inv_mass, attached, p_body, body_core_shape, body_max_deviation, shape_rigid, xp,
+        # the strain limit, after friction: what a snagged particle's friction gives way to
+        limit_deviation(rest_x, inv_mass, attached, p_body, body_core_shape, body_max_deviation, shape_rigid, xp,
                             rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
         if coupling == COUPLING_CONSISTENT:
             project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q,
@@ -327,10 +316,10 @@ def _step(
 
 def damping_of(model: TissueModel, sim: SimConfig) -> float:
     """The deformation damping rate [1/s] of ``model``'s tissue under ``sim``: ``sim.damping``, or
-    its material's default (config.COMPLIANT_DAMPING / STEP_DAMPING)."""
+    the material's default, config.COMPLIANT_DAMPING."""
     if sim.damping is not None:
         return sim.damping
-    return COMPLIANT_DAMPING if model.body_compliant.any() else STEP_DAMPING
+    return COMPLIANT_DAMPING
 
 
 class TissueSolver:
@@ -344,11 +333,11 @@ class TissueSolver:
         model_arrays = {
             "rest_x": model.particle_rest_x, "rest_q": model.particle_rest_q, "rest_moment": rest_moments(model),
             "inertia": model.particle_inertia_local(), "radii": model.particle_radii, "mass": model.particle_mass,
-            "inv_mass": model.particle_inv_mass, "g_pack": group_pack(model), "body_stiffness": model.body_stiffness,
+            "inv_mass": model.particle_inv_mass, "g_pack": group_pack(model),
             "body_friction": model.body_friction, "p_body": model.particle_body, "g_off": model.group_offsets,
             "g_mem": model.group_members, "body_off": model.body_particle_offsets,
             "body_core_shape": model.body_core_shape, "attached": model.particle_attached,
-            "body_compliant": model.body_compliant, "group_kappa": model.group_kappa,
+            "group_kappa": model.group_kappa,
             "body_max_deviation": model.body_max_deviation, "body_contact_cone": model.body_contact_cone,
         }  # fmt: skip
         self._sizes = {"n": n, "contacts": 4 * n + 16, "pairs": 4 * n + 16, "shapes": 0, "patches": 0,
