@@ -55,8 +55,8 @@ class SoftGraspEnv(gym.Env):
     """Two fingers pick up a cylinder and hold it while the arm carries it: soft fingers, each a
     rigid core wrapped in oriented-particle tissue (``SoftGrasp-v3``), or the same cores touching
     the cylinder through pybullet's rigid contacts (``SoftGraspRigid-v3``; with the torsional
-    friction of the tissue's contact patch, ``SoftGraspRigidTorsion-v3``). The v2 / v1 ids keep
-    the arm and carry test their published results were made with (Version history).
+    friction of the tissue's contact patch, ``SoftGraspRigidTorsion-v3``). Older versions live in
+    the release that last registered them (Version history).
 
     ## Description
     A gripper hangs above a cylinder (radius 3 cm, height 10 cm, 0.1 kg) standing on the ground.
@@ -80,20 +80,18 @@ class SoftGraspEnv(gym.Env):
     | index | meaning | scaling |
     |---|---|---|
     | 0, 1, 2 | palm velocity x, y, z (world frame; ignored during the carry test) | ``a * gripper_speed`` m/s (0.15 at full action; the vector capped at that speed), reached with the arm's acceleration limit ``arm_acceleration`` |
-    | 3 | finger closing | target travel ``(a + 1) / 2 * travel`` from fully open: -1 fully open, +1 closed to the stop, where the pads meet (v1/v2: the cores' faces, ``finger_max_opening``); the force limit sets the squeeze. With ``finger_action="force"``: the squeeze itself, ``(a + 1) / 2 * finger_force`` N, the fingers closing until they meet resistance (they never open) |
+    | 3 | finger closing | target travel ``(a + 1) / 2 * travel`` from fully open: -1 fully open, +1 closed to the stop, where the pads meet; the force limit sets the squeeze. With ``finger_action="force"``: the squeeze itself, ``(a + 1) / 2 * finger_force`` N, the fingers closing until they meet resistance (they never open) |
 
     The arm brakes before the workspace's walls (x, y within ±15 cm of the origin, fingertip
     height between just above the ground and 20 cm) and waits for a palm that is blocked 2 cm
     behind it. Peak palm acceleration under any action sequence, measured at every physics step:
-    1.5 m/s^2 (at most 2, tests/scene/test_gripper.py). With ``arm="jump"`` (v1/v2) the action
-    moves the arm's target by ``a * gripper_speed / control_frequency`` m instead, and the palm's
-    constraint chases it (86 m/s^2 at each control step at 1/240 s).
+    1.5 m/s^2 (at most 2, tests/scene/test_gripper.py).
     Out-of-range actions are clipped to [-1, 1] and ``info["action_clipped"]`` says so; a NaN/inf
     action or one of the wrong shape raises ``ValueError``, one that is not real numbers
     ``TypeError``.
 
     ## Observation space
-    ``Box(low, high, (24,), float32)`` (23 without the carry test: the v1 ids; the grip ids, with
+    ``Box(low, high, (24,), float32)`` (23 without the carry test, the Easy ids; the grip ids, with
     ``observe_object=False``, leave out the cylinder's rows 7-18 and 21 and add their taxels: 171),
     SI units, world frame (z up); ``env.obs_names`` names the entries, ``softgrasp_env.observation.obs_slice``
     finds a group. The bounds are finite where they hold whatever happens - the cylinder axis in
@@ -115,7 +113,7 @@ class SoftGraspEnv(gym.Env):
     | 23 | time | time since reset [s] (only with the carry test, which starts at a fixed time) |
     | then | tactile_<left/right>_r<row>_c<col>_<channel> | only with ``tactile=(rows, cols)``: each pad's taxels over its core's inner face, row 0 at the top, columns from -y to +y, five channels per taxel - pressure, traction_y, traction_z [Pa] and the tissue's shear_y, shear_z [m] (0 for rigid pads; core frame); ``softgrasp_env.observation.tactile_view`` gives the (2, rows, cols, 5) grid; unbounded |
 
-    The forces are reported, not capped: the arm (40 N; 200 N on v1/v2) can press a finger onto
+    The forces are reported, not capped: the arm (40 N) can press a finger onto
     the cylinder far harder than the motors squeeze.
 
     ## Rewards
@@ -147,7 +145,7 @@ class SoftGraspEnv(gym.Env):
     - ``info["is_success"]``: ``info["held"]`` - lifted ≥ ``success_height``, both fingers pressing
       (≥ 0.05 N each), tilted no more than ``max_tilt`` - and, with the carry test, the carry over
       (``info["carrying"]`` while it runs) with the cylinder held at every env step of it and its
-      in-hand slide at most ``carry_slide_limit`` (5 mm; v1/v2: held at the end only). The
+      in-hand slide at most ``carry_slide_limit`` (5 mm). The
       grip-force task (``squeeze_factor``, 2 on the grip ids) also needs the carry's mean squeeze
       ``info["carry_squeeze"]`` at most that many times ``info["least_squeeze"]``, the least force
       per finger that holds this cylinder through this carry: Coulomb, ``m max|a - g| / (2 mu_s)``
@@ -169,7 +167,12 @@ class SoftGraspEnv(gym.Env):
     <arguments>
 
     Deprecated spellings that keep working with a ``DeprecationWarning``: ``soft=True/False``
-    (``fingers="tissue"/"rigid"``), ``tissue_density=`` (``particle_density=``).
+    (``fingers="tissue"/"rigid"``), ``tissue_density=`` (``particle_density=``), and the only
+    choice left of an argument removed after 0.6.0 (``arm="smooth"``,
+    ``tissue_material="compliant"``, ``carry_direction="any"``). Its retired choices
+    (``arm="jump"``, ``tissue_material="per_step"``, ``carry_direction="across"``,
+    ``carry_amplitude=``, ``carry_slide_limit=None``) are a ``ValueError`` naming release 0.6.0,
+    which has them.
 
     ## Rendering
     ``render_mode="rgb_array"`` draws the scene with pybullet's CPU renderer in a viewer server of
@@ -190,20 +193,18 @@ class SoftGraspEnv(gym.Env):
     step 99).
 
     ## Version history
-    - v3 (issue 19): the smooth arm and velocity actions (``arm="smooth"``), 40 N; the carry test
+    - v3: the smooth arm and velocity actions, 40 N; the carry test
       drawn per episode over a band and success held through it; the tissue's mu_k = mu_s (one
       friction law for every kind); the torsional rigid peer. Since 0.5.0 the tissue is the
-      compliant material (``tissue_material="compliant"``: a shear modulus in Pa, the pad
-      compressing ~4.4 mm under 3 N at every dt, a 2 cm strain limit) and the peer's lever is its
-      patch's 16.7 mm; 0.4.0's v3 (the per-step material, 17.7 mm) replays bit for bit with
-      ``tissue_material="per_step"`` (the peer with ``fingers=TorsionalRigidConfig(spinning_friction=
-      0.0177)``). v1/v2 keep
-      ``arm="jump"``, 200 N, the 1 cm / 2 Hz carry with success at its end, mu_k 0.7 and the
-      per-step material, and replay bit for bit.
-    - v2: the carry test (the soft, rigid and sparse ids; the observation gains the time); the v1
-      ids stay unchanged because their published baselines reproduce on them.
+      compliant material (a shear modulus in Pa, the pad compressing ~4.4 mm under 3 N at every dt,
+      a 2 cm strain limit) and the peer's lever is its patch's 16.7 mm; 0.4.0's v3 (the per-step
+      material, 17.7 mm) replays bit for bit in release 0.6.0.
+    - v2: the carry test (the soft, rigid and sparse ids; the observation gains the time); the jump
+      arm (the action moved a target the palm's constraint chased), 200 N, a 1 cm / 2 Hz carry
+      across the jaw with success at its end, mu_k 0.7 and the per-step material. Retired after
+      0.6.0 (``pip install softgrasp-env==0.6.0`` reproduces it, and v1).
     - v1: the reach task for every id; the gentle start as the Easy ids; the contact-face tissue
-      preset (4,000 particles per m²).
+      preset (4,000 particles per m²). Retired after 0.6.0.
     - v0: initial release (gone: its physics cannot be reproduced by this code).
     """
 
@@ -409,7 +410,7 @@ class SoftGraspEnv(gym.Env):
 
 
 class SoftGraspGoalEnv(SoftGraspEnv):
-    """Goal-conditioned SoftGrasp (``SoftGraspGoal-v4``, ``-v3``, ``-v1``) for hindsight experience replay.
+    """Goal-conditioned SoftGrasp (``SoftGraspGoal-v4``, ``-v3``) for hindsight experience replay.
 
     As :class:`SoftGraspEnv` (same actions, physics, starting state and time limit; no carry
     test), with the goal task (softgrasp_env/tasks/goal.py). By default (``SoftGraspGoal-v4``) a
@@ -427,8 +428,8 @@ class SoftGraspGoalEnv(SoftGraspEnv):
       ``compute_reward(...) == 0``.
 
     Extra arguments: ``distance_threshold`` (0.02 m), ``goal_height_range`` ((0.05, 0.08) m),
-    ``end_when_knocked_over`` (False; True on SoftGraspGoal-v3 and -v1: the lift task's episode
-    ends, as they were released with).
+    ``end_when_knocked_over`` (False; True on SoftGraspGoal-v3: the lift task's episode
+    ends, as it was released with).
     """
 
     def __init__(self, render_mode: str | None = None, *, distance_threshold: float = DISTANCE_THRESHOLD,

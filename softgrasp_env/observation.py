@@ -36,7 +36,7 @@ OBS_GROUPS: dict[str, tuple[str, ...]] = {
 OBS_NAMES: tuple[str, ...] = tuple(n for g, names in OBS_GROUPS.items() if g != "time" for n in names)
 """Names of the observation entries, in order (the env card documents each)."""
 CARRY_OBS_NAMES: tuple[str, ...] = OBS_NAMES + ("time",)
-"""With the carry test (``carry=True``, the v2 ids) the observation ends with the time since
+"""With the carry test (``carry=True``) the observation ends with the time since
 reset [s]: the carry comes at a fixed time, and a policy that cannot see the clock would face a
 task that is not Markov."""
 
