@@ -1,5 +1,5 @@
-"""A pip install is a working product (issue 23): the core needs only gymnasium, pybullet, numpy and
-numba; the wheel carries the license, ``py.typed`` and the shipped baselines; and (slow, run by CI
+"""A pip install is a working product: the core needs only gymnasium, pybullet, numpy and
+numba; the wheel carries the license, ``py.typed`` and the best baseline of each id; and (slow, run by CI
 on its own line) the wheel installed in a fresh venv without any extra, used from outside the
 checkout, makes, resets and steps the newest id, runs the scripted policy and says that it compiles."""
 
@@ -69,7 +69,29 @@ def test_files_users_expect_are_there():
     assert "Typing :: Typed" in classifiers and any(c.startswith("Programming Language :: Python :: 3") for c in classifiers)
     assert PYPROJECT["project"]["urls"]
     data = PYPROJECT["tool"]["setuptools"]["package-data"]
-    assert data["softgrasp_env"] == ["py.typed"] and data["softgrasp_env.policies"] == ["trained/*/*"]
+    assert data["softgrasp_env"] == ["py.typed"]
+    assert PYPROJECT["tool"]["setuptools"]["include-package-data"] is False  # the list is all there is
+
+
+def _best() -> dict[str, str]:
+    from softgrasp_env.policies.baselines import TRAINED, best_per_env
+
+    return best_per_env([json.loads(p.read_text()) for p in TRAINED.glob("*/card.json")])
+
+
+def test_the_wheel_lists_the_best_baseline_of_each_id():
+    """pyproject's package data names exactly the best baseline of each id (the highest success on
+    its card; ties to the first name), every other one stays in the repository; and every id with
+    a baseline is a registered one."""
+    import softgrasp_env
+
+    listed = PYPROJECT["tool"]["setuptools"]["package-data"]["softgrasp_env.policies"]
+    names = [re.fullmatch(r"trained/([\w.-]+)/\*", entry).group(1) for entry in listed]
+    best = _best()
+    assert sorted(names) == sorted(best.values()), (names, best)
+    assert set(best) <= set(softgrasp_env.ENV_IDS)
+    for name in names:
+        assert (ROOT / "softgrasp_env" / "policies" / "trained" / name / "model.zip").is_file()
 
 
 # --- the wheel, installed where a user would --------------------------------------------------------
@@ -110,10 +132,10 @@ try:
 except ImportError as exc:
     out["load_error"] = str(exc)
 try:
-    load_baseline("SoftGrasp-v2_sac_0")  # issue 10's, kept in the repository, not the wheel
-    out["old_error"] = None
+    load_baseline("SoftGrasp-v3_ppo_0")  # not the id's best: kept in the repository, not the wheel
+    out["other_error"] = None
 except ValueError as exc:
-    out["old_error"] = str(exc)
+    out["other_error"] = str(exc)
 for mod in ("agents", "torch", "stable_baselines3", "matplotlib"):
     try:
         __import__(mod)
@@ -127,9 +149,9 @@ print("RESULT " + json.dumps(out))
 @pytest.mark.slow
 def test_the_wheel_works_in_a_fresh_venv_without_extras(tmp_path):
     """Build the wheel, install it (no extras) in a new venv, and use it from a folder outside the
-    checkout: the numba cache is cold there, as after any pip install. Measured here: the wheel
-    6.6 MB with the first v3 baselines, 21.2 MB with issue 22's 29, the install 10 s from pip's cache, the first gym.make 35 s (the
-    compile), then reset 0.03 s and the first step 0.004 s."""
+    checkout: the numba cache is cold there, as after any pip install. Measured: the wheel 6.6 MB
+    with the best baseline of each of 7 ids, the install 10 s from pip's cache, the first gym.make
+    35 s (the compile), then reset 0.03 s and the first step 0.004 s."""
     dist = tmp_path / "dist"
     tic = time.perf_counter()
     subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(dist), str(ROOT)], check=True)
@@ -138,19 +160,17 @@ def test_the_wheel_works_in_a_fresh_venv_without_extras(tmp_path):
     with zipfile.ZipFile(wheel) as z:
         names = z.namelist()
     assert "softgrasp_env/py.typed" in names and any(n.endswith(".dist-info/licenses/LICENSE") for n in names)
-    # the wheel carries the baselines of the current ids (v3, the goal id's v4); the v1/v2 ones
-    # stay in the repository
-    models = [p.parent.name for p in (ROOT / "softgrasp_env" / "policies" / "trained").glob("*/model.zip")]
-    current = {m for m in models if "-v3_" in m or "-v4_" in m}
-    assert len(current) >= 3 and len(models) - len(current) == 25, models  # issue 10's 25 in the repository
+    # the wheel carries the best baseline of each id; the others stay in the repository
+    current = set(_best().values())
+    assert len(current) >= 3
     in_wheel = {n.split("/")[3] for n in names if n.startswith("softgrasp_env/policies/trained/")}
     assert in_wheel == current, in_wheel
     assert not any(n.startswith("agents/") or "__pycache__" in n or n.endswith((".nbi", ".nbc")) for n in names)
     # A shipped model (weights, card, log) compresses to 0.6-0.9 MB (the grip ids' 171 inputs are
-    # the largest); a replay buffer or a numba cache swept in would cost tens of MB. Measured: 21.2
-    # MB for 29 models (issue 22's); a fixed 20 MB bound no longer fit the baselines themselves.
+    # the largest); a replay buffer, a numba cache or every seed swept in would cost tens of MB.
+    # Measured: 6.6 MB for the 7 best models; the bound is 10 MB.
     size_mb = wheel.stat().st_size / 1e6
-    assert size_mb < 1.0 * len(current) + 1, (size_mb, len(current))
+    assert size_mb <= 10.0 and size_mb < 1.0 * len(current) + 1, (size_mb, len(current))
 
     env_dir = tmp_path / "venv"
     venv.EnvBuilder(with_pip=True, clear=True).create(env_dir)  # a truly fresh venv: no system site-packages
@@ -170,7 +190,7 @@ def test_the_wheel_works_in_a_fresh_venv_without_extras(tmp_path):
     assert result["env"] == "SoftGrasp-v3" and result["steps"] == 100 and result["success"] and result["in_space"]
     assert result["baselines"] == len(current)
     assert "softgrasp-env[train]" in result["load_error"]
-    assert "not in the wheel" in result["old_error"] and "source repository" in result["old_error"], result
+    assert "best baseline of each id" in result["other_error"] and "source repository" in result["other_error"], result
     assert not any(result[m] for m in ("agents", "torch", "stable_baselines3", "matplotlib")), result
     # the first run talks: a line when numba starts compiling, one with the time when it is done
     assert "softgrasp_env: numba is compiling the solver's kernels" in run.stderr, run.stderr

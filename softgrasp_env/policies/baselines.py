@@ -1,6 +1,6 @@
-"""The trained baselines that ship with the package: SAC and PPO on the v3 soft fingers, rigid twin
-and torsional peer (issue 22, several seeds each), and, in the source repository, issue 10's PPO
-and SAC on the v1/v2 ids and HER + SAC on the goal env. Each is a folder of ``trained/`` beside
+"""The trained baselines: SAC and PPO on the v3 soft fingers, rigid twin and torsional peer
+(several seeds each), SAC on the grip-force ids (with and without the taxels) and HER + SAC with
+demonstrations on the goal env. Each is a folder of ``trained/`` beside
 this file: ``model.zip`` (stable-baselines3), ``vecnormalize.pkl`` (the observation statistics it
 was trained with; HER runs have none), ``card.json`` and ``README.md`` (the model card: env, algo,
 hyperparameters, steps, seed, success over 100 seeded episodes, the command that made it),
@@ -17,9 +17,10 @@ hyperparameters, steps, seed, success over 100 seeded episodes, the command that
 
 They are package data, not downloads (a download would need a server and a network at run
 time): the SAC models are 0.95 MB each, their critics and optimiser state included, so that
-training can go on from them. The wheel carries the baselines of the current ids (v3; the goal id's v4); the v1/v2
-ones (issue 10's, on the old ids, 15 MB) are in the source repository's folder only, where these
-functions find them from a checkout. The repository's ``agents.cards`` publishes new ones here.
+training can go on from them. The wheel carries the best baseline of each id (:func:`best_per_env`:
+the highest success on its card); the others are in the source repository's folder only, where
+these functions find them from a checkout. The repository's ``agents.cards`` publishes new ones
+here.
 """
 
 from __future__ import annotations
@@ -61,15 +62,29 @@ def baseline_path(name: str) -> Path:
         names = [d.name for d in _dirs()]
         near = difflib.get_close_matches(str(name), names, n=3)
         hint = f" (did you mean {', '.join(map(repr, near))}?)" if near else ""
-        if isinstance(name, str) and re.search(r"-v[12]_", name):
-            hint += (" (the v1/v2 baselines are not in the wheel: they are in the source repository's "
-                     "softgrasp_env/policies/trained/, found from a checkout or loaded by path with agents.evaluate)")  # fmt: skip
+        if re.fullmatch(r"SoftGrasp\w*-v\d+_[\w-]+", str(name)):
+            hint += (" (the wheel carries the best baseline of each id only: the others are in the source "
+                     "repository's softgrasp_env/policies/trained/, found from a checkout or loaded by path with "
+                     "agents.evaluate; the baselines of a retired id ship with the release that last registers it, "
+                     "which gym.make of the id names)")  # fmt: skip
         raise ValueError(f"no shipped baseline {name!r}{hint}; the baselines are: {', '.join(names)}")
     return TRAINED / name
 
 
 def _read_card(model_dir: Path) -> dict[str, Any]:
     return json.loads((model_dir / "card.json").read_text())
+
+
+def best_per_env(cards: list[dict[str, Any]]) -> dict[str, str]:
+    """env id -> the name of its best baseline among ``cards``: the highest ``evaluation.success_rate``,
+    ties to the first name in sorted order (the lowest seed of the first algo). What the wheel
+    ships (pyproject.toml's package data; tests/test_packaging.py checks the two agree)."""
+    best: dict[str, dict[str, Any]] = {}
+    for card in sorted(cards, key=lambda c: c["name"]):
+        have = best.get(card["env"])
+        if have is None or card["evaluation"]["success_rate"] > have["evaluation"]["success_rate"]:
+            best[card["env"]] = card
+    return {env: card["name"] for env, card in sorted(best.items())}
 
 
 def baseline_card(name: str) -> dict[str, Any]:
@@ -160,4 +175,4 @@ def load_baseline(name: str, *, env: Any = None) -> Baseline:
     return Baseline(name, path, card, model, stats, made)
 
 
-__all__ = ["TRAINED", "Baseline", "baseline_card", "baseline_path", "list_baselines", "load_baseline"]
+__all__ = ["TRAINED", "Baseline", "baseline_card", "baseline_path", "best_per_env", "list_baselines", "load_baseline"]
