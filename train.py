@@ -310,7 +310,7 @@ def main(argv: list[str] | None = None) -> int:
         run = ns.out / (ns.name or f"{env_id}_{algo}_{seed}")
     goal = default_algo(env_id) == "her-sac"  # the goal-conditioned ids
     if algo == "her-sac" and not goal:
-        parser.error("--algo her-sac needs a goal-conditioned env (SoftGraspGoal-v4, -v3 or -v1)")
+        parser.error("--algo her-sac needs a goal-conditioned env (SoftGraspGoal-v4 or -v3)")
     if algo == "her-sac" and n_envs != 1:
         parser.error("--algo her-sac runs with --n-envs 1")
     if ns.demos is not None and algo == "ppo":

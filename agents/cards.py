@@ -2,7 +2,7 @@
 ``softgrasp_env.policies.load_baseline``; ``agents/trained`` is a link to it): publishing a train.py
 run there with its model card, reading the cards back, and the results table.
 
-    python -m agents.cards publish runs/SoftGrasp-v2_ppo_0 runs/SoftGraspRigid-v2_ppo_0 ...
+    python -m agents.cards publish runs/SoftGrasp-v3_ppo_0 runs/SoftGraspRigid-v3_ppo_0 ...
     python -m agents.cards table                 # the results table (scripted measured live)
 
 ``publish`` evaluates each run over 100 seeded episodes (seeds 1000-1099, the seeds
@@ -360,13 +360,11 @@ def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True,
     rows = []
     if scripted:
         for env_id in ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspGoal-v4",
-                       "SoftGraspGrip-v3", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3",
-                       "SoftGrasp-v2", "SoftGraspRigid-v2", "SoftGrasp-v1", "SoftGraspRigid-v1",
-                       "SoftGraspGoal-v1"):  # fmt: skip
+                       "SoftGraspGrip-v3", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3"):  # fmt: skip
             if versions is not None and int(env_id.rsplit("-v", 1)[1]) not in versions:
                 continue
             env = gym.make(env_id)
-            # The grip ids' scripted policy reads the taxels (issue 21); the others the scripted grasp.
+            # The grip ids' scripted policy reads the taxels; the others the scripted grasp.
             grip = env_id.startswith("SoftGraspGrip")
             try:
                 policy = TactileGripPolicy(env) if grip else ScriptedGraspPolicy.for_env(env)

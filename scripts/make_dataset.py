@@ -1,13 +1,13 @@
 """Minari datasets (Farama's standard for offline RL) of recorded episodes: the scripted grasp and
 the best shipped learned baseline on the v3 ids (SoftGrasp-v3, SoftGraspRigid-v3,
-SoftGraspRigidTorsion-v3: issue 22's SAC models) and on the v2 ids issue 10's baselines were
-trained on (SoftGrasp-v2, SoftGraspRigid-v2). An id with no shipped baseline has no learned
-dataset (asking for one is an error).
+SoftGraspRigidTorsion-v3: SAC models). An id with no shipped baseline has no learned dataset
+(asking for one is an error). (The v2 ids' datasets were retired with them: release 0.6.0 has
+them.)
 
     .venv/bin/python scripts/make_dataset.py                                   # 100 episodes each
     .venv/bin/python scripts/make_dataset.py --episodes 3 --out datasets/minari --force   # the shipped sample
     MINARI_DATASETS_PATH=datasets/minari .venv/bin/python -c \\
-        "import minari; print(minari.load_dataset('softgrasp/SoftGrasp-v2/scripted-v0'))"
+        "import minari; print(minari.load_dataset('softgrasp/SoftGrasp-v3/scripted-v0'))"
 
 Writes ``softgrasp/<env id>/scripted-v0`` and ``softgrasp/<env id>/learned-v0`` (the baseline with
 the best success rate on its card; its name is the dataset's algorithm) under ``--out`` (default:
@@ -31,8 +31,9 @@ import numpy as np
 
 import softgrasp_env
 from softgrasp_env.policies import ScriptedGraspPolicy, baseline_card, list_baselines
+from softgrasp_env.policies.baselines import best_per_env
 
-ENVS = ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGrasp-v2", "SoftGraspRigid-v2")
+ENVS = ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3")
 POLICIES = ("scripted", "learned")
 INFO_KEYS = {"is_success": bool, "held": bool, "carrying": bool, "lift_height": float, "diverged": bool}
 """What each step keeps of ``info`` (Minari needs the same keys and types at every step; the rest
@@ -40,11 +41,12 @@ of info varies: reward terms only after a step, the divergence reason only when 
 
 
 def best_baseline(env_id: str) -> str:
-    """The shipped baseline of ``env_id`` with the best success rate on its card (ties: the name)."""
+    """The shipped baseline of ``env_id`` with the best success rate on its card (ties: the last
+    name; softgrasp_env.policies.baselines.best_per_env, what the wheel ships)."""
     names = list_baselines(env=env_id)
     if not names:
         raise ValueError(f"no shipped baseline for {env_id!r}")
-    return max(names, key=lambda n: (baseline_card(n)["evaluation"]["success_rate"], n))
+    return best_per_env([baseline_card(n) for n in names])[env_id]
 
 
 def run_episode(env: gym.Env, act, seed: int):

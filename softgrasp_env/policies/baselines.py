@@ -77,12 +77,12 @@ def _read_card(model_dir: Path) -> dict[str, Any]:
 
 def best_per_env(cards: list[dict[str, Any]]) -> dict[str, str]:
     """env id -> the name of its best baseline among ``cards``: the highest ``evaluation.success_rate``,
-    ties to the first name in sorted order (the lowest seed of the first algo). What the wheel
-    ships (pyproject.toml's package data; tests/test_packaging.py checks the two agree)."""
+    ties to the last name in sorted order. What the wheel ships (pyproject.toml's package data;
+    tests/test_packaging.py checks the two agree) and what scripts/make_dataset.py records."""
     best: dict[str, dict[str, Any]] = {}
     for card in sorted(cards, key=lambda c: c["name"]):
         have = best.get(card["env"])
-        if have is None or card["evaluation"]["success_rate"] > have["evaluation"]["success_rate"]:
+        if have is None or card["evaluation"]["success_rate"] >= have["evaluation"]["success_rate"]:
             best[card["env"]] = card
     return {env: card["name"] for env, card in sorted(best.items())}
 
