@@ -29,7 +29,6 @@ version = release
 extensions = [
     "myst_parser",
     "sphinx.ext.autodoc",
-    "sphinx.ext.napoleon",
     "sphinx.ext.viewcode",
     "envpages",
     "sitecheck",
@@ -56,9 +55,11 @@ suppress_warnings: list[str] = []
 autodoc_default_options = {"members": True, "undoc-members": False, "show-inheritance": True}
 autodoc_member_order = "bysource"
 autodoc_typehints = "description"
+autodoc_typehints_description_target = "documented"
 autodoc_preserve_defaults = True
-napoleon_google_docstring = False
-napoleon_numpy_docstring = False
+# gymnasium.Env's docstrings (step, reset, ...) are its API, documented by gymnasium; ours are on the
+# env pages
+autodoc_inherit_docstrings = False
 
 html_theme = "furo"
 html_title = f"softgrasp {release}"

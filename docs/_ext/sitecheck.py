@@ -70,6 +70,18 @@ def _card_docstring(app, what, name, obj, options, lines: list[str]) -> None:
     lines[:] = [*first, "", f"The env card: :doc:`/{ENV_CARDS[name]}`.", ""]
 
 
+def _indented_blocks(app, what, name, obj, options, lines: list[str]) -> None:
+    """A docstring's indented block after a line ending in one colon (a recipe, a code sample),
+    which reST would take as an unexpected indentation, is shown as a literal block (``::``)."""
+    for k, line in enumerate(lines[:-2]):
+        if not line.rstrip().endswith(":") or line.rstrip().endswith("::") or lines[k + 1].strip():
+            continue
+        nxt = next((m for m in range(k + 1, len(lines)) if lines[m].strip()), None)
+        indent = len(line) - len(line.lstrip())
+        if nxt is not None and len(lines[nxt]) - len(lines[nxt].lstrip()) > indent and not lines[nxt].lstrip().startswith(("-", "*", "..")):
+            lines[k] = line.rstrip() + ":"
+
+
 # --- links and images of the built site -------------------------------------------------------------
 
 
@@ -140,5 +152,6 @@ def setup(app):
     app.add_config_value("pending_pages", set(), "env")
     app.connect("source-read", _drop_pending)
     app.connect("autodoc-process-docstring", _card_docstring)
+    app.connect("autodoc-process-docstring", _indented_blocks)
     app.connect("build-finished", _build_finished)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True}
