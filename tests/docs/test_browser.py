@@ -48,9 +48,7 @@ def _results_page(outdir: Path) -> Path:
     """A results page with figures: the first of docs/results/'s built pages that has an image."""
     pages = sorted((outdir / "results").glob("*.html"))
     with_images = [p for p in pages if "<img" in p.read_text(encoding="utf-8")]
-    if not with_images:  # before docs/results/*.md are written: a page that exists, still checked
-        print("no results page with images in the site yet (docs/results/*.md): checking the API page instead")
-        return outdir / "api.html"
+    assert with_images, f"no results page with a figure in {outdir / 'results'}: {[p.name for p in pages]}"
     return with_images[0]
 
 
@@ -121,7 +119,6 @@ def test_site_in_headless_chromium(built_site, browser, tmp_path):
         assert section in headings, headings
     assert env["variance"] > 100
 
-    page = _results_page(outdir)
-    results = _check_page(browser, page, outdir, shots)
-    assert results["images"] or page.name == "api.html", "the results page shows no image"
+    results = _check_page(browser, _results_page(outdir), outdir, shots)
+    assert results["images"], "the results page shows no image"
     print(f"browser checks: {time.perf_counter() - start:.1f} s; screenshots in {shots}")
