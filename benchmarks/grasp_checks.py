@@ -1,10 +1,10 @@
-"""The env's own scripted grasp, measured as a new user would try it (issue 19's table): the aligned
-gentle start (SoftGraspEasy / SoftGraspEasyRigid with yaw, wedge, offset and cylinder position
-fixed at 0), 3 N per finger, every figure from one physics step to the next; before (the v1 ids,
-the jump arm) and after (v3, the smooth arm) in one run.
+"""The env's own scripted grasp, measured as a new user would try it: the aligned gentle start
+(SoftGraspEasy-v3 / SoftGraspEasyRigid-v3 with yaw, wedge, offset and cylinder position fixed at
+0), 3 N per finger, every figure from one physics step to the next. (Release 0.6.0 also measures
+the v1 ids' jump arm beside it.)
 
-    PYTHONPATH=. python benchmarks/grasp_checks.py                          # every row, v1 and v3
-    PYTHONPATH=. python benchmarks/grasp_checks.py --rows dt,arm --versions v3  # some
+    PYTHONPATH=. python benchmarks/grasp_checks.py                          # every row
+    PYTHONPATH=. python benchmarks/grasp_checks.py --rows dt,arm            # some
 
 Rows: ``dt`` the scripted grasp at dt 1/1000 ... 1/120 s (held, lift, in-hand motion from
 lift-off to the end, pad compression at the end, peak palm acceleration); ``arm`` the palm's peak
@@ -32,8 +32,7 @@ KINDS = {"soft": dict(fingers="tissue"), "soft-consistent": dict(fingers="tissue
          "soft-mu_k=0.7": dict(fingers="tissue", friction_dynamic=0.7),
          "soft-consistent-mu_k=0.7": dict(fingers="tissue", coupling="consistent", friction_dynamic=0.7)}  # fmt: skip
 """The finger kinds compared (the tissue at its default mu_k = mu_s, pybullet's one coefficient),
-and the tissue with the two-coefficient law of v1/v2 (mu_k 0.7 < mu_s 0.9): issue 19's friction
-law."""
+and the tissue with a two-coefficient law (mu_k 0.7 < mu_s 0.9)."""
 NO_SLIP = CARRY_SLIDE_LIMIT
 """The mass and friction rows count a cylinder held only if it also moved at most this in the hand
 from lift-off to the end [m], the v3 success's slide limit: a grasp that slips while the arm
@@ -161,10 +160,9 @@ def bisect(held, lo: float, hi: float, *, rel_tol: float = 0.02) -> float:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--rows", default="dt,arm,mass,friction")
-    parser.add_argument("--versions", default="v1,v3", help="v1: before (the jump arm); v3: after")
     parser.add_argument("--kinds", default=",".join(KINDS), help="for the mass and friction rows, comma-separated")
     ns = parser.parse_args(argv)
-    rows, versions = ns.rows.split(","), ns.versions.split(",")
+    rows, versions = ns.rows.split(","), ["v3"]
     kinds = {name: KINDS[name] for name in ns.kinds.split(",")}
     g, mu, force, mass = 9.81, 0.9, 3.0, 0.1
     if "dt" in rows:

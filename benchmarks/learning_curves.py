@@ -1,9 +1,9 @@
 """Learning curves of the shipped baselines: success rate against env steps, soft vs rigid fingers,
-mean and spread (min-max) over seeds, one panel per algorithm and task version (a row each: v2
-with the carry test, v1 without), or (``--by kind``) one panel per id name and version, in rows of four.
+mean and spread (min-max) over seeds, one panel per algorithm and task version (a row each), or
+(``--by kind``) one panel per id name and version, in rows of four.
 
-    PYTHONPATH=. python benchmarks/learning_curves.py --versions v2,v1      # agents/trained/ -> docs/results/
-    PYTHONPATH=. python benchmarks/learning_curves.py --versions v3,v4 --by kind --name learning_curves_v3   # issue 22's
+    PYTHONPATH=. python benchmarks/learning_curves.py --versions v3       # agents/trained/ -> docs/results/
+    PYTHONPATH=. python benchmarks/learning_curves.py --versions v3,v4 --by kind --name learning_curves_v3
     PYTHONPATH=. python benchmarks/learning_curves.py --models runs --out /tmp/curves
 
 Two measures per run, both from the files train.py writes:
@@ -36,11 +36,11 @@ COLORS = {"SoftGrasp": "tab:blue", "SoftGraspRigid": "tab:red", "SoftGraspGoal":
           "SoftGraspRigidTorsion": "tab:orange", "SoftGraspGrip": "tab:blue", "SoftGraspGripRigid": "tab:red",
           "SoftGraspGripRigidTorsion": "tab:orange"}  # fmt: skip
 ALGO_COLORS = {"ppo": "tab:purple", "sac": "tab:blue", "her-sac": "tab:green"}
-VERSIONS = {"v4": "v4 (v3, no early end)", "v3": "v3 (the sway band)", "v2": "v2 (carry test)", "v1": "v1 (no carry test)"}
+VERSIONS = {"v4": "v4 (v3, no early end)", "v3": "v3 (the sway band)"}
 
 
 def _split(env_id: str) -> tuple[str, str]:
-    """``"SoftGraspRigid-v2"`` -> ``("SoftGraspRigid", "v2")``; a variant's env kwargs after the id
+    """``"SoftGraspRigid-v3"`` -> ``("SoftGraspRigid", "v3")``; a variant's env kwargs after the id
     (``"SoftGraspGrip-v3 tactile=None"``, agents.cards.env_label) stay out of it."""
     name, _, version = env_id.split(" ", 1)[0].rpartition("-")
     return name, version
@@ -114,10 +114,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--models", type=Path, default=ROOT / "agents" / "trained")
     parser.add_argument("--out", type=Path, default=ROOT / "docs" / "results")
     parser.add_argument("--by", choices=["algo", "kind"], default="algo",
-                        help="one panel per algorithm (lines: finger kinds; the v1/v2 figure) or per finger kind "
-                             "(lines: algorithms; issue 22's v3 figure)")  # fmt: skip
+                        help="one panel per algorithm (lines: finger kinds) or per finger kind "
+                             "(lines: algorithms)")  # fmt: skip
     parser.add_argument("--name", default="learning_curves", help="file name of the .png and .csv")
-    parser.add_argument("--versions", default=None, help="only these env versions, e.g. v3 or v2,v1 (default: all)")
+    parser.add_argument("--versions", default=None, help="only these env versions, e.g. v3 or v3,v4 (default: all)")
     parser.add_argument("--per-row", type=int, default=4,
                         help="with --by kind: at most this many panels per row (default 4)")  # fmt: skip
     ns = parser.parse_args(argv)

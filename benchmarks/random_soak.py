@@ -1,13 +1,13 @@
-"""No tearing (issue 19, item 8): many env steps of random actions, every divergence counted.
+"""No tearing: many env steps of random actions, every divergence counted.
 
 Two streams of actions, each over back-to-back episodes (seeded resets, the env's own ranges):
 ``uniform``, the action space's uniform draw (the arm mostly hovers: velocity actions average
 out), and ``noisy-scripted``, the scripted grasp with Gaussian noise (sigma 0.5 per entry, clipped)
 so that the fingers press on the cylinder, its rim and the ground thousands of times: the states
-where the tissue has torn before (the snag over the rim, ~1 in 10^4-2*10^4 steps on v2).
+where the tissue has torn before (the snag over the rim, ~1 in 10^4-2*10^4 steps).
 
     PYTHONPATH=. python benchmarks/random_soak.py                       # 10^5 steps per stream
-    PYTHONPATH=. python benchmarks/random_soak.py --steps 20000 --env SoftGrasp-v2
+    PYTHONPATH=. python benchmarks/random_soak.py --steps 20000 --env SoftGraspRigidTorsion-v3
 
 Prints, per stream: steps, episodes, divergences (with the seed, step and the reason), the
 largest tissue deviation from its core seen (the tear detector's quantity), steps/s.

@@ -1,10 +1,12 @@
 """Where each method fails: the scripted grasp over grids of settings, every finger kind, same
-scene, same policy, same seed (issue 9; the v3 maps: issue 19, item 7).
+scene, same policy, same seed, on the v3 physics (``SoftGraspEasy-v3``).
 
     PYTHONPATH=. python benchmarks/stability_map.py [--quick | --tiny] [--methods rigid,tissue,...]
-        [--maps v1 | v3 | all | name,name,...] [--name stability_map_v3]
+        [--maps physics | v3 | all | name,name,...] [--name stability_map_v3]
 
-The v1 maps (the default, rows x columns; docs/results/stability_map.csv):
+The physics maps (the default, rows x columns; docs/results/stability_map.csv was made with them
+on the physics of release 0.6.0's v1 ids, before the compliant material and the smooth arm; run
+again, they map the v3 physics):
 1. ``wedge_yaw``: jaw wedge (angle between the finger faces) x gripper yaw, lateral offset 5 mm;
 2. ``offset_friction``: lateral offset along the finger face, up to past its end (the face is 4 cm
    long) x friction scale (tissue, rigid finger and ground coefficients together), no wedge;
@@ -234,7 +236,7 @@ class Map:
 
 CENTRED = {"cylinder_xy": (0.0, 0.0)}
 ALIGNED = {"yaw": 0.05, "lateral_offset": 0.005, "jaw_wedge": 0.0, **CENTRED}
-"""The v1 maps' aligned start (the physics maps' fixed settings)."""
+"""The aligned start (the physics maps' fixed settings)."""
 WEDGE_MAX = math.pi / 6
 """The largest jaw wedge SceneConfig takes [rad]."""
 YAW_MAX = math.pi / 4
@@ -244,7 +246,7 @@ SWAY = {"carry_frequency": 1.9, "carry_acceleration": 1.0, "carry_direction": 0.
 """The carry maps' sway unless a map varies it: at the two-point grasp's pendulum frequency, the v3
 range's largest peak acceleration, across the jaw (where a two-point grasp swings)."""
 
-V1_MAPS = (
+PHYSICS_MAPS = (
     Map("wedge_yaw", ("jaw_wedge", [0.0, 0.025, 0.05, 0.1, 0.2, 0.3, 0.45]), ("yaw", [0.0, 0.1, 0.2, 0.3]),
         {"lateral_offset": 0.005, **CENTRED}, [0.0, 0.05, 0.2, 0.45], [0.0, 0.2]),
     Map("offset_friction", ("lateral_offset", [0.0, 0.01, 0.02, 0.025, 0.03]),
@@ -313,16 +315,16 @@ V3_MAPS = (
 TINY_MAPS = (  # CI: the wedge where rigid blocks fail and tissue holds
     Map("tiny", ("jaw_wedge", [0.0, 0.1]), ("yaw", [0.1]), {"lateral_offset": 0.005, **CENTRED}),
 )
-MAP_GROUPS = {"v1": V1_MAPS, "v3": V3_MAPS, "all": V1_MAPS + V3_MAPS}
-ALL_MAPS = {m.name: m for m in V1_MAPS + V3_MAPS}
+MAP_GROUPS = {"physics": PHYSICS_MAPS, "v3": V3_MAPS, "all": PHYSICS_MAPS + V3_MAPS}
+ALL_MAPS = {m.name: m for m in PHYSICS_MAPS + V3_MAPS}
 
 
 def choose_maps(spec: str, *, tiny: bool) -> tuple[Map, ...]:
-    """``--maps``: a group (v1, v3, all) or comma-separated map names; --tiny alone: the CI map."""
+    """``--maps``: a group (physics, v3, all) or comma-separated map names; --tiny alone: the CI map."""
     if tiny and not spec:
         return TINY_MAPS
     out: list[Map] = []
-    for part in (spec or "v1").split(","):
+    for part in (spec or "physics").split(","):
         if part in MAP_GROUPS:
             out += MAP_GROUPS[part]
         elif part in ALL_MAPS:
@@ -333,8 +335,8 @@ def choose_maps(spec: str, *, tiny: bool) -> tuple[Map, ...]:
 
 
 def maps(quick: bool, tiny: bool) -> list[tuple[str, list, str, list, dict]]:
-    """The v1 maps (or the tiny one) as (row name, row values, column name, column values, fixed)."""
-    return [(*m.grid(quick)[0], *m.grid(quick)[1], m.fixed) for m in (TINY_MAPS if tiny else V1_MAPS)]
+    """The physics maps (or the tiny one) as (row name, row values, column name, column values, fixed)."""
+    return [(*m.grid(quick)[0], *m.grid(quick)[1], m.fixed) for m in (TINY_MAPS if tiny else PHYSICS_MAPS)]
 
 
 ALIASES = {"thesis": "tissue, thesis", "consistent": "tissue, consistent", "tissue": "tissue, thesis"}
@@ -362,7 +364,7 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="coarser grids")
     parser.add_argument("--tiny", action="store_true", help="the CI smoke run: one wedge row")
     parser.add_argument("--methods", default="", help="comma-separated subset of the methods (thesis, consistent: ours with each coupling)")
-    parser.add_argument("--maps", default="", help="v1 (default), v3, all, or comma-separated map names: "
+    parser.add_argument("--maps", default="", help="physics (default), v3, all, or comma-separated map names: "
                         + ", ".join(ALL_MAPS))  # fmt: skip
     parser.add_argument("--name", default="stability_map", help="stem of the CSV and PNG written")
     parser.add_argument("--out", type=Path, default=OUT)

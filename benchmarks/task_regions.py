@@ -1,6 +1,5 @@
 """Where in the reach task's ranges each finger kind holds: success per region of every quantity
-the v3 start draws (issue 22, item 3; the successor of wedge_sign.py, which splits by the wedge
-only and reads v2's carry).
+the v3 start draws (the successor of wedge_sign.py, which splits by the wedge only).
 
 Runs one policy per kind (soft, rigid twin, torsional peer; default the scripted grasp) on the
 card seeds (1000-1099) of SoftGrasp-v3, SoftGraspRigid-v3 and SoftGraspRigidTorsion-v3. The kinds

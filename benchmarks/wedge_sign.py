@@ -3,11 +3,11 @@ size and sign, and how high above the cylinder's centre the fingers close, over 
 episodes of the model cards (seeds 1000-1099).
 
     PYTHONPATH=. python benchmarks/wedge_sign.py                                 # scripted and every shipped rigid model
-    PYTHONPATH=. python benchmarks/wedge_sign.py --env SoftGrasp-v2 --policy scripted agents/trained/SoftGrasp-v2_sac_0
+    PYTHONPATH=. python benchmarks/wedge_sign.py --env SoftGrasp-v3 --policy scripted agents/trained/SoftGrasp-v3_sac_0
 
 A positive wedge opens the gap at the top (the faces meet the cylinder with their lower edges),
 a negative one at the bottom. The grip height is the grip point above the cylinder's centre at
-the first step both fingers press with more than 0.5 N. On the v2 ids it also counts the
+the first step both fingers press with more than 0.5 N. With the carry test it also counts the
 episodes whose cylinder was held when the carry test began (``info["held"]`` at its first step)
 and how many of those still held it at the end.
 """
@@ -54,7 +54,7 @@ def episodes(env_id: str, spec: str, seeds: range) -> np.ndarray:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="SoftGraspRigid-v2")
+    parser.add_argument("--env", default="SoftGraspRigid-v3")
     parser.add_argument("--policy", nargs="+", default=None,
                         help="'scripted' and/or runs; default: scripted and every shipped model of --env")  # fmt: skip
     parser.add_argument("--episodes", type=int, default=cards.EPISODES)
