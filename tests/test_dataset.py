@@ -14,10 +14,9 @@ minari = pytest.importorskip("minari")  # the [offline] extra
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLE = ROOT / "datasets" / "minari"
-IDS = [f"softgrasp/{env}/{policy}-v0" for env in ("SoftGrasp-v2", "SoftGraspRigid-v2") for policy in ("scripted", "learned")]
-IDS += [f"softgrasp/{env}/{policy}-v0" for env in ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3")
+IDS = [f"softgrasp/{env}/{policy}-v0" for env in ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3")
         for policy in ("scripted", "learned")]  # fmt: skip
-HOLDS = ("SoftGrasp-v2/scripted-v0", "SoftGrasp-v3/scripted-v0", "SoftGraspRigidTorsion-v3/scripted-v0",
+HOLDS = ("SoftGrasp-v3/scripted-v0", "SoftGraspRigidTorsion-v3/scripted-v0",
          "SoftGrasp-v3/learned-v0", "SoftGraspRigidTorsion-v3/learned-v0")  # fmt: skip
 """Datasets whose every episode succeeds: the scripted soft grasp and the torsional peer (30 of 30
 seeded episodes each on v3, benchmarks/v3_ranges.py), and on v3 the learned ones of both (SAC
@@ -61,8 +60,6 @@ def test_the_shipped_sample_loads(dataset_id, datasets_path):
     eps = _check(dataset, env_id, 3)
     if dataset_id.endswith(HOLDS):  # the scripted soft grasp (and the torsional peer) succeed every time
         assert all(ep.infos["is_success"][-1] for ep in eps)
-    if "Rigid-v2" in dataset_id:  # and no rigid grasp survives the v2 carry
-        assert not any(ep.infos["is_success"][-1] for ep in eps)
     if "Rigid-v3/scripted" in dataset_id:  # the v3 rigid twin: one of the three seeds (8 of 30 on seeds 1000-1029)
         assert [bool(ep.infos["is_success"][-1]) for ep in eps].count(True) == 1
 
@@ -70,21 +67,19 @@ def test_the_shipped_sample_loads(dataset_id, datasets_path):
 def test_the_script_writes_a_dataset_minari_loads(datasets_path, capsys):
     from scripts import make_dataset
 
-    assert make_dataset.main(["--envs", "SoftGraspRigid-v2", "--policies", "scripted", "--episodes", "2"]) == 0
-    assert "softgrasp/SoftGraspRigid-v2/scripted-v0: 2 episodes" in capsys.readouterr().out
-    _check(minari.load_dataset("softgrasp/SoftGraspRigid-v2/scripted-v0"), "SoftGraspRigid-v2", 2)
+    assert make_dataset.main(["--envs", "SoftGraspRigid-v3", "--policies", "scripted", "--episodes", "2"]) == 0
+    assert "softgrasp/SoftGraspRigid-v3/scripted-v0: 2 episodes" in capsys.readouterr().out
+    _check(minari.load_dataset("softgrasp/SoftGraspRigid-v3/scripted-v0"), "SoftGraspRigid-v3", 2)
     with pytest.raises(SystemExit, match="exists; --force replaces it"):
-        make_dataset.main(["--envs", "SoftGraspRigid-v2", "--policies", "scripted", "--episodes", "1"])
-    assert make_dataset.main(["--envs", "SoftGraspRigid-v2", "--policies", "scripted", "--episodes", "1", "--force"]) == 0
-    assert minari.load_dataset("softgrasp/SoftGraspRigid-v2/scripted-v0").total_episodes == 1
+        make_dataset.main(["--envs", "SoftGraspRigid-v3", "--policies", "scripted", "--episodes", "1"])
+    assert make_dataset.main(["--envs", "SoftGraspRigid-v3", "--policies", "scripted", "--episodes", "1", "--force"]) == 0
+    assert minari.load_dataset("softgrasp/SoftGraspRigid-v3/scripted-v0").total_episodes == 1
 
 
 def test_the_learned_policy_is_the_best_shipped_baseline():
     from scripts.make_dataset import best_baseline
 
-    assert best_baseline("SoftGrasp-v2") == "SoftGrasp-v2_sac_0"  # 85 % on its card
-    assert best_baseline("SoftGraspRigid-v2") == "SoftGraspRigid-v2_sac_2"  # 34 %
-    # v3 (issue 22): ties at the best rate go to the last name
+    # ties at the best rate go to the last name (softgrasp_env.policies.baselines.best_per_env)
     assert best_baseline("SoftGrasp-v3") == "SoftGrasp-v3_sac_1"  # 100 % (seed 0 too)
     assert best_baseline("SoftGraspRigid-v3") == "SoftGraspRigid-v3_sac_1"  # 82 % (seed 0 too)
     assert best_baseline("SoftGraspRigidTorsion-v3") == "SoftGraspRigidTorsion-v3_sac_2"  # 100 % (seed 0 too)

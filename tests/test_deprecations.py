@@ -173,3 +173,23 @@ def test_the_demo_takes_its_old_density_flags(monkeypatch):
             demo.main(argv)
     old, new = built
     assert old == new and old.tissue.particle_density == 5000.0 and old.tissue.mass_density == 1200.0
+
+
+# --- the keywords retired after 0.6.0, when one choice was left ------------------------------------
+
+
+@pytest.mark.parametrize("kept", [dict(arm="smooth"), dict(tissue_material="compliant"), dict(carry_direction="any")])
+def test_the_only_choice_left_warns_and_changes_nothing(kept):
+    """``arm="smooth"``, ``tissue_material="compliant"``, ``carry_direction="any"``: what happens
+    anyway since the other choices were retired; one DeprecationWarning, the same arguments."""
+    with pytest.warns(DeprecationWarning, match=f"{next(iter(kept))}={next(iter(kept.values()))!r} is deprecated") as got:
+        old = _args("SoftGrasp-v3", **kept)
+    assert len([w for w in got if issubclass(w.category, DeprecationWarning) and "is deprecated" in str(w.message)]) == 1
+    assert old == _args("SoftGrasp-v3")
+
+
+@pytest.mark.parametrize("retired", [dict(arm="jump"), dict(tissue_material="per_step"), dict(carry_direction="across"),
+                                     dict(carry_amplitude=0.01), dict(carry_slide_limit=None)])  # fmt: skip
+def test_a_retired_choice_names_the_release_that_has_it(retired):
+    with pytest.raises(ValueError, match=r"was retired; `pip install softgrasp-env==0\.6\.0` \(git tag v0\.6\.0\)"):
+        gym.make("SoftGrasp-v3", **retired)

@@ -19,6 +19,7 @@ import softgrasp_env
 from softgrasp_env import ENV_IDS
 from softgrasp_env.env import SoftGraspEnv
 from softgrasp_env.observation import OBS_NAMES, obs_slice
+from softgrasp_env.registration import RETIRED, retired_message
 from tests.helpers import assert_same, obs_vector, rollout, run_episode
 
 # Gymnasium's checker notes unbounded observation boxes; like its MuJoCo envs, ours are unbounded.
@@ -29,19 +30,45 @@ _INF_BOUND = "observation space m"
 
 
 def test_ids_are_registered_with_time_limits():
-    assert len(ENV_IDS) == 21
+    """Per family the latest version and the one before it: 12 ids."""
+    assert ENV_IDS == ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspSparse-v3", "SoftGraspGoal-v4",
+                       "SoftGraspGoal-v3", "SoftGraspEasy-v3", "SoftGraspEasyRigid-v3", "SoftGraspRigidTorsion-v3",
+                       "SoftGraspEasyRigidTorsion-v3", "SoftGraspGrip-v3", "SoftGraspGripRigid-v3",
+                       "SoftGraspGripRigidTorsion-v3")  # fmt: skip
     gym.register_envs(softgrasp_env)  # the documented idiom is accepted
     for env_id in ENV_IDS:
         spec = gym.spec(env_id)
         assert spec.max_episode_steps == 100
-        assert spec.kwargs.get("arm", "smooth") == ("smooth" if env_id.endswith(("-v3", "-v4")) else "jump")
-    # SoftGraspGoal-v4 is v3's goal id with its episodes ended by physics failures only (issue 22)
+        assert "arm" not in spec.kwargs
+        versions = [i.rsplit("-", 1)[1] for i in ENV_IDS if i.rsplit("-", 1)[0] == env_id.rsplit("-", 1)[0]]
+        assert len(versions) <= 2
+    # SoftGraspGoal-v4 is v3's goal id with its episodes ended by physics failures only
     assert gym.spec("SoftGraspGoal-v4").kwargs == {**gym.spec("SoftGraspGoal-v3").kwargs, "end_when_knocked_over": False}
-    for version, carry in (("v3", True), ("v2", True), ("v1", False)):
-        assert gym.spec(f"SoftGrasp-{version}").kwargs["fingers"] == "tissue"
-        assert gym.spec(f"SoftGraspRigid-{version}").kwargs["fingers"] == "rigid"
-        for name in ("SoftGrasp", "SoftGraspRigid", "SoftGraspSparse"):
-            assert gym.spec(f"{name}-{version}").kwargs["carry"] is carry
+    assert gym.spec("SoftGrasp-v3").kwargs["fingers"] == "tissue"
+    assert gym.spec("SoftGraspRigid-v3").kwargs["fingers"] == "rigid"
+    for name in ("SoftGrasp", "SoftGraspRigid", "SoftGraspSparse"):
+        assert gym.spec(f"{name}-v3").kwargs["carry"] is True
+
+
+@pytest.mark.parametrize("env_id", sorted(RETIRED))
+def test_a_retired_id_names_the_release_that_has_it(env_id):
+    """The v1/v2 ids (and SoftGraspGoal-v1) are retired: gym.make of one, with any arguments, is
+    gymnasium's DeprecatedEnv naming release 0.6.0 and its tag; they are not in ENV_IDS."""
+    assert env_id not in ENV_IDS and env_id.endswith(("-v1", "-v2"))
+    message = (rf"{env_id} was retired; `pip install softgrasp-env==0\.6\.0` \(git tag v0\.6\.0\) reproduces its "
+               "results")  # fmt: skip
+    with pytest.warns(DeprecationWarning, match="is out of date"):  # gymnasium's own, on any older version
+        with pytest.raises(gym.error.DeprecatedEnv, match=message):
+            gym.make(env_id)
+    with pytest.raises(gym.error.DeprecatedEnv, match=message):
+        gym.make(env_id, arm="jump", disable_env_checker=True)
+
+
+def test_the_retired_table_is_the_ids_0_6_0_had_beyond_these():
+    assert sorted(RETIRED) == sorted([*(f"SoftGrasp{f}-{v}" for f in ("", "Rigid", "Sparse") for v in ("v1", "v2")),
+                                      "SoftGraspGoal-v1", "SoftGraspEasy-v1", "SoftGraspEasyRigid-v1"])  # fmt: skip
+    assert set(RETIRED.values()) == {"0.6.0"}
+    assert "This release registers SoftGraspGoal-v4, SoftGraspGoal-v3" in retired_message("SoftGraspGoal-v1")
 
 
 def test_register_envs_is_idempotent():

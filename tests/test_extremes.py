@@ -1,10 +1,10 @@
-"""Every accepted setting runs (issue 12): the ends of the documented ranges, alone and in a small
+"""Every accepted setting runs: the ends of the documented ranges, alone and in a small
 grid of combinations, run episodes without divergence; a seeded fuzz over the documented ranges
 gives no NaN and no exception but the documented ValueErrors, and no divergence.
 
 Where a range's end did not run it was narrowed, with the measurement in the docstring of the
-setting (config.py: SimConfig.dt, TissueConfig.shear_modulus / stiffness / mass_density / group_size; fingers/
-tissue.py: the sag, particle-width and consistent-squeeze rules of the tissue kind; arguments.py:
+setting (config.py: SimConfig.dt, TissueConfig.shear_modulus / mass_density / group_size; fingers/
+tissue.py: the particle-width and consistent-squeeze rules of the tissue kind; arguments.py:
 MAX_ARM_STEP)."""
 
 from __future__ import annotations
@@ -70,9 +70,6 @@ ENDS = {
     "tissue mass density 1e4": dict(tissue=TissueConfig(mass_density=1e4)),
     "shear_modulus 1e3 (the softest)": dict(shear_modulus=1e3),
     "shear_modulus 1e6 (the stiffest)": dict(shear_modulus=1e6),
-    "per-step material (v1/v2)": dict(tissue_material="per_step"),
-    "per-step stiffness 0.1": dict(tissue=TissueConfig(material="per_step", stiffness=0.1)),
-    "per-step stiffness 1": dict(tissue=TissueConfig(material="per_step", stiffness=1.0)),
     "radius_scale 0.05": dict(tissue=TissueConfig(radius_scale=0.05)),
     "radius_scale 0.79 (widest at the default density)": dict(tissue=TissueConfig(radius_scale=0.79)),
     "normal_radius 1e-4": dict(tissue=TissueConfig(normal_radius=1e-4)),
@@ -102,22 +99,14 @@ ENDS = {
 COMBINATIONS = {
     "dt 1/60, 1 iteration": dict(sim=SimConfig(dt=1 / 60, iterations=1)),
     "dt 1/60, group_size 16": dict(sim=SimConfig(dt=1 / 60), tissue=TissueConfig(group_size=16)),
-    "dt 1/60, no damping, the slackest per-step tissue it accepts": dict(
-        sim=SimConfig(dt=1 / 60, damping=0.0), tissue=TissueConfig(material="per_step", stiffness=0.46)),  # fmt: skip
     "dt 1/60, no damping, the softest tissue": dict(sim=SimConfig(dt=1 / 60, damping=0.0), shear_modulus=1e3),
     "dt 1/60, the stiffest tissue": dict(sim=SimConfig(dt=1 / 60), shear_modulus=1e6),
     "consistent, dt 1/60, finger_force 7.5 (its strongest at 1/60)": dict(
         sim=SimConfig(dt=1 / 60, coupling="consistent"), finger_force=7.5),  # fmt: skip
     "consistent, finger_force 30, gripper_speed 2": dict(sim=SimConfig(coupling="consistent"), finger_force=30.0,
                                                          gripper_speed=2.0),  # fmt: skip
-    "1 iteration, group_size 16, per-step stiffness 0.1": dict(
-        sim=SimConfig(iterations=1), tissue=TissueConfig(group_size=16, material="per_step", stiffness=0.1)),  # fmt: skip
     "1 iteration, group_size 16, the softest tissue": dict(sim=SimConfig(iterations=1),
                                                            tissue=TissueConfig(group_size=16, shear_modulus=1e3)),  # fmt: skip
-    "heaviest tissue, per-step stiffness 0.1": dict(tissue=TissueConfig(mass_density=1e4, material="per_step",
-                                                                        stiffness=0.1)),  # fmt: skip
-    "lightest tissue, per-step stiffness 0.1": dict(tissue=TissueConfig(mass_density=100.0, material="per_step",
-                                                                        stiffness=0.1)),  # fmt: skip
     "heaviest and softest tissue": dict(tissue=TissueConfig(mass_density=1e4, shear_modulus=1e3)),
     "lightest and stiffest tissue": dict(tissue=TissueConfig(mass_density=100.0, shear_modulus=1e6)),
     "gravity 100, heaviest tissue": dict(sim=SimConfig(gravity=100.0), tissue=TissueConfig(mass_density=1e4)),
@@ -153,9 +142,8 @@ def test_ends_and_combinations_run_over_more_seeds(name):
     """Eight more episodes each (5 random-action, 3 scripted): at most one ends in the one known
     failure, a tissue particle snagged over the cylinder's rim and torn just past the 3 cm limit
     (at the defaults about once in 10,000 random-action steps, README). Measured over the 56
-    settings: 54 none; 'lightest tissue, stiffness 0.1' one (random seed 3, 3.4 cm; the same
-    seed tears at 3.0 cm with 300 kg/m^3 or with stiffness 0.2), 'every randomisation range wide'
-    one (scripted seed 2, 3.3 cm; none with jaw_wedge_range 0.15 or without the radius range).
+    settings of release 0.6.0 (six of them the per-step material's, retired since): 54 none;
+    'lightest tissue, stiffness 0.1' (per-step) one, 'every randomisation range wide' one (scripted seed 2, 3.3 cm; none with jaw_wedge_range 0.15 or without the radius range).
     Fixing the snag is physics left to do; any other divergence, or a second, fails."""
     problems = _episodes({**ENDS, **COMBINATIONS, **SLOW_COMBINATIONS}[name], seeds=range(1, 6), scripted=range(1, 4))
     assert len(problems) <= 1 and all("tissue torn: a particle 3." in p for p in problems), problems
@@ -170,8 +158,6 @@ def test_slow_ends_run(kwargs):
 
 @pytest.mark.parametrize("kwargs, match", [
     (dict(sim=SimConfig(dt=1 / 60), gripper_speed=2.0), r"gripper_speed=2 m/s with sim\.dt=0\.0166667 s .* at most 0\.5 m/s"),
-    (dict(sim=SimConfig(dt=1 / 60), tissue=TissueConfig(material="per_step", stiffness=0.1)),
-     r"too slack for the time step.*sags it 2\.73 cm.*at least 0\.454"),
     (dict(tissue=TissueConfig(radius_scale=2.0)), r"particles are too wide.*0\.0316 m.*at least 25600 per m\^2"),
     (dict(particle_density=900.0), r"particles are too wide.*0\.0200 m"),
     (dict(tissue=TissueConfig(normal_radius=0.03)), r"tissue pad \(0\.038 m\)"),
@@ -197,9 +183,9 @@ def _draw(rng: np.random.Generator) -> dict:
         fingers=str(rng.choice(["tissue", "tissue", "rigid", "segmented"])),
         sim=SimConfig(dt=1.0 / rate, iterations=int(rng.integers(1, 8)), damping=lu(1e-3, 1e4),
                       coupling=str(rng.choice(["thesis", "consistent"])), gravity=float(rng.uniform(0, 20))),
-        tissue=TissueConfig(particle_density=lu(2304, 2e4), **(
-                                dict(shear_modulus=lu(1e3, 1e6)) if rng.uniform() < 0.7 else
-                                dict(material="per_step", stiffness=float(rng.uniform(0.1, 1.0)))),
+        # (rng.uniform(), ...)[1]: the draw that once chose a retired material, kept so that every
+        # other setting is drawn as before
+        tissue=TissueConfig(particle_density=lu(2304, 2e4), shear_modulus=(rng.uniform(), lu(1e3, 1e6))[1],
                             mass_density=lu(100, 1e4), group_size=int(rng.integers(4, 17)),
                             radius_scale=float(rng.uniform(0.05, 1.0)), normal_radius=lu(1e-4, 0.01), extrude=lu(0.002, 0.02), friction_static=mu_s,
                             friction_dynamic=mu_s * float(rng.uniform(0.3, 1.0))),

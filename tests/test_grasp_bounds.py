@@ -21,7 +21,7 @@ def test_the_scripted_grasp_holds_with_little_in_hand_motion_at_every_dt(kind, h
     """Held at every dt from 1/1000 to 1/120 s with in-hand motion (lift-off to the end) under
     1 mm and the palm under 2 m/s^2. Measured soft 0.29 / 0.41 / 0.35 / 0.30 mm (the per-step
     material of 0.4.0: 0.15 / 0.34 / 1.10 / 0.04, its pad crushed at 1/120), rigid <= 0.01 mm,
-    palm 1.0-1.5 m/s^2 (the v1 ids' arm: dropped at 1/1000, 48.7 / 3.7 / 3.0 mm soft, 71 / 31 /
+    palm 1.0-1.5 m/s^2 (release 0.6.0's v1 ids' arm: dropped at 1/1000, 48.7 / 3.7 / 3.0 mm soft, 71 / 31 /
     7.4 / 0 mm rigid, 500 / 344 / 86 / 22 m/s^2)."""
     r = scripted_episode(KINDS[kind], "v3", dt=1.0 / hz)
     assert r["held"] and not r["diverged"]
@@ -41,7 +41,7 @@ BOUNDS = {"soft": (0.95, 1.05), "soft-consistent": (0.95, 1.05), "rigid": (1.0, 
 """Held at the first multiple of Coulomb's bound, not at the second. Bisected (benchmarks/
 grasp_checks.py): soft and consistent 0.463 kg (-3.0 % against this bound; -4.5 % with the palm's
 peak measured at the boundary, 1.33 m/s^2; +1.3 / -1.0 % with the cylinder's own, 2.00 / 1.74),
-within issue 19's 5 % (the per-step material of v1/v2: 0.433, -9.3 %: the cylinder bounced on
+within 5 % (the per-step material of release 0.6.0's v1/v2: 0.433, -9.3 %: the cylinder bounced on
 pads whose stiffness was a per-step number); rigid and torsional 0.515 (+7.8 %: the cylinder
 leaves the ground part-way through the arm's acceleration, its own peak 1.1 m/s^2:
 2 mu F / (g + 1.1) = 0.494 kg, +4.2 %)."""

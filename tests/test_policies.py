@@ -18,23 +18,25 @@ from tests.helpers import run_episode
 
 def test_the_baselines_are_package_data_with_cards():
     names = list_baselines()
-    # the v1/v2 set (25) and issue 22's runs (the v3 ids, the goal id's v4) as they are shipped
-    assert len([n for n in names if "-v1_" in n or "-v2_" in n]) == 25 and len(names) >= 28, names
+    # every baseline is of a registered id (the checkout's: every seed; a wheel's: the best of each)
+    import softgrasp_env
+
+    assert names and all(baseline_card(n)["env"] in softgrasp_env.ENV_IDS for n in names), names
     assert {"SoftGrasp-v3_sac_0", "SoftGraspRigid-v3_sac_0", "SoftGraspRigid-v3_ppo_0"} <= set(names)
     assert policies.TRAINED.parent.name == "policies" and policies.TRAINED.parent.parent.name == "softgrasp_env"
-    v2 = list_baselines(env="SoftGrasp-v2")
-    assert v2 == [f"SoftGrasp-v2_{a}_{s}" for a in ("ppo", "sac") for s in range(3)]
-    assert list_baselines(env="SoftGrasp-v2", algo="sac") == [f"SoftGrasp-v2_sac_{s}" for s in range(3)]
-    card = baseline_card("SoftGrasp-v2_sac_0")
-    assert card["env"] == "SoftGrasp-v2" and card["algo"] == "sac" and card["evaluation"]["episodes"] == 100
+    v3 = list_baselines(env="SoftGrasp-v3")
+    assert v3 == [f"SoftGrasp-v3_{a}_{s}" for a in ("ppo", "sac") for s in range(3)]
+    assert list_baselines(env="SoftGrasp-v3", algo="sac") == [f"SoftGrasp-v3_sac_{s}" for s in range(3)]
+    card = baseline_card("SoftGrasp-v3_sac_0")
+    assert card["env"] == "SoftGrasp-v3" and card["algo"] == "sac" and card["evaluation"]["episodes"] == 100
     for name in names:
         folder = baseline_path(name)
         assert (folder / "model.zip").is_file() and (folder / "card.json").is_file()
 
 
 def test_an_unknown_baseline_is_named_with_the_nearest_ones():
-    with pytest.raises(ValueError, match=r"no shipped baseline 'SoftGrasp-v2_sac_7' \(did you mean 'SoftGrasp-v2_sac_"):
-        baseline_card("SoftGrasp-v2_sac_7")
+    with pytest.raises(ValueError, match=r"no shipped baseline 'SoftGrasp-v3_sac_7' \(did you mean 'SoftGrasp-v3_sac_"):
+        baseline_card("SoftGrasp-v3_sac_7")
     with pytest.raises(ValueError, match="no shipped baseline '../trained'"):
         load_baseline("../trained")
 
@@ -42,11 +44,11 @@ def test_an_unknown_baseline_is_named_with_the_nearest_ones():
 def test_a_loaded_baseline_acts_on_raw_observations_as_agents_runs_does():
     from agents.runs import load_run
 
-    b = load_baseline("SoftGraspRigid-v2_ppo_0")
-    run = load_run(baseline_path("SoftGraspRigid-v2_ppo_0"))
+    b = load_baseline("SoftGraspRigid-v3_ppo_0")
+    run = load_run(baseline_path("SoftGraspRigid-v3_ppo_0"))
     env = b.make_env()
     try:
-        assert env.spec.id == "SoftGraspRigid-v2" and b.stats is not None and not b.stats.training
+        assert env.spec.id == "SoftGraspRigid-v3" and b.stats is not None and not b.stats.training
         seen = []
 
         def act(obs):
@@ -64,7 +66,7 @@ def test_a_loaded_baseline_acts_on_raw_observations_as_agents_runs_does():
 
 
 def test_a_her_baseline_loads_onto_an_env_of_its_own():
-    b = load_baseline("SoftGraspGoal-v1_her-sac_0")
+    b = load_baseline("SoftGraspGoal-v4_her-sac-demos_2")
     try:
         assert b.stats is None and b._env is not None
         env = b.make_env()
@@ -84,27 +86,41 @@ def test_loading_without_stable_baselines3_names_the_train_extra(monkeypatch):
         return real_import(name, *args, **kwargs)
 
     monkeypatch.setattr(builtins, "__import__", no_sb3)
-    assert list_baselines() and baseline_card("SoftGrasp-v2_sac_0")  # cards need no SB3
+    assert list_baselines() and baseline_card("SoftGrasp-v3_sac_1")  # cards need no SB3
     with pytest.raises(ImportError, match=r"softgrasp-env\[train\]") as exc:
-        load_baseline("SoftGrasp-v2_sac_0")
-    assert "SoftGrasp-v2_sac_0" in str(exc.value)
+        load_baseline("SoftGrasp-v3_sac_1")
+    assert "SoftGrasp-v3_sac_1" in str(exc.value)
 
 
-def test_a_missing_old_baseline_says_where_the_old_ones_are():
-    """The wheel leaves issue 10's v1/v2 models in the repository: asking an install for one names
-    where they are; a missing v3 name gets the plain list."""
-    with pytest.raises(ValueError, match="not in the wheel.*source repository"):
-        baseline_card("SoftGrasp-v2_sac_7")
+def test_a_missing_baseline_says_where_the_others_are():
+    """The wheel carries the best baseline of each id: asking for another (or one of a retired id)
+    names where they are; a name that is no baseline's gets the plain list."""
+    with pytest.raises(ValueError, match="best baseline of each id only.*source repository.*retired id"):
+        baseline_card("SoftGrasp-v2_sac_0")
     with pytest.raises(ValueError) as exc:
-        baseline_card("SoftGrasp-v3_sac_7")
-    assert "not in the wheel" not in str(exc.value) and "SoftGrasp-v3_sac_0" in str(exc.value)
+        baseline_card("ppo_0")
+    assert "best baseline of each id" not in str(exc.value) and "SoftGrasp-v3_sac_0" in str(exc.value)
+
+
+def test_the_arm_keyword_of_the_scripted_policy_is_retired():
+    """ScriptedGraspPolicy(arm="smooth") (the only arm left) warns and is the default;
+    arm="jump" names release 0.6.0; any other keyword is a TypeError."""
+    with pytest.warns(DeprecationWarning, match="arm='smooth' is deprecated"):
+        policy = ScriptedGraspPolicy(arm="smooth")
+    obs = np.zeros(24)
+    obs[7:10] = [0.01, 0.0, -0.05]
+    assert np.array_equal(policy(obs), ScriptedGraspPolicy()(obs))
+    with pytest.raises(ValueError, match=r"arm='jump' was retired; `pip install softgrasp-env==0\.6\.0`"):
+        ScriptedGraspPolicy(arm="jump")
+    with pytest.raises(TypeError, match="unexpected keyword"):
+        ScriptedGraspPolicy(gripper="x")
 
 
 def test_the_scripted_policy_is_one_class_under_both_names():
     import agents.scripted
 
     assert agents.scripted.ScriptedGraspPolicy is ScriptedGraspPolicy  # one implementation, in the package
-    env = gym.make("SoftGraspRigid-v2")
+    env = gym.make("SoftGraspRigid-v3")
     try:
         obs, _ = env.reset(seed=3)
         action = ScriptedGraspPolicy()(obs)

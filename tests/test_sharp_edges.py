@@ -29,7 +29,7 @@ def test_a_time_limit_that_ends_before_the_carry_warns_at_make():
     assert _make_warnings("SoftGrasp-v3") == []  # the registered 100 steps: the carry ends on the last
     assert _make_warnings("SoftGrasp-v3", max_episode_steps=100) == []
     assert _make_warnings("SoftGrasp-v3", max_episode_steps=-1) == []  # no time limit at all
-    assert _make_warnings("SoftGrasp-v1", max_episode_steps=20) == []  # no carry: a lift may succeed any time
+    assert _make_warnings("SoftGraspEasy-v3", max_episode_steps=20) == []  # no carry: a lift may succeed any time
     # the rule follows the carry's settings and the control rate
     (msg,) = _make_warnings("SoftGraspRigid-v3", carry_start=5.0, control_frequency=40.0)
     assert ">= 260" in msg
@@ -88,5 +88,5 @@ def test_evaluate_names_the_env_it_ran(capsys):
 
     assert main(["--policy", "scripted", "--episodes", "1"]) == 0
     assert capsys.readouterr().out.startswith("SoftGrasp-v3 / scripted: success")
-    assert main(["--policy", "random", "--env", "SoftGraspRigid-v1", "--episodes", "1"]) == 0
-    assert capsys.readouterr().out.startswith("SoftGraspRigid-v1 / random: success")
+    assert main(["--policy", "random", "--env", "SoftGraspEasyRigid-v3", "--episodes", "1"]) == 0
+    assert capsys.readouterr().out.startswith("SoftGraspEasyRigid-v3 / random: success")

@@ -18,7 +18,7 @@ from agents.scripted import ScriptedGraspPolicy
 
 
 def test_scripted_policy_succeeds_where_random_actions_do_not():
-    env = gym.make("SoftGraspEasyRigid-v1")  # the evaluator, quickly: rigid twin, gentle start
+    env = gym.make("SoftGraspEasyRigid-v3")  # the evaluator, quickly: rigid twin, gentle start
     scripted = evaluate(env, ScriptedGraspPolicy(), episodes=3, seed=100)
     env.action_space.seed(0)
     random = evaluate(env, load_policy("random", env), episodes=3, seed=100)
@@ -28,9 +28,9 @@ def test_scripted_policy_succeeds_where_random_actions_do_not():
 
 
 def test_evaluate_resets_a_stateful_policy_at_every_episode():
-    """The grip task's scripted policies keep state within an episode (issue 21): the evaluator
+    """The grip task's scripted policies keep state within an episode: the evaluator
     resets them at each episode's start, so every episode meets the policy as it was made."""
-    env = gym.make("SoftGraspEasyRigid-v1")
+    env = gym.make("SoftGraspEasyRigid-v3")
 
     class Counting:
         def __init__(self):
@@ -53,9 +53,9 @@ def test_evaluate_resets_a_stateful_policy_at_every_episode():
 
 
 def test_default_algos_and_presets():
-    assert default_algo("SoftGraspGoal-v1") == "her-sac"
-    assert default_algo("SoftGrasp-v2") == "sac"
-    env = gym.make("SoftGraspRigid-v2")
+    assert default_algo("SoftGraspGoal-v4") == "her-sac"
+    assert default_algo("SoftGrasp-v3") == "sac"
+    env = gym.make("SoftGraspRigid-v3")
     for algo in ("ppo", "sac"):
         model = make_model(algo, env, seed=0, **({"n_steps": 64, "batch_size": 64} if algo == "ppo" else {}))
         assert model.gamma == 0.98
@@ -65,9 +65,9 @@ def test_default_algos_and_presets():
     assert set(ALGOS) == {"ppo", "sac", "her-sac"}
 
 
-@pytest.mark.parametrize(("env_id", "algo", "steps"), [("SoftGraspRigid-v2", "sac", 300),
-                                                       ("SoftGraspRigid-v2", "ppo", 1024),
-                                                       ("SoftGraspGoal-v1", "her-sac", 230)])  # fmt: skip
+@pytest.mark.parametrize(("env_id", "algo", "steps"), [("SoftGraspRigid-v3", "sac", 300),
+                                                       ("SoftGraspRigid-v3", "ppo", 1024),
+                                                       ("SoftGraspGoal-v4", "her-sac", 230)])  # fmt: skip
 def test_train_writes_a_run_that_evaluate_can_load(tmp_path, env_id, algo, steps, capsys):
     import train
 
@@ -104,9 +104,9 @@ def test_train_rejects_bad_arguments(tmp_path):
     import train
 
     with pytest.raises(SystemExit):
-        train.main(["--env", "SoftGrasp-v2", "--algo", "her-sac", "--out", str(tmp_path)])
+        train.main(["--env", "SoftGrasp-v3", "--algo", "her-sac", "--out", str(tmp_path)])
     with pytest.raises(SystemExit):
-        train.main(["--env", "SoftGrasp-v2", "--timesteps", "0", "--out", str(tmp_path)])
+        train.main(["--env", "SoftGrasp-v3", "--timesteps", "0", "--out", str(tmp_path)])
     with pytest.raises(SystemExit):
         evaluate_main(["--policy", str(tmp_path / "missing.zip")])
 
@@ -119,7 +119,7 @@ def test_making_a_model_leaves_the_presets_as_they_are():
     from agents.baselines import PRESETS, make_model
 
     before = copy.deepcopy(PRESETS)
-    env = gym.make("SoftGraspRigid-v2")
+    env = gym.make("SoftGraspRigid-v3")
     for algo in ("ppo", "sac"):
         make_model(algo, env, seed=0)
     env.close()
@@ -135,7 +135,7 @@ def test_the_zoo_hyperparameter_files_say_what_the_presets_say():
     from agents.baselines import PRESETS
 
     root = Path(__file__).resolve().parents[2] / "agents" / "hyperparams"
-    for name, sections in (("ppo.yml", {"SoftGrasp-v2": "ppo"}), ("sac.yml", {"SoftGrasp-v2": "sac", "SoftGraspGoal-v1": "her-sac"})):
+    for name, sections in (("ppo.yml", {"SoftGrasp-v3": "ppo"}), ("sac.yml", {"SoftGrasp-v3": "sac", "SoftGraspGoal-v4": "her-sac"})):
         text = (root / name).read_text()
         for env_id, algo in sections.items():
             block = re.search(rf"^{re.escape(env_id)}:.*?(?=^\S|\Z)", text, re.S | re.M).group(0)

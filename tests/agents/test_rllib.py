@@ -41,11 +41,11 @@ def test_ppo_on_a_local_ray_instance_with_two_env_runners_and_evaluation_of_its_
     """``ray.init(num_cpus=2)`` (``--num-cpus 2``): a PPO iteration sampled by 2 env runners
     completes, the success rate is reported, a checkpoint is written, and agents.evaluate loads it
     as it loads an SB3 run: the same table line, deterministic actions inside the action space."""
-    rc = rllib_train.main(["--env", "SoftGraspRigid-v2", "--num-env-runners", "2", "--num-cpus", "2", *SHORT,
+    rc = rllib_train.main(["--env", "SoftGraspRigid-v3", "--num-env-runners", "2", "--num-cpus", "2", *SHORT,
                            "--out", str(tmp_path)])  # fmt: skip
     assert rc == 0
-    trial, meta = _trial(tmp_path, "SoftGraspRigid-v2_rllib-ppo")
-    assert meta["backend"] == "rllib" and meta["env"] == "SoftGraspRigid-v2" and meta["num_env_runners"] == 2
+    trial, meta = _trial(tmp_path, "SoftGraspRigid-v3_rllib-ppo")
+    assert meta["backend"] == "rllib" and meta["env"] == "SoftGraspRigid-v3" and meta["num_env_runners"] == 2
     assert meta["timesteps_trained"] >= 200 and 0.0 <= meta["success_rate"] <= 1.0
     progress = (trial / "progress.csv").read_text().splitlines()
     assert len(progress) >= 2 and "env_runners/success_rate" in progress[0]
@@ -54,9 +54,9 @@ def test_ppo_on_a_local_ray_instance_with_two_env_runners_and_evaluation_of_its_
     capsys.readouterr()
     assert evaluate_main(["--policy", str(trial), "--episodes", "2"]) == 0
     line = capsys.readouterr().out
-    assert line.startswith(f"SoftGraspRigid-v2 / {trial}: success ") and "over 2 episodes" in line
+    assert line.startswith(f"SoftGraspRigid-v3 / {trial}: success ") and "over 2 episodes" in line
 
-    env = gym.make("SoftGraspRigid-v2")
+    env = gym.make("SoftGraspRigid-v3")
     try:
         policy = load_policy(str(trial / meta["checkpoint"]), env)  # a checkpoint directory loads too
         obs, _ = env.reset(seed=0)
@@ -68,9 +68,9 @@ def test_ppo_on_a_local_ray_instance_with_two_env_runners_and_evaluation_of_its_
         assert evaluate(env, policy, episodes=1, seed=1000).episodes == 1
     finally:
         env.close()
-    soft = gym.make("SoftGrasp-v2")
+    soft = gym.make("SoftGrasp-v3")
     try:
-        with pytest.raises(ValueError, match="trained on 'SoftGraspRigid-v2'"):
+        with pytest.raises(ValueError, match="trained on 'SoftGraspRigid-v3'"):
             load_policy(str(trial), soft)
         load_policy(str(trial), soft, other_env=True)  # on purpose: same spaces
     finally:
@@ -80,13 +80,13 @@ def test_ppo_on_a_local_ray_instance_with_two_env_runners_and_evaluation_of_its_
 def test_sac_trains_and_its_checkpoint_loads(tmp_path):
     """RLlib's SAC (new API stack) on our Box actions: an iteration past its learning start, a
     checkpoint, and the squashed Gaussian's deterministic action inside the bounds."""
-    rc = rllib_train.main(["--env", "SoftGraspEasyRigid-v1", "--algo", "sac", "--num-env-runners", "0", "--num-cpus", "1",
+    rc = rllib_train.main(["--env", "SoftGraspEasyRigid-v3", "--algo", "sac", "--num-env-runners", "0", "--num-cpus", "1",
                            "--algo-kwargs", "num_steps_sampled_before_learning_starts=100", "train_batch_size_per_learner=32",
                            "--timesteps", "200", "--out", str(tmp_path)])  # fmt: skip
     assert rc == 0
-    trial, meta = _trial(tmp_path, "SoftGraspEasyRigid-v1_rllib-sac")
+    trial, meta = _trial(tmp_path, "SoftGraspEasyRigid-v3_rllib-sac")
     assert meta["algo"] == "sac" and meta["timesteps_trained"] >= 200
-    env = gym.make("SoftGraspEasyRigid-v1")
+    env = gym.make("SoftGraspEasyRigid-v3")
     try:
         policy = load_policy(str(trial), env)
         obs, _ = env.reset(seed=0)
@@ -101,13 +101,13 @@ def test_tune_runs_one_trial_per_seed_and_grid_point_in_parallel(tmp_path):
     """``--seeds 0 1 --grid lr=0.0001``: two Tune trials, side by side on the 2 CPUs (each
     samples in its own process: 0 env runners), each with its seed and grid point in its
     directory name and run.json."""
-    rc = rllib_train.main(["--env", "SoftGraspEasyRigid-v1", "--num-env-runners", "0", "--num-cpus", "2",
+    rc = rllib_train.main(["--env", "SoftGraspEasyRigid-v3", "--num-env-runners", "0", "--num-cpus", "2",
                            "--seeds", "0", "1", "--grid", "lr=0.0001", *SHORT, "--out", str(tmp_path)])  # fmt: skip
     assert rc == 0
-    trials = sorted(p.name for p in (tmp_path / "SoftGraspEasyRigid-v1_rllib-ppo").iterdir() if (p / "run.json").exists())
+    trials = sorted(p.name for p in (tmp_path / "SoftGraspEasyRigid-v3_rllib-ppo").iterdir() if (p / "run.json").exists())
     assert trials == ["seed_0_lr_0.0001", "seed_1_lr_0.0001"]
     for name, seed in zip(trials, (0, 1), strict=True):
-        meta = json.loads((tmp_path / "SoftGraspEasyRigid-v1_rllib-ppo" / name / "run.json").read_text())
+        meta = json.loads((tmp_path / "SoftGraspEasyRigid-v3_rllib-ppo" / name / "run.json").read_text())
         assert meta["seed"] == seed and meta["hyperparameters"]["lr"] == 0.0001 and meta["timesteps_trained"] >= 200
 
 
@@ -127,17 +127,17 @@ def test_training_joins_a_two_node_cluster_and_restarts_a_killed_env_runner(tmp_
     try:
         cluster.add_node(num_cpus=2)
         cluster.wait_for_nodes()
-        rc = rllib_train.main(["--env", "SoftGrasp-v2", "--num-env-runners", "2", "--address", cluster.address, *SHORT,
+        rc = rllib_train.main(["--env", "SoftGrasp-v3", "--num-env-runners", "2", "--address", cluster.address, *SHORT,
                                "--out", str(tmp_path)])  # fmt: skip
         assert rc == 0
-        _, meta = _trial(tmp_path, "SoftGrasp-v2_rllib-ppo")
+        _, meta = _trial(tmp_path, "SoftGrasp-v3_rllib-ppo")
         assert meta["timesteps_trained"] >= 200
 
         ray.init(address=cluster.address)
         try:
             assert len([n for n in ray.nodes() if n["Alive"]]) == 2
             algo = rllib_train.build_algorithm(
-                "SoftGrasp-v2", num_env_runners=2, num_cpus_per_env_runner=1.0,
+                "SoftGrasp-v3", num_env_runners=2, num_cpus_per_env_runner=1.0,
                 training={"train_batch_size_per_learner": 200, "minibatch_size": 100, "num_epochs": 1})  # fmt: skip
             try:
                 group = algo.env_runner_group

@@ -57,9 +57,9 @@ def test_the_command_lines_refuse_a_bad_thread_count_before_anything_runs(main, 
 
 
 def test_a_run_records_the_threads_it_trained_on(tmp_path, restore_threads):
-    args = ["--env", "SoftGraspEasyRigid-v1", "--algo", "ppo", "--algo-kwargs", "n_steps=64", "batch_size=64",
+    args = ["--env", "SoftGraspEasyRigid-v3", "--algo", "ppo", "--algo-kwargs", "n_steps=64", "batch_size=64",
             "--timesteps", "64", "--eval-every", "64", "--eval-episodes", "1", "--no-progress",
             "--out", str(tmp_path), "--torch-threads", "2"]  # fmt: skip
     assert train.main(args) == 0
-    meta = json.loads((tmp_path / "SoftGraspEasyRigid-v1_ppo_0" / "run.json").read_text())
+    meta = json.loads((tmp_path / "SoftGraspEasyRigid-v3_ppo_0" / "run.json").read_text())
     assert meta["torch_threads"] == 2 and torch.get_num_threads() == 2

@@ -20,7 +20,7 @@ from agents import runs
 from agents.evaluate import main as evaluate_main
 from softgrasp_env.env import SoftGraspEnv
 
-ENV = "SoftGraspEasyRigid-v1"  # fast, and random actions end episodes (tip the cylinder) within the tiny budgets
+ENV = "SoftGraspEasyRigid-v3"  # fast, and random actions end episodes (tip the cylinder) within the tiny budgets
 TINY_PPO = ["--env", ENV, "--algo", "ppo", "--algo-kwargs", "n_steps=64", "batch_size=64",
             "--timesteps", "64", "--eval-every", "64", "--eval-episodes", "1"]  # fmt: skip
 
@@ -230,7 +230,7 @@ def test_evaluation_refuses_missing_or_damaged_observation_statistics(tiny_run, 
 
 def test_run_json_records_the_command_steps_time_and_hyperparameters(tiny_run):
     meta = json.loads((tiny_run[0] / "run.json").read_text())
-    assert meta["command"].startswith("python train.py --env SoftGraspEasyRigid-v1 --algo ppo")
+    assert meta["command"].startswith("python train.py --env SoftGraspEasyRigid-v3 --algo ppo")
     assert "cylinder_mass=0.2" in meta["command"]
     # PPO collects whole rollouts: the steps really trained are reported, not the ones asked for
     assert meta["timesteps_trained"] == meta["num_timesteps"] >= 64
@@ -253,7 +253,7 @@ def test_evaluation_refuses_a_damaged_run_json_or_a_model_of_another_algo(tiny_r
     (run / "run.json").write_text(json.dumps({**meta, "env": 3}))
     with pytest.raises(ValueError, match=r"run\.json': 'env' must be a str"):
         runs.load_run(run)
-    (run / "run.json").write_text('{"env": "SoftGrasp-v1",')
+    (run / "run.json").write_text('{"env": "SoftGrasp-v3",')
     with pytest.raises(ValueError, match=r"run\.json' cannot be read: JSONDecodeError"):
         runs.load_run(run)
     (run / "run.json").write_text(json.dumps(meta))
@@ -265,16 +265,16 @@ def test_evaluation_refuses_a_damaged_run_json_or_a_model_of_another_algo(tiny_r
 def test_evaluation_refuses_another_env_unless_asked_and_never_other_spaces(tiny_run, capsys):
     run = str(tiny_run[0])
     with pytest.raises(SystemExit):
-        evaluate_main(["--policy", run, "--env", "SoftGraspRigid-v2", "--episodes", "1"])
-    assert "trained on 'SoftGraspEasyRigid-v1'" in capsys.readouterr().err
+        evaluate_main(["--policy", run, "--env", "SoftGraspRigid-v3", "--episodes", "1"])
+    assert "trained on 'SoftGraspEasyRigid-v3'" in capsys.readouterr().err
     # on purpose: the same spaces, another id
-    assert evaluate_main(["--policy", run, "--env", "SoftGraspRigid-v1", "--other-env", "--episodes", "1"]) == 0
-    assert "SoftGraspRigid-v1" in capsys.readouterr().out
+    assert evaluate_main(["--policy", run, "--env", "SoftGraspEasy-v3", "--other-env", "--episodes", "1"]) == 0
+    assert "SoftGraspEasy-v3" in capsys.readouterr().out
     with pytest.raises(SystemExit):
-        evaluate_main(["--policy", run, "--env", "SoftGraspGoal-v1", "--other-env", "--episodes", "1"])
+        evaluate_main(["--policy", run, "--env", "SoftGraspGoal-v4", "--other-env", "--episodes", "1"])
     assert "observation_space Dict(" in capsys.readouterr().err
-    with pytest.raises(SystemExit):  # v2 adds the clock: a v1 policy cannot read it
-        evaluate_main(["--policy", run, "--env", "SoftGraspRigid-v2", "--other-env", "--episodes", "1"])
+    with pytest.raises(SystemExit):  # the carry test adds the clock: a policy without it cannot read it
+        evaluate_main(["--policy", run, "--env", "SoftGraspRigid-v3", "--other-env", "--episodes", "1"])
     assert "(24,)" in capsys.readouterr().err
 
 

@@ -1,6 +1,6 @@
 """The trained baselines shipped in softgrasp_env/policies/trained/: each loads and runs, its card agrees with its
-files, the set covers the headline (soft vs rigid, PPO and SAC, 3 seeds each, HER+SAC on the goal
-id; for v2, the carry test, and v1 without it), and (slow) each reaches the success rate on its card again."""
+files, the set covers the headline (soft, rigid and torsional, PPO and SAC, 3 seeds each on the v3
+ids; HER+SAC on the goal id), and (slow) each reaches the success rate on its card again."""
 
 from __future__ import annotations
 
@@ -31,12 +31,10 @@ def test_the_headline_set_is_shipped():
     for d in MODELS:
         card = cards.read_card(d)
         groups.setdefault((card["algo"], card["env"]), set()).add(card["seed"])
-    # v2 (the carry test) is the headline; v1's set stays shipped, the evidence that without the
-    # carry learned policies score alike with soft and rigid fingers.
     for algo in ("ppo", "sac"):
-        for env_id in ("SoftGrasp-v2", "SoftGraspRigid-v2", "SoftGrasp-v1", "SoftGraspRigid-v1"):
+        for env_id in ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3"):
             assert len(groups.get((algo, env_id), ())) >= 3, (algo, env_id, groups)
-    assert groups.get(("her-sac", "SoftGraspGoal-v1")), groups
+    assert groups.get(("her-sac", "SoftGraspGoal-v4")), groups
 
 
 def test_wilson_interval_matches_the_published_values():

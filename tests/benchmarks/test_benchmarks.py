@@ -203,21 +203,20 @@ def test_taxel_field_pictures_the_hold_and_the_slip(tmp_path):
 def test_env_throughput_names_a_malformed_keyword_argument():
     from benchmarks.env_throughput import parse_spec
 
-    assert parse_spec("SoftGrasp-v3@tissue_material=per_step@shear_modulus=2e3") == (
-        "SoftGrasp-v3", {"tissue_material": "per_step", "shear_modulus": 2000.0})
+    assert parse_spec("SoftGrasp-v3@tissue_contact_cone=True@shear_modulus=2e3") == (
+        "SoftGrasp-v3", {"tissue_contact_cone": True, "shear_modulus": 2000.0})
     with pytest.raises(ValueError, match="'shear_modulus' is not key=value"):
         parse_spec("SoftGrasp-v3@shear_modulus")
 
 
-def test_grasp_checks_arm_row_is_smooth_on_v3_and_kicks_on_v1():
+def test_grasp_checks_arm_row_is_smooth():
     import re
 
     out = _run_plain("grasp_checks.py", "--rows", "arm")
     pattern = r"(v\d): palm peak acceleration, full-up from rest, dt 1/(\d+): ([\d.]+)"
     peak = {(v, hz): float(a) for v, hz, a in re.findall(pattern, out)}
-    assert len(peak) == 6, out
+    assert len(peak) == 3, out
     assert all(peak["v3", hz] <= 2.0 for hz in ("1000", "240", "120")), peak  # measured 1.40-1.50
-    assert peak["v1", "240"] > 50.0, peak  # the jump arm's kick, 85 m/s^2 measured
 
 
 def test_carry_bands_counts_the_tissue_and_the_torsional_peer_holding_in_every_band():

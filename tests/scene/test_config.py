@@ -33,14 +33,9 @@ def test_spacing_follows_density():
 @pytest.mark.parametrize(
     "kwargs, field",
     [
-        (dict(material="per_step", stiffness=0.0), "stiffness"),
-        (dict(material="per_step", stiffness=1.5), "stiffness"),
-        (dict(material="per_step", stiffness=-0.1), "stiffness"),
-        (dict(material="per_step", stiffness=NAN), "stiffness"),
-        (dict(material="per_step", stiffness=0.03), "stiffness"),  # too slack: tore under random actions (issue 12)
         (dict(mass_density=3e4), "mass_density"),  # too heavy: tore under random actions
         (dict(group_size=2), "group_size"),
-        (dict(group_size=17), "group_size"),  # bigger groups sagged and tore (issue 12)
+        (dict(group_size=17), "group_size"),  # bigger groups sagged and tore
         (dict(group_size=8.0), "group_size"),
         (dict(group_size=True), "group_size"),
         (dict(extrude=-1.0), "extrude"),
@@ -57,17 +52,14 @@ def test_spacing_follows_density():
         (dict(friction_static=NAN), "friction_static"),
         (dict(friction_dynamic=0.95), "friction_dynamic"),
         (dict(friction_static=0.3, friction_dynamic=0.31), "friction_dynamic"),
-        (dict(material="per_step", stiffness="0.5"), "stiffness"),
-        (dict(stiffness=0.5), "stiffness"),  # the per-step material's, given to the compliant one
-        (dict(material="per_step", shear_modulus=4e3), "shear_modulus"),  # the other way round
+        (dict(stiffness=0.5), "stiffness"),  # the retired per-step material's
+        (dict(material="per_step"), "material"),  # retired: names 0.6.0
         (dict(shear_modulus=999.0), "shear_modulus"),
         (dict(max_deviation=0.031), "max_deviation"),  # past the 3 cm that counts as torn
         (dict(max_deviation=0.0), "max_deviation"),
-        (dict(material="per_step", max_deviation=0.02), "max_deviation"),  # the compliant material's
         (dict(shear_modulus=1.1e6), "shear_modulus"),
         (dict(shear_modulus=NAN), "shear_modulus"),
         (dict(material="linear"), "material"),
-        (dict(material="per_step", stiffness=True), "stiffness"),
     ],
 )
 def test_tissue_config_rejects(kwargs, field):
@@ -78,10 +70,8 @@ def test_tissue_config_rejects(kwargs, field):
 @pytest.mark.parametrize(
     "kwargs",
     [
-        dict(material="per_step", stiffness=1.0),  # closed upper end
-        dict(material="per_step", stiffness=0.1),  # closed lower end
         dict(mass_density=1e4),
-        dict(material="per_step", stiffness=1),  # int for a float field is fine
+        dict(mass_density=100),  # int for a float field is fine
         dict(group_size=4),
         dict(group_size=16),
         dict(particle_density=100.0),
@@ -93,7 +83,6 @@ def test_tissue_config_rejects(kwargs, field):
         dict(shear_modulus=1e6),
         dict(max_deviation=1e-3),
         dict(max_deviation=0.03),
-        dict(material="per_step"),
     ],
 )
 def test_tissue_config_accepts_boundaries(kwargs):
@@ -103,16 +92,24 @@ def test_tissue_config_accepts_boundaries(kwargs):
 
 
 def test_the_materials_numbers_as_the_solver_reads_them():
-    """None means the material's default; the other material's numbers do not apply (inf: no
-    strain limit for the per-step material)."""
-    from softgrasp_env.config import DEFAULT_MAX_DEVIATION, DEFAULT_SHEAR_MODULUS, DEFAULT_STEP_STIFFNESS
+    """None means the material's default."""
+    from softgrasp_env.config import DEFAULT_MAX_DEVIATION, DEFAULT_SHEAR_MODULUS
 
-    compliant, per_step = TissueConfig(), TissueConfig(material="per_step")
+    compliant = TissueConfig()
     assert (compliant.modulus, compliant.deviation_limit) == (DEFAULT_SHEAR_MODULUS, DEFAULT_MAX_DEVIATION)
     assert TissueConfig(shear_modulus=8e3, max_deviation=0.01).modulus == 8e3
     assert TissueConfig(max_deviation=0.01).deviation_limit == 0.01
-    assert per_step.step_stiffness == DEFAULT_STEP_STIFFNESS and per_step.deviation_limit == math.inf
-    assert TissueConfig(material="per_step", stiffness=0.7).step_stiffness == 0.7
+
+
+def test_the_retired_material_keywords():
+    """material="compliant" (the only material since 0.6.0) warns and is the default; the per-step
+    material and its stiffness name release 0.6.0, which has them."""
+    with pytest.warns(DeprecationWarning, match="material='compliant' is deprecated"):
+        assert TissueConfig(material="compliant") == TissueConfig()
+    with pytest.raises(ValueError, match=r"TissueConfig\.material='per_step' was retired; `pip install softgrasp-env==0\.6\.0`"):
+        TissueConfig(material="per_step")
+    with pytest.raises(ValueError, match=r"TissueConfig\.stiffness=0\.5 .* was retired.*==0\.6\.0"):
+        TissueConfig(stiffness=0.5)
 
 
 @pytest.mark.parametrize(
@@ -196,36 +193,36 @@ def test_scene_config_rejects(kwargs, field):
 
 def test_scene_config_accepts():
     cfg = SceneConfig(fingers="rigid", yaw=math.pi / 4, lateral_offset=-0.1,
-                      tissue=TissueConfig(material="per_step", stiffness=0.2),
+                      tissue=TissueConfig(shear_modulus=2e4),
                       sim=SimConfig(coupling="consistent"))  # fmt: skip
     assert cfg.soft is False
     assert cfg.yaw == pytest.approx(math.pi / 4)
-    assert cfg.tissue.stiffness == 0.2
+    assert cfg.tissue.shear_modulus == 2e4
     assert cfg.sim.coupling == "consistent"
 
 
 def test_nested_configs_validate_on_their_own():
-    with pytest.raises(ValueError, match=r"TissueConfig\.stiffness"):
-        SceneConfig(tissue=TissueConfig(material="per_step", stiffness=2.0))
+    with pytest.raises(ValueError, match=r"TissueConfig\.shear_modulus"):
+        SceneConfig(tissue=TissueConfig(shear_modulus=2e6))
 
 
 def test_error_message_names_the_range_and_the_value():
     with pytest.raises(ValueError) as info:
-        TissueConfig(material="per_step", stiffness=1.5)
+        TissueConfig(shear_modulus=1.5)
     msg = str(info.value)
-    assert "[0.1, 1.0]" in msg and "1.5" in msg
+    assert "[1000.0, 1000000.0]" in msg and "1.5" in msg
     with pytest.raises(ValueError) as info:
         SimConfig(iterations=0)
     assert "[1, 200]" in str(info.value) and "0" in str(info.value)
 
 
 def test_configs_are_frozen_and_replace_revalidates():
-    cfg = TissueConfig(material="per_step")
+    cfg = TissueConfig()
     with pytest.raises(dataclasses.FrozenInstanceError):
-        cfg.stiffness = 0.9  # type: ignore[misc]
-    assert replace(cfg, stiffness=0.9).stiffness == 0.9
-    with pytest.raises(ValueError, match=r"TissueConfig\.stiffness"):
-        replace(cfg, stiffness=0.0)
+        cfg.max_deviation = 0.01  # type: ignore[misc]
+    assert replace(cfg, max_deviation=0.01).max_deviation == 0.01
+    with pytest.raises(ValueError, match=r"TissueConfig\.max_deviation"):
+        replace(cfg, max_deviation=0.0)
     with pytest.raises(ValueError, match=r"TissueConfig\.shear_modulus"):
         replace(TissueConfig(), shear_modulus=10.0)
     with pytest.raises(ValueError, match=r"SimConfig\.dt"):

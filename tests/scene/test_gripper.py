@@ -1,5 +1,5 @@
-"""The gripper's control: the env's action as a GripperControl (the smooth arm's velocity, the
-jump arm's displaced target, kept in the workspace; the finger target), the smooth arm's path
+"""The gripper's control: the env's action as a GripperControl (the palm's velocity, kept in the
+workspace; the finger target), the arm's path
 (speed and acceleration limits exactly, no overshoot, the same at every dt), and a control
 applied to the scene moves the palm and fingers as it says, smoothly under any action sequence."""
 
@@ -12,13 +12,12 @@ import numpy as np
 import pytest
 
 from softgrasp_env.config import SimConfig
-from softgrasp_env.scene import GraspScene, GripperActions, GripperControl, SceneConfig, Workspace
+from softgrasp_env.scene import GraspScene, GripperControl, SceneConfig, Workspace
 from softgrasp_env.scene.gripper import (
     GRIP_TOP,
     MAX_LEAD,
     WORKSPACE_HALF_WIDTH,
     PalmPath,
-    TargetActions,
     VelocityActions,
 )
 
@@ -41,10 +40,14 @@ def test_the_workspace_is_the_documented_box():
     np.testing.assert_allclose(WS.high, [WORKSPACE_HALF_WIDTH, WORKSPACE_HALF_WIDTH, GRIP_TOP])
 
 
-def test_each_arm_gets_its_actions():
-    assert type(GripperActions.of("smooth", 0.15, 20.0, WS, 0.06)) is VelocityActions
-    assert type(GripperActions.of("jump", 0.15, 20.0, WS, 0.06)) is TargetActions
-    with pytest.raises(ValueError, match="arm must be one of"):
+def test_the_arm_keyword_is_retired():
+    """SceneConfig(arm="smooth") (the only arm left) warns and is the default; the jump arm of
+    release 0.6.0 is a ValueError naming it."""
+    with pytest.warns(DeprecationWarning, match="arm='smooth' is deprecated"):
+        assert SceneConfig(fingers="rigid", arm="smooth") == CFG
+    with pytest.raises(ValueError, match=r"arm='jump' was retired; `pip install softgrasp-env==0\.6\.0`"):
+        SceneConfig(arm="jump")
+    with pytest.raises(ValueError, match="no longer an argument"):
         SceneConfig(arm="teleport")
 
 
@@ -57,20 +60,6 @@ def test_a_smooth_arm_action_is_a_velocity_with_the_workspace_as_its_box():
     np.testing.assert_allclose(c.palm_box[1], WS.high + G2P)
     assert c.finger_closing == pytest.approx(CFG.finger_max_opening)
     assert actions.control(np.zeros(4), _scene([0.0, 0.0, 0.2])).finger_closing == pytest.approx(0.03)
-
-
-def test_a_jump_arm_action_moves_the_target_in_the_workspace_and_within_reach_of_the_palm():
-    actions = TargetActions(0.15, 20.0, WS, CFG.finger_max_opening)
-    start = np.array([0.01, -0.02, 0.18])
-    c = actions.control(np.array([1.0, -0.5, 0.0, -1.0]), _scene(start))
-    np.testing.assert_allclose(c.palm_target - start, [0.0075, -0.00375, 0.0], atol=1e-15)
-    assert c.finger_closing == 0.0
-    edge = np.array([WORKSPACE_HALF_WIDTH, 0.0, 0.1]) + G2P  # grip at the +x edge: no further out
-    assert actions.control(np.array([1.0, 0, 0, 0]), _scene(edge)).palm_target[0] - G2P[0] == pytest.approx(
-        WORKSPACE_HALF_WIDTH)  # fmt: skip
-    target = np.array([0.05, 0.0, 0.15])  # the palm lags 3 cm: the target leads it by 2 cm at most
-    c = actions.control(np.array([1.0, 0, 0, 0]), _scene(target, target - [0.03, 0.0, 0.0]))
-    assert c.palm_target[0] == pytest.approx(target[0] - 0.03 + MAX_LEAD)
 
 
 def _run(path: PalmPath, control: GripperControl, steps: int, palm=None) -> np.ndarray:
@@ -147,7 +136,8 @@ def test_the_palm_itself_stays_under_the_acceleration_limit_under_bang_bang_acti
     """The env's actions flipping between full speed one way and the other every control step
     (the hardest on the arm), with a cylinder in the way: the palm's own acceleration, from
     pybullet's velocities at every physics step, stays under 2 m/s^2 (the arm's 1.5 plus what its
-    constraint and the contacts add) at every dt; the jump arm kicked it at 86 m/s^2 (1/240 s)."""
+    constraint and the contacts add) at every dt; an arm whose target jumped once per control step
+    (release 0.6.0's v1/v2) kicked it at 86 m/s^2 (1/240 s)."""
     cfg = SceneConfig(fingers="rigid", sim=SimConfig(dt=dt))
     sc = GraspScene(cfg)
     actions = VelocityActions(cfg.arm_speed, 20.0, Workspace.of(cfg), cfg.finger_max_opening)

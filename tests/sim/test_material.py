@@ -1,6 +1,6 @@
-"""The tissue's material in the grasp scene (issue 19, item 1): the pad's compression under the
-fingers' 3 N is a property of the material, the same at every dt and iteration count - where the
-per-step material of v1/v2 compressed 0.64 mm at 1/1000 s and 11 mm (crushed) at 1/120 s."""
+"""The tissue's material in the grasp scene: the pad's compression under the fingers' 3 N is a
+property of the material, the same at every dt and iteration count - where the per-step material
+of release 0.6.0's v1/v2 ids compressed 0.64 mm at 1/1000 s and 11 mm (crushed) at 1/120 s."""
 
 from __future__ import annotations
 

@@ -189,8 +189,8 @@ def test_hold_bound_is_coulombs(kind):
     """The heaviest cylinder the fingers hold at 3 N each is within 5 % of 2 mu_s F / g: held
     without slipping at 0.95 of it, slipping at 1.05, at the default mu_k = mu_s 0.9. The lift is
     slow (4 s) so that the test is of the static bound. Bisection measured
-    (benchmarks/accuracy_defaults.py): thesis -3.8 %, consistent -4.2 %, rigid twin -0.0 % (with
-    the jump arm and mu_k 0.7: -3.0 / -2.6 / -0.0 %; before the accuracy work: -14.5 %, +37 %,
+    (benchmarks/accuracy_defaults.py): thesis -3.8 %, consistent -4.2 %, rigid twin -0.0 % (release
+    0.6.0's v1/v2 arm and mu_k 0.7: -3.0 / -2.6 / -0.0 %; before the accuracy work: -14.5 %, +37 %,
     -45 %)."""
     plan = GraspPlan(lift=4.0, hold=3.0)
     base = SceneConfig(fingers="rigid" if kind == "rigid" else "tissue", sim=SimConfig(coupling="consistent" if kind == "consistent" else "thesis"))

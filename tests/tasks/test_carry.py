@@ -1,8 +1,7 @@
 """The carry test (softgrasp_env/tasks/carry.py): for the episode's last 1.5 s the arm, not the
-policy, sways the palm. v3: a sway drawn per episode (1.2-3 Hz, 0.5-1 m/s^2 peak, any horizontal
+policy, sways the palm: a sway drawn per episode (1.2-3 Hz, 0.5-1 m/s^2 peak, any horizontal
 direction), ramped in, and success needs the cylinder held at every step of it with little
-in-hand slide. v1/v2: 1 cm at 2 Hz across the jaw, success if held at the end. A rigid two-point
-grasp swings out near its pendulum frequency, the tissue holds."""
+in-hand slide. A rigid two-point grasp swings out near its pendulum frequency, the tissue holds."""
 
 from __future__ import annotations
 
@@ -93,7 +92,7 @@ def test_a_sway_the_arm_cannot_follow_is_refused_at_reset_and_at_make(make_env):
     with pytest.raises(ValueError, match="reset option 'carry_frequency' must be in"):
         env.reset(seed=0, options=dict(carry_frequency=0.0))
     with pytest.raises(ValueError, match=r"sway at 2 Hz \(1 cm\) peaks at 1.66 m/s\^2 \(1.58 steady"):
-        gym.make("SoftGrasp-v3", carry_amplitude=0.01, carry_acceleration=None, carry_frequency=2.0)
+        gym.make("SoftGrasp-v3", carry_acceleration=0.01 * (4.0 * math.pi) ** 2, carry_frequency=2.0)
 
 
 @pytest.mark.parametrize("angle", [0.0, 1.2])
@@ -158,7 +157,7 @@ def _verdicts(held, slides, slide_limit=CARRY_SLIDE_LIMIT):
     """CarryTest's success at each of 10 steps (dt 1 s, carry from 3 s for 5 s) for the given
     held flags and in-hand positions."""
     cfg = SceneConfig(fingers="rigid")
-    carry = CarryTest(_Script(held), dt=1.0, workspace=Workspace.of(cfg), start=3.0, duration=5.0, amplitude=None,
+    carry = CarryTest(_Script(held), dt=1.0, workspace=Workspace.of(cfg), start=3.0, duration=5.0,
                       acceleration=1.0, frequency=0.1, slide_limit=slide_limit)  # fmt: skip
     carry.draw(np.random.default_rng(0), {}, cfg)
     carry.begin(None, np.random.default_rng(0))
@@ -167,6 +166,22 @@ def _verdicts(held, slides, slide_limit=CARRY_SLIDE_LIMIT):
         reading = SimpleNamespace(cyl_rel=np.array([0.0, slide, 0.0]))
         out.append(carry.evaluate(reading, SimpleNamespace(steps=k)).success)
     return out
+
+
+def test_the_carry_test_defaults_to_the_envs_sway():
+    """CarryTest on its own draws the sway gym.make's defaults give: the same band, range, window
+    and slide limit."""
+    from dataclasses import fields
+
+    from softgrasp_env.arguments import EnvArguments
+
+    defaults = {f.name: f.default for f in fields(EnvArguments)}
+    cfg = SceneConfig(fingers="rigid")
+    carry = CarryTest(_Script([True] * 10), dt=1 / 240, workspace=Workspace.of(cfg))
+    assert carry.frequency_band == defaults["carry_frequency"] == (1.2, 3.0)
+    assert carry.acceleration_band == defaults["carry_acceleration"] == (0.5, 1.0)
+    assert carry.slide_limit == defaults["carry_slide_limit"] == CARRY_SLIDE_LIMIT
+    assert (carry.start, carry.duration) == (defaults["carry_start"], defaults["carry_duration"])
 
 
 def test_v3_success_needs_the_cylinder_held_through_the_whole_carry_without_sliding():
@@ -227,37 +242,6 @@ def test_the_grasp_holds_through_a_30_s_carry(env_id, coupling, make_env):
         assert lift.max() - lift.min() < 5e-4  # no slip in the hand
 
 
-# --- v1/v2 ---------------------------------------------------------------------------------------
-
-
-def test_the_v2_carry_sways_the_target_across_the_jaw_and_ignores_the_arm_action(make_env):
-    """v2 as it was: from 3.5 s the arm's target moves 1 cm sin(2 pi 2 Hz t) across the jaw; the
-    jump arm's palm lags it (measured 2.5 mm), nothing along the jaw or up; success at step 100."""
-    env = make_env("SoftGrasp-v2")
-    infos, obs, _ = _run(env, seed=1001, arm_during_carry=[1, -1, 1, 1])
-    yaw = env.unwrapped.scene.config.yaw
-    assert len(infos) == 100 and obs.shape[1] == 24
-    assert all(i["held"] for i in infos[60:]) and [i["is_success"] for i in infos[60:]] == [False] * 39 + [True]
-    across = np.array([-np.sin(yaw), np.cos(yaw), 0.0])
-    along = np.array([np.cos(yaw), np.sin(yaw), 0.0])
-    d = obs[71:] - obs[70]
-    t = 0.05 * np.arange(1, 31)
-    assert np.abs(d[:, :3] @ across - 0.01 * np.sin(2 * np.pi * 2.0 * t)).max() < 0.005
-    assert np.abs(d[:, :3] @ along).max() < 1e-3 and np.abs(d[:, 2]).max() < 1e-3
-
-
-def test_before_the_carry_v2_is_v1_bit_for_bit(make_env):
-    e1, e2 = make_env("SoftGrasp-v1"), make_env("SoftGrasp-v2")
-    policy = ScriptedGraspPolicy.for_env(e1)
-    o1, _ = e1.reset(seed=5)
-    o2, _ = e2.reset(seed=5)
-    for _ in range(70):
-        a = policy(o1)
-        o1, *_ = e1.step(a)
-        o2, *_ = e2.step(a)
-        assert np.array_equal(o1, o2[:23])
-
-
 # --- settings ----------------------------------------------------------------------------------
 
 
@@ -269,12 +253,15 @@ def test_before_the_carry_v2_is_v1_bit_for_bit(make_env):
         ("SoftGrasp-v3", dict(carry_frequency=(3.0, 1.0)), r"low <= high"),
         ("SoftGrasp-v3", dict(carry_frequency=(1.0, 2.0, 3.0)), r"a number or \(low, high\)"),
         ("SoftGrasp-v3", dict(carry_acceleration=(0.5, 2.0)), "above the arm's arm_acceleration"),
-        ("SoftGrasp-v3", dict(carry_amplitude=0.01), "exactly one of carry_acceleration and carry_amplitude"),
-        ("SoftGrasp-v3", dict(carry_direction="up"), "carry_direction must be one of"),
+        ("SoftGrasp-v3", dict(carry_acceleration=None), "carry_acceleration must be a finite number"),
         ("SoftGrasp-v3", dict(carry_slide_limit=0.0), "carry_slide_limit"),
         ("SoftGrasp-v3", dict(carry_duration=-1.0), "carry_duration"),
-        ("SoftGrasp-v2", dict(carry_amplitude=0.1), "carry_amplitude"),
-        ("SoftGrasp-v2", dict(carry_amplitude=0.05, carry_frequency=10.0), r"moves the arm up to 1\.31 cm per physics step"),
+        # the v1/v2 sway's settings, retired: each names the release that has them
+        ("SoftGrasp-v3", dict(carry_amplitude=0.01), r"carry_amplitude=0\.01 was retired.*softgrasp-env==0\.6\.0.*"
+                                                     r"carry_acceleration = amplitude \* \(2 pi carry_frequency\)\^2"),
+        ("SoftGrasp-v3", dict(carry_direction="across"), r"carry_direction='across' was retired.*==0\.6\.0"),
+        ("SoftGrasp-v3", dict(carry_direction="up"), "carry_direction is no longer an argument"),
+        ("SoftGrasp-v3", dict(carry_slide_limit=None), r"carry_slide_limit=None .* was retired.*==0\.6\.0"),
         ("SoftGraspGoal-v3", dict(carry=True), "no carry test"),
     ],
 )
@@ -283,8 +270,8 @@ def test_carry_settings_are_checked(env_id, kwargs, match):
         gym.make(env_id, **kwargs)
 
 
-def test_the_easy_task_and_v1_have_no_carry_and_no_clock(make_env):
-    for env_id in ("SoftGraspEasy-v3", "SoftGraspRigid-v1", "SoftGraspSparse-v1", "SoftGraspGoal-v3"):
+def test_the_easy_task_has_no_carry_and_no_clock(make_env):
+    for env_id in ("SoftGraspEasy-v3", "SoftGraspEasyRigid-v3", "SoftGraspGoal-v3"):
         env = make_env(env_id)
         assert not env.unwrapped.carry
         obs, info = env.reset(seed=0)

@@ -81,9 +81,8 @@ def test_knocking_the_cylinder_over_ends_the_lift_task_but_not_the_goal_episode(
     assert len(goal) == gym.spec("SoftGraspGoal-v4").max_episode_steps
     assert goal[-1][2] and not any(term for _, term, _ in goal)
     assert all(r == -1.0 for r, _, _ in goal[len(lift) :])
-    # SoftGraspGoal-v3 and -v1 keep the ends they were released with.
-    for env_id in ("SoftGraspGoal-v3", "SoftGraspGoal-v1"):
-        assert _knock_over(make_env(env_id))[-1][1]
+    # SoftGraspGoal-v3 keeps the ends it was released with.
+    assert _knock_over(make_env("SoftGraspGoal-v3"))[-1][1]
     # a flag, not a truthy value
     with pytest.raises(TypeError, match="end_when_knocked_over must be True or False"):
         gym.make("SoftGraspGoal-v4", end_when_knocked_over="yes")

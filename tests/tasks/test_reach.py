@@ -1,5 +1,5 @@
-"""The reach task (``task="reach"``, softgrasp_env/tasks/reach.py; every id but the Easy ones, the
-carry test on top for -v2: tests/tasks/test_carry.py): it needs a closed-loop policy. The gripper
+"""The reach task (``task="reach"``, softgrasp_env/tasks/reach.py; every id but the Easy and grip ones, the
+carry test on top: tests/tasks/test_carry.py): it needs a closed-loop policy. The gripper
 starts above the cylinder's top, 4-14 cm from the origin in a random direction, the cylinder
 anywhere within +-7 cm, the fingers misaligned (jaw wedge up to +-0.15 rad, yaw up to +-pi/4)."""
 

@@ -356,18 +356,16 @@ def test_combined_body_group_size(group_size):
 
 
 def test_combined_body_metadata_from_config():
-    tissue = TissueConfig(material="per_step", stiffness=0.3, friction_static=0.8, friction_dynamic=0.4,
-                          particle_density=20_000.0, mass_density=1200.0, extrude=0.004)  # fmt: skip
+    tissue = TissueConfig(shear_modulus=5e3, friction_static=0.8, friction_dynamic=0.4, particle_density=20_000.0,
+                          mass_density=1200.0, extrude=0.004)  # fmt: skip
     shape = SHAPES["box"]
     model = build_combined_body(shape, tissue)
     assert model.body_count == 1
     assert model.body_particle_offsets.tolist() == [0, model.particle_count]
     assert model.body_core_shape.tolist() == [-1]
-    assert model.body_stiffness.tolist() == [0.3]
-    assert model.body_compliant.tolist() == [False] and not model.group_kappa.any()
-    compliant = build_combined_body(shape, replace(tissue, material="compliant", stiffness=None, shear_modulus=5e3))
-    assert compliant.body_compliant.tolist() == [True]
-    assert (compliant.group_kappa > 0).all()  # G / (rho l^2) per group: tests/tissue/test_compliant.py
+    assert (model.group_kappa > 0).all()  # G / (rho l^2) per group: tests/tissue/test_compliant.py
+    stiffer = build_combined_body(shape, replace(tissue, shear_modulus=1e4))
+    np.testing.assert_allclose(stiffer.group_kappa, 2.0 * model.group_kappa)
     assert model.body_friction.tolist() == [[0.8, 0.4]]
     assert (model.particle_body == 0).all()
     assert model.particle_mass.sum() == pytest.approx(1200.0 * shape.area * 0.004, rel=1e-9)

@@ -39,8 +39,8 @@ def column(kappa: float) -> TissueModel:
         particle_body=np.zeros(2, dtype=np.int32), particle_partner=np.array([1, 0], dtype=np.int32),
         particle_attached=np.array([True, False]), group_offsets=np.array([0, 2, 4], dtype=np.int32),
         group_members=members, group_rest_offset=rest_x[members] - c, body_particle_offsets=np.array([0, 2], dtype=np.int32),
-        body_core_shape=np.array([0], dtype=np.int32), body_stiffness=np.array([0.5]), body_friction=np.array([[0.9, 0.9]]),
-        body_compliant=np.array([True]), group_kappa=np.full(2, kappa),
+        body_core_shape=np.array([0], dtype=np.int32), body_friction=np.array([[0.9, 0.9]]),
+        group_kappa=np.full(2, kappa),
     )  # fmt: skip
 
 
@@ -118,7 +118,7 @@ def test_the_pads_stiffness_against_its_core_is_the_layers():
 def test_step_limits_at_the_defaults():
     """The pads' steps at the defaults: their groups' s = kappa h^2 within MAX_STEP_STIFFNESS and
     their pull on a 50 g core within MAX_COUPLING_FOLD (1 step at 1/480 s, 2 at 1/240 s, 4 at
-    1/120 s); the per-step material (v1/v2) needs no shorter steps."""
+    1/120 s)."""
     model = build_combined_body(CoreShape("box", half_extents=(0.008, 0.02, 0.03)), TissueConfig(), faces=("+x", "-z"))
     core = np.array([0.05])
     for dt, n in ((1 / 1000, 1), (1 / 480, 1), (1 / 240, 2), (1 / 120, 4)):
@@ -127,9 +127,6 @@ def test_step_limits_at_the_defaults():
         assert model.group_kappa.max() * h * h <= MAX_STEP_STIFFNESS
         assert core_stiffness(model)[0] * h * h / 0.05 <= MAX_COUPLING_FOLD
         assert coupling_substeps(model, core, dt) <= n
-    per_step = build_combined_body(CoreShape("box", half_extents=(0.008, 0.02, 0.03)),
-                                   TissueConfig(material="per_step"), faces=("+x", "-z"))  # fmt: skip
-    assert substeps_for(per_step, 1 / 60) == 1
 
 
 @pytest.mark.parametrize("limit", [0.005, 0.02])
