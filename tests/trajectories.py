@@ -1,6 +1,7 @@
 """Seeded trajectories of the registered ids (and of the settings reached only through kwargs),
 recorded through the public API alone: ``gym.make``, ``reset``, ``step`` and the scripted policy.
-``tests/data/trajectories_v3.npz`` holds the v3 ids as 0.5.0 shipped them; ``tests/test_trajectories.py``
+``tests/data/trajectories_v3.npz`` holds the v3 ids as 0.5.0 shipped them, ``trajectories_more.npz``
+the other ids and the settings reached only through kwargs; ``tests/test_trajectories.py``
 replays them and asserts bit-identical observations, rewards and flags, so a refactor or a speed-up
 that changes behaviour cannot land quietly. (The v1/v2 ids' recording went with them: release 0.6.0
 replays it.)
@@ -8,7 +9,7 @@ replays it.)
 Record again (only when behaviour is meant to change, with the ids moving version, or the change
 named and measured):
 
-    python -m tests.trajectories
+    python -m tests.trajectories --set v3 | more
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import gymnasium as gym
 import numpy as np
 
 DATA_V3 = Path(__file__).parent / "data" / "trajectories_v3.npz"
+DATA_MORE = Path(__file__).parent / "data" / "trajectories_more.npz"
 
 INFO_FLAGS = ("is_success", "held", "carrying", "diverged", "action_clipped")
 """Boolean info entries recorded per step."""
@@ -39,6 +41,25 @@ V3_CASES: tuple[tuple[str, str, dict, str, int], ...] = (
 """The v3 ids and the settings a speed-up might treat differently: the consistent coupling, one
 world substep (1/1000 s) and four (1/120 s). (The recording also holds a case of the per-step
 material, retired after 0.6.0; it is no longer replayed.)"""
+
+MORE_CASES: tuple[tuple[str, str, dict, str, int], ...] = (
+    *((f"{env_id}/random", env_id, {}, "random", 130) for env_id in (
+        "SoftGraspGoal-v4", "SoftGraspGrip-v3", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3")),
+    ("SoftGraspGoal-v4/scripted", "SoftGraspGoal-v4", {}, "scripted", 100),
+    ("segmented/scripted", "SoftGraspEasy-v3", {"fingers": "segmented"}, "scripted", 60),
+    ("segmented/random", "SoftGrasp-v3", {"fingers": "segmented"}, "random", 40),
+    ("fem/scripted", "SoftGraspEasy-v3", {"fingers": "fem"}, "scripted", 12),
+    ("tissue-all-consistent/random", "SoftGrasp-v3", {"tissue_faces": "all", "sim": "consistent"}, "random", 40),
+    ("fast-preset/scripted", "SoftGrasp-v3", {"preset": "fast"}, "scripted", 60),
+    ("ranges/random", "SoftGraspRigid-v3",
+     {"friction_range": 0.3, "cylinder_mass_range": 0.5, "cylinder_radius_range": 0.005}, "random", 60),
+)  # fmt: skip
+"""What the v3 recording does not reach: the v4 goal id, the grip-force ids (the squeeze as the
+action, taxels), and the settings reached only through kwargs - the segmented and FEM fingers, tissue
+on every face with the consistent coupling, the fast preset, the randomised ranges. Recorded after
+the v1/v2 ids (which covered these settings) were retired, on the same physics."""
+
+SETS = {"v3": (V3_CASES, DATA_V3), "more": (MORE_CASES, DATA_MORE)}
 
 
 def _kwargs(kwargs: dict) -> dict:
@@ -123,8 +144,9 @@ def main(argv: list[str] | None = None) -> None:
     import softgrasp_env  # noqa: F401  (registers the ids)
 
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.parse_args(argv)
-    cases, path = V3_CASES, DATA_V3
+    parser.add_argument("--set", choices=sorted(SETS), required=True,
+                        help="which recording to make again (each is a file of its own)")
+    cases, path = SETS[parser.parse_args(argv).set]
     out: dict[str, np.ndarray] = {"fingerprint": np.array(fingerprint())}
     for name, env_id, kwargs, policy, steps in cases:
         for key, arr in record(env_id, kwargs, policy, steps).items():
