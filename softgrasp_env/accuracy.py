@@ -257,8 +257,8 @@ def shear_under_load(scene: GraspScene, *, rate: float = 2.0, slip: float = 1e-3
                      every: int = 4, rows: int = 4, cols: int = 3) -> ShearRecord:  # fmt: skip
     """The scripted grasp (a short hold), then the cylinder made heavier at ``rate`` [N/s of
     weight] until it slips ``slip`` on the pads (or its weight reaches ``max_load``): how the pads
-    shear under a tangential load up to slip (issue 21, item 4), read through the taxels
-    (fingers/tactile.py) every ``every`` physics steps. Slip is the cylinder's slide in the grip
+    shear under a tangential load up to slip, read through the taxels
+    (:mod:`softgrasp_env.fingers.tactile`) every ``every`` physics steps. Slip is the cylinder's slide in the grip
     less the pads' own shear (an elastic pad carries the cylinder down with its surface)."""
     plan = GraspPlan(hold=0.5)
     run_grasp(scene, plan)

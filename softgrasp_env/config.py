@@ -234,7 +234,7 @@ _MOVED = {"SceneConfig": "softgrasp_env.scene", "FINGER_KINDS": "softgrasp_env.f
 
 def __getattr__(name: str):
     # Names that moved out of this module when the scene and the finger kinds got modules of their
-    # own (issue 18): still importable from here, with a DeprecationWarning.
+    # own: still importable from here, with a DeprecationWarning.
     if name in _MOVED:
         import importlib
 

@@ -228,7 +228,7 @@ class SoftGraspEnv(gym.Env):
         self.control_frequency = float(args.control_frequency)
         self.obs_names = args.obs_names
         """The observation's entries, in order (``OBS_NAMES``, and ``time`` with the carry test)."""
-        # The instance lists the render modes that work on this machine: without a display the GUI
+        # The instance lists the render modes that work where it runs: without a display the GUI
         # cannot open (pybullet would end the process), so checkers must not try "human" there.
         modes = [m for m in type(self).metadata["render_modes"] if m != "human" or _display_available()]
         self.metadata = {**type(self).metadata, "render_modes": modes, "render_fps": self.control_frequency}

@@ -31,7 +31,7 @@ grips the cylinder:
   -(k q + c q') (``'torque'``: TORQUE_CONTROL each step) is unstable here: a segment's inertia
   about its yaw axis is ~2e-7 kg m^2, so even k = 0.05 N m/rad gives omega dt = 2.1 at 1/240 s,
   and at the defaults the damper alone (c dt / I = 4.1 > 2) throws a joint kicked by 0.01 rad to
-  pybullet's 100 rad/s joint-rate clamp within 5 steps (tests/fingers/test_segmented.py).
+  pybullet's 100 rad/s joint-rate clamp within 5 steps.
   A plain POSITION_CONTROL motor with a fixed force limit is no spring either: it is a hard
   velocity constraint that holds the rest angle exactly until its limit, then gives way at a
   constant torque. Re-limiting the motor to the spring torque each step keeps both good parts:
@@ -110,7 +110,7 @@ k dt^2 / I + 2 b < 4 (module docstring)."""
 DIVERGED_JOINT_RATE = 90.0
 """A passive joint turning faster than this [rad/s] has diverged: pybullet clamps joint rates at
 100 rad/s (its maxJointVelocity), where the explicit 'torque' springs end up within 5 steps; the
-motor springs stayed below 40 rad/s in the grasps measured (tests/fingers/test_segmented.py)."""
+motor springs stayed below 40 rad/s in the grasps measured."""
 
 
 SEGMENT_SPRINGS: tuple[str, ...] = ("motor", "torque")

@@ -1,4 +1,4 @@
-"""Tactile pads (issue 21): a fixed grid of taxels on each finger core's inner face, read from the
+"""Tactile pads: a fixed grid of taxels on each finger core's inner face, read from the
 simulation's state (no new physics).
 
 A taxel carries five channels (:data:`TAXEL_CHANNELS`), in the finger core's frame (x across the

@@ -1,6 +1,6 @@
 """Loading stable-baselines3 models and their observation statistics: the one implementation that
-``softgrasp_env.policies.load_baseline`` and the repository's ``agents.runs`` (train.py's runs,
-agents.evaluate) share. stable-baselines3 and torch come with the ``[train]`` extra; nothing here
+``softgrasp_env.policies.load_baseline`` and the repository's training and evaluation scripts
+share. stable-baselines3 and torch come with the ``[train]`` extra; nothing here
 imports them before it is called, so ``import softgrasp_env.policies`` works without them.
 """
 
@@ -72,7 +72,7 @@ def saved_algo(model: Path) -> str | None:
 
 def load_model(algo: str, path: str | Path, *, env: Any = None):
     """``model_class(algo).load(path)`` on the CPU, onto ``env`` if given (HER's buffer needs one;
-    train.py's --resume continues on its envs).
+    a resumed training run continues on its envs).
 
     A model saved before the observation Box got its finite bounds (the unit axis, the forces, the
     yaw, the clock) recorded ``Box(-inf, inf)``; SB3 refuses an env whose space differs in anything,
@@ -119,7 +119,7 @@ def load_stats(path: str | Path, *, required: bool = False):
     """The observation statistics saved by ``VecNormalize.save`` (frozen), or ``None`` when the file
     does not exist and is not ``required``. A missing required file, or one that does not unpickle
     to a VecNormalize, is a ValueError naming it: a policy fed raw observations it was trained on
-    normalised ones for fails silently (100 % vs 0 % success, issue 12)."""
+    normalised ones for fails silently (one baseline: 100 % success with its statistics, 0 % without)."""
     path = Path(path)
     if not path.exists():
         if required:

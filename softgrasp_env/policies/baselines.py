@@ -4,7 +4,7 @@ demonstrations on the goal env. Each is a folder of ``trained/`` beside
 this file: ``model.zip`` (stable-baselines3), ``vecnormalize.pkl`` (the observation statistics it
 was trained with; HER runs have none), ``card.json`` and ``README.md`` (the model card: env, algo,
 hyperparameters, steps, seed, success over 100 seeded episodes, the command that made it),
-``run.json`` (train.py's record) and the training logs.
+``run.json`` (the training run's record) and the training logs.
 
     from softgrasp_env.policies import list_baselines, baseline_card, load_baseline
 
@@ -77,8 +77,8 @@ def _read_card(model_dir: Path) -> dict[str, Any]:
 
 def best_per_env(cards: list[dict[str, Any]]) -> dict[str, str]:
     """env id -> the name of its best baseline among ``cards``: the highest ``evaluation.success_rate``,
-    ties to the last name in sorted order. What the wheel ships (pyproject.toml's package data;
-    tests/test_packaging.py checks the two agree) and what scripts/make_dataset.py records."""
+    ties to the last name in sorted order. What the wheel ships (its package data is checked against it) and
+    which learned policy each shipped dataset records."""
     best: dict[str, dict[str, Any]] = {}
     for card in sorted(cards, key=lambda c: c["name"]):
         have = best.get(card["env"])

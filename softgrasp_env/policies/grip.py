@@ -1,4 +1,4 @@
-"""Scripted policies for the grip-force task (SoftGraspGrip-v3 and its rigid twins; issue 21).
+"""Scripted policies for the grip-force task (SoftGraspGrip-v3 and its rigid twins).
 
 Both read only what the gripper senses (the grip ids observe neither the cylinder's pose nor its
 motion): from the easy start around the cylinder's top they go down 3 cm with the fingers open,

@@ -149,8 +149,8 @@ class World:
         self._joints = _SlidingCores(client, self.rigid, self._colliders.rigid_in_solve)
         self._stale = False
         """The rigid states in ``_colliders`` are older than pybullet's: a world without tissue reads
-        them when they are asked for (``colliders``), not after every step (issue 20: per physics
-        step only what the physics needs)."""
+        them when they are asked for (``colliders``), not after every step (per physics step only
+        what the physics needs)."""
         self.model: TissueModel | None = None
         self.solver: TissueSolver | None = None
         self.state: TissueState | None = None

@@ -1,4 +1,4 @@
-"""The grip-force task (issue 21), a composition over the carry test: hold and carry the cylinder
+"""The grip-force task, a composition over the carry test: hold and carry the cylinder
 with the least squeeze.
 
 The cylinder's mass and friction are drawn per episode and not observed (the ids' ranges make the
@@ -20,7 +20,8 @@ it). ``a(t)`` is the cylinder's acceleration over each env step of the carry, th
 velocities at the step's two ends (20 Hz: a 3 Hz sway's peak reads sin(x)/x = 0.96 of itself, its
 share of |a + g| being 10 % at most). The measure is point Coulomb: a soft pad that wraps the
 cylinder holds with less (its normals tilt around the curve and sum to more than the squeeze;
-docs/RESULTS.md measures how much), which counts as success too.
+the package's documentation, Results: tactile pads and the grip-force task, measures how much),
+which counts as success too.
 
 ``info`` carries ``carry_squeeze`` (the carry's mean squeeze so far) and ``least_squeeze`` (F_least
 so far) [N], both 0 before the carry (not NaN: Gymnasium's checker and users compare infos by
