@@ -42,24 +42,18 @@ class TissueConfig:
 
     particle_density: float = 4_000.0
     """Attached particles per square metre of core surface [1/m^2] (``density`` before 0.3);
-    4,000/m^2 is ~16 mm spacing (30 particles on a finger's inner face and tip). Chosen on the speed/accuracy chart
-    (benchmarks/methods.py): against 10,000/m^2 the grasp penetrates less (0.095 mm vs 0.69 mm at
-    3 iterations: bigger particles, fewer contacts to resolve) at 1.4x the steps/s, and the hold
-    bound stays within 3 % of Coulomb's (10,000: -4 %)."""
+    4,000/m^2 is ~16 mm spacing (30 particles on a finger's inner face and tip), chosen on the
+    speed/accuracy chart (the package's documentation, Finger kinds, gives the measurements)."""
     extrude: float = 0.008
     """Distance from an attached particle to its outer partner [m] (thesis 5.2.1 *extrude*)."""
     group_size: int = 8
     """Particles per implicit shape-matching group, centre included (thesis 5.2.1 *groupSize*), 4 to
     16. Larger groups span most of a pad (30 particles a face at the default density) and let it
-    sag and tear: 32 diverged in every episode at 1 iteration, 64 in 1 of 5 at 2 iterations (and
-    1 of 5 at 2 iterations and 1/60 s), while 16 ran every episode at 1 iteration (issue 12's
-    extremes probe)."""
+    sag and tear."""
     mass_density: float = 1_000.0
     """Mass density of the tissue [kg/m^3] (``tissue_density`` before 0.3), 100 to 1e4; particle
-    mass = density * (its share of the layer volume). Heavier tissue outweighs its shape matching under the arm's shoves: 3e4
-    tore in 2 of 3 random-action episodes, 1e5 in every episode, scripted ones too; 1e4 ran all.
-    Tissue lighter than foam (2 and 13 kg/m^3) tore in two of the fuzzed settings, and setting
-    that alone back to 1,000 made both run."""
+    mass = density * (its share of the layer volume). Heavier tissue outweighs its shape matching
+    under the arm's shoves, and tissue lighter than foam tears too."""
     shear_modulus: float | None = None
     """The tissue's shear modulus G [Pa], 1e3 to 1e6; None: the default,
     DEFAULT_SHEAR_MODULUS. Each implicit group's shape matching is an elastic energy
@@ -70,8 +64,7 @@ class TissueConfig:
     from the spot its core carries it to (a deformation constraint, Provot 1995, projected after
     friction: tissue/anchors.py, limit_deviation); None: DEFAULT_MAX_DEVIATION. A particle snagged
     on the cylinder's top face is pulled through the cylinder by its group and held there by its
-    own friction; without the limit the tissue tore (past the 3 cm divergence limit) 5 times in
-    2 x 10^5 random-action env steps."""
+    own friction; without the limit the tissue tears."""
     radius_scale: float = 0.6
     """Tangential ellipsoid radius as a fraction of the particle spacing (>0.5 closes gaps)."""
     normal_radius: float = 0.003
@@ -83,22 +76,19 @@ class TissueConfig:
     friction_dynamic: float | None = None
     """Coulomb dynamic (kinetic) friction coefficient mu_k of the tissue surface [-]; None: equal to
     mu_s, one coefficient, the law of pybullet's rigid contacts, so that every finger kind is
-    compared under the same friction (with mu_k = 0.7 < mu_s the soft grasp lifted at 0.230 x the
-    default friction where Coulomb needs 0.209 x, with mu_k = mu_s at 0.212 x; it held 0.427 kg
-    against 0.439 kg). A number below mu_s gives the two-coefficient law."""
+    compared under the same friction. A number below mu_s gives the two-coefficient law (Macklin et
+    al. 2014)."""
     contact_cone: bool = False
     """Coulomb per contact as well as per patch (tissue/friction.py, _apply_with_cones): each tissue
     contact's friction at most mu_s times its normal force, what that sheds handed to the patch's
     other contacts so that the patch still transmits what its law decides, and a contact its cone
     held back re-anchored where it slipped to. False, the default: the patch's bound on what it
     transmits alone, which lets the self-equilibrated friction of a pad wrapped round the cylinder
-    grow without bound - a pad squeezed on the way down and then relaxed held the cylinder while its
-    core pushed 0.058 N, 0.04 x Coulomb's least force; with the cones 1.01 x
-    (benchmarks/friction_glue.py). Not the default yet, because it changes the material: a squeezed
-    pad's edges now slip, and under 3 N it compresses 5.38 mm instead of 4.34 (5.28 at 20
-    iterations, 5.31 at 1/1000 s: it converges), so the ids' shear modulus would want re-choosing
-    and the soft ids a new version; and a particle snagged on the cylinder's top stays at its strain
-    limit where the patch law lets it slide off (issue 22's notes)."""
+    grow without bound (a relaxed pad can hold the cylinder with almost no squeeze). Not the
+    default, because it changes the material (a squeezed pad's edges slip, and it compresses more
+    under the same load): the ids' shear modulus would want re-choosing and the soft ids a new
+    version. The package's documentation (Results: tactile pads, "The contact cones") gives the
+    measurements."""
 
     def __post_init__(self) -> None:
         o = "TissueConfig"
@@ -150,30 +140,23 @@ class SimConfig:
     dt: float = 1.0 / 240.0
     """Physics step [s], at most 1/60 s; one tissue step and one pybullet step per world step.
     Longer steps tear the tissue in the grasp (the contact and coupling corrections grow with dt
-    squared): 1/40 s in 1 of 2 scripted episodes, 1/20 s in every episode at its second step;
-    1/60 s ran every episode of the extremes probe (tests/test_extremes.py)."""
+    squared)."""
     iterations: int = 3
-    """Gauss-Seidel iterations over the shape-matching groups and contacts per step. Measured on the
-    scripted grasp at the default tissue (deepest penetration over every step, thesis coupling):
-    1 -> 3.05 mm, 2 -> 0.81 mm, 3 -> 0.095 mm, 4 -> 0.034 mm; at dt / 2, 1 iteration gives 0.11 mm
-    but the ramp breakaway comes 15 % early, 2 give 0.04 mm. 3 is the fewest at 1/240 s that meets
-    every accuracy target (README, Measured); with the default 60 particles an iteration costs a
-    few per cent of the step, most of which is pybullet's."""
+    """Gauss-Seidel iterations over the shape-matching groups and contacts per step. 3 is the fewest
+    at 1/240 s that meets every accuracy target of the defaults; with the default 60 particles an
+    iteration costs a few per cent of the step, most of which is pybullet's."""
     rotation_iterations: int = 1
     """Most warm-started rotation-extraction sweeps per group solve (Mueller et al. 2016); stops
     early once the correction is below 1e-10 rad. One sweep per solve suffices with the warm start
-    carried by each group's spin: 4 sweeps changed the grasp's height error by 3 % (0.534 -> 0.518
-    mm) and cost 20 % of the speed."""
+    carried by each group's spin."""
     gravity: float = 9.81
     """Gravitational acceleration along -z [m/s^2]."""
     damping: float | None = None
     """Damping rate of each tissue body's deviation from its rigid motion [1/s] (Mueller et al.
     2007 sec. 3.5): the deviation's velocity shrinks by exp(-damping * dt) per step, the same rate
     at every dt; rigid motion, so momentum and angular momentum, are kept. 0 disables it; None:
-    COMPLIANT_DAMPING (300/s). The pad is stiff enough to ring: its finger core, pushed on by the pad a
-    step late and held back by its motor's speed limit, swung 0.6 mm in a steady 20 Hz cycle under
-    a 3 N squeeze at 0.5/s; 300/s (a ratio of about 0.8 of critical for the pad's own ~180 rad/s
-    mode) settles it within a few steps."""
+    COMPLIANT_DAMPING (300/s, about 0.8 of critical for the pad's own ~180 rad/s mode): the pad is
+    stiff enough to ring against its finger core, which it pushes on a step late."""
     coupling: CouplingMode = "thesis"
     """'thesis': core infinitely heavy inside the solve, error -> impulse, snap back (thesis 5.1.3).
     'consistent': attachment projected with the core's generalised inverse mass (XPBD); a core on a

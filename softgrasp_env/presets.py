@@ -1,18 +1,17 @@
 """Named settings of the soft fingers, chosen at the knee of the speed/accuracy chart
-(benchmarks/methods.py; docs/RESULTS.md has the figures): model no more than the scene needs.
+(the package's documentation, Results: the methods side by side): model no more than the scene
+needs.
 Every preset covers only the faces where the fingers can touch the cylinder (each core's inner
 face and tip, ``TissueFingerConfig(faces='contact')``); the backs and sides meet the world through
 pybullet's contacts.
 
 - ``fast``: 2,500 particles per m^2 of face (32 particles in all, 20 mm spacing), 2 iterations at
-  1/240 s: 1.3x the default's steps/s; the hold bound is 6-7 % under Coulomb's (default: 3 %),
-  penetration 0.03 mm.
+  1/240 s: about 1.3x the default's steps/s, its hold bound a few per cent further under
+  Coulomb's than the default's.
 - ``default``: the defaults of SceneConfig / SimConfig / TissueConfig: 4,000 per m^2 (60
   particles), 3 iterations at 1/240 s; meets every accuracy target of the defaults' tests.
 - ``accurate``: the default tissue at half the time step (dt 1/480 s) with 2 iterations: smaller
-  steps converge faster than more iterations (pose error against a converged run 0.17 mm vs 0.80,
-  in-hand motion 0.39 mm vs 1.15, penetration 0.04 mm vs 0.10), at half the simulated seconds per
-  wall second. Its hold bound sits 5 % under Coulomb's, 2 % further than the default's.
+  steps converge faster than more iterations, at half the simulated seconds per wall second.
 
 ``scene_config(name)`` gives the SceneConfig; the env takes ``preset=name``.
 """

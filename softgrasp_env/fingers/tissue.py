@@ -4,7 +4,7 @@ and couples both ways (thesis 5.1.3, 5.2.2; softgrasp_env/sim/world.py).
 
 The tissue's material and discretisation are ``SceneConfig.tissue`` (a TissueConfig: particle
 density, pad depth, stiffness, friction); this kind's own setting is which faces of a core get
-tissue. Its combination rules (``check``) refuse what tore the tissue in issue 12's probe.
+tissue. Its combination rules (``check``) refuse settings that tear the tissue.
 """
 
 from __future__ import annotations
@@ -33,15 +33,12 @@ contact takes it."""
 MAX_CONSISTENT_SQUEEZE_IMPULSE = 0.125
 """Largest finger_force * dt the consistent coupling accepts [N s]: a core sliding on its joint
 under the motor's force is projected against the tissue every step, and a large impulse per step
-drives it through the pad. Probe of issue 12 (scripted grasps): 30 N at 1/60 s (0.5 N s) and
-100 N at 1/120 s (0.83) diverged in every episode, 30 N at 1/120 s (0.25) ran; the stability map
-saw 10-20 N fail at 1/60 s (0.17-0.33) on the easy task. 0.125 keeps below all of them."""
+drives it through the pad. 0.125 keeps below every impulse that was seen to diverge (the
+package's documentation, Finger kinds, gives the probe)."""
 MAX_PARTICLE_RADIUS = 0.0125
 """Widest tangential particle radius (radius_scale * spacing) accepted on the fingers [m]. Wider
-particles overhang the cores' edges (a face is 4 cm wide) and catch on the cylinder's rim:
-3.5-6.7 cm tore the tissue within 10-50 random-action steps, 2.0 cm (900 per m^2) in one of five
-random-action episodes (issue 12's probe and the extremes tests); the `fast` preset's 1.2 cm
-(2,500 per m^2) and the default's 0.95 cm run."""
+particles overhang the cores' edges (a face is 4 cm wide) and catch on the cylinder's rim; the
+``fast`` preset's 1.2 cm (2,500 per m^2) and the default's 0.95 cm run."""
 MAX_PARTICLE_SPEED = 20.0
 """A particle faster than this [m/s] has diverged (as a rigid body faster than 20 m/s)."""
 MAX_DEVIATION = 0.03

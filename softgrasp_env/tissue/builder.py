@@ -363,7 +363,8 @@ def group_kappa(offsets: np.ndarray, members: np.ndarray, rest_offset: np.ndarra
     material's shear energy. So k_j / m_j = G / (rho l^2) is the same for every member: the
     projection conserves momentum, and kappa is the squared angular frequency of a shear wave
     across the group, sqrt(G / rho) / l. The constant of order one this leaves out is measured,
-    not assumed: docs/RESULTS.md gives the pad's compression and shear under load."""
+    not assumed (the package's documentation, Results: the v3 physics, gives the pad's compression
+    and shear under load)."""
     n = offsets.shape[0] - 1
     out = np.empty(n)
     for i in range(n):
