@@ -14,9 +14,8 @@ the cylinder, the tip what meets the ground first; the back, sides and top never
 the grasp (the tissue kind's ``faces='contact'`` covers the same two faces). It is a
 structured hex grid, each hex split into 6 tetrahedra around its main diagonal (Kuhn / Freudenthal
 split): with every hex split the same way neighbouring hexes share their face diagonals, so the
-mesh is conforming without any search. One such split is chiral, and the pad then pushed what it
-squeezed sideways: measured, the cylinder drifted 6.8 mm along the face (y) in a 0.6 s squeeze at
-dt = 1/960 s, and 6.6 mm the other way with the mesh mirrored. So the split is mirrored across the
+mesh is conforming without any search. One such split is chiral, and the pad then pushes what it
+squeezes sideways along the face. So the split is mirrored across the
 face's middle planes (y = 0, z = 0; both grid planes, the cell counts along the face are even),
 which keeps it conforming (a mirror fixes the triangulation of the plane it mirrors in) and makes
 the pad symmetric as the tissue is. Cells inside the core are left out. The grid is given by the
@@ -25,13 +24,13 @@ cells along the face are as near cubic as the core's extents allow.
 
 The nodes on the core's surface are anchored to the core link (``createSoftBodyAnchor``: the node
 follows the link rigidly, two-way). The pad does not collide with its own core (a collision filter
-pair): its anchored nodes lie on the core's face, and pybullet's contacts then fought the anchors.
-Measured without the filter, pads hanging in the air: 50 reported face contacts per pad with the
-core, the free nodes torn 63 mm off their rest places in 0.25 s, half the steps/s.
+pair): its anchored nodes lie on the core's face, and pybullet's contacts would fight the
+anchors and tear the pad.
 
 Time step: pybullet's deformable world integrates the elastic forces explicitly (only damping,
 contacts and anchors are implicit), so the pads need a shorter step than the scene's 1/240 s; the
-scene takes ``FemConfig.substeps`` pybullet steps per world step (measurements there).
+scene takes ``FemConfig.substeps`` pybullet steps per world step. The package's documentation
+(Results: the methods side by side, "FEM pads") gives the measurements behind these choices.
 
 What pybullet reports: ``getContactPoints`` lists a soft body's face-rigid contacts with their
 normal force, but not its node-rigid contacts (PhysicsServerCommandProcessor, 3.2.7), so
@@ -85,10 +84,9 @@ FEM_GROUND_HALF_EXTENTS = (1.0, 1.0, 0.05)
 
 
 def fem_ground_shape(client: BulletClient) -> int:
-    """Collision shape of the ground for the fem scene: a box, not pybullet's plane. Measured:
-    pads hanging 6-8 cm above a GEOM_PLANE got about 100 phantom contacts each with it and were
-    torn apart (64 mm of node travel in 1 s); over a box ground the same pads stay put (0.07 mm).
-    The rigid bodies meet the box's top face as they met the plane."""
+    """Collision shape of the ground for the fem scene: a box, not pybullet's plane (pads above a
+    GEOM_PLANE get phantom contacts with it and tear). The rigid bodies meet the box's top face as
+    they met the plane."""
     h = FEM_GROUND_HALF_EXTENTS
     return client.createCollisionShape(p.GEOM_BOX, halfExtents=list(h), collisionFramePosition=[0.0, 0.0, -h[2]])
 
@@ -295,11 +293,8 @@ class FemConfig(FingerConfig):
     substeps: int = 8
     """pybullet steps per world step (``sim.dt``), each ``sim.dt / substeps`` long. pybullet's
     deformable world integrates the elastic forces explicitly (only the damping and the
-    constraints are implicit). Measured with the coarse pads, scripted grasp of the default
-    cylinder: 1 substep (1/240 s) blew up at first contact (nodes 25 mm inside the cylinder, which
-    was thrown off at 6 m/s); 2 still gave 7 mm of penetration at the impact; 4 lifted it but it
-    slid 17 mm down the pads in the 2 s hold (14-41 mm of lift left, depending on a 0.2 mm start
-    offset); 8 holds it (0.11 mm of slip) at half the speed of 4."""
+    constraints are implicit): fewer than 8 substeps at 1/240 s let the coarse pads blow up or let
+    the cylinder slide."""
 
     def __post_init__(self) -> None:
         check_choice("resolution", self.resolution, tuple(FEM_CELLS_THROUGH), owner="FemConfig")

@@ -48,19 +48,14 @@ MAX_STEP_STIFFNESS = 0.25
 """Largest s = kappa dt^2 of a compliant group in one step: the world runs in steps short enough
 (substeps_for). Pressed on the cylinder, the pad's passes close the gap to the implicit step by a
 factor of about s / (1 + s) each (what contacts and friction hold, a group's Newton step takes as
-free), so 0.25 leaves 4 % after 2 iterations and under 1 % after 3. Measured on the squeezed pad
-(3 N, G 4,000 Pa, 1.5 s): in steps of 1/480 s (s 0.14) its compression is 3.3 % above the finest
-setting's at 2 iterations and 0.6 % below at 3 (tests/sim/test_material.py); in single steps of
-1/240 s (s 0.54) an earlier revision of this solve was 11 % and 6 % above."""
+free), so 0.25 leaves 4 % after 2 iterations and under 1 % after 3 (the package's documentation,
+Results: the v3 physics, "Convergence in dt and iterations", gives the measurements)."""
 
 
 MAX_COUPLING_FOLD = 0.5
 """Largest K dt^2 / m_core of one step [-], K a compliant pad's stiffness against its core
 (core_stiffness) and m_core the core's mass: the pad's force reaches a core that pybullet moves a
-step late (thesis 5.2.2), and beyond about 1 it rings. Measured on the squeeze (3 N, G 4,000 Pa,
-50 g cores, K 1,310 N/m): 1.03 (1/160 s) held the core in a 20 Hz limit cycle against its motor's
-speed limit, the pad's compression swinging 0.6 mm; 0.66 (1/200 s) settled; a free-falling 50 g
-box in tissue on every face (K 3,800 N/m) at 1.3 grew a mode from round-off to 3 mN s in 80 steps."""
+step late (thesis 5.2.2), and beyond about 1 it rings."""
 
 
 def substeps_for(model: TissueModel, dt: float) -> int:
