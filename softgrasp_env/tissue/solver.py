@@ -1,7 +1,7 @@
 """The oriented-particle solver: one tissue step against a set of rigid colliders.
 
 One step, in the order of the thesis (5.2.2) and of position-based dynamics (Mueller et al. 2007,
-Alg. 1), reads as a recipe (see :func:`_step`):
+Alg. 1), reads as a recipe (see :func:`_step`)::
 
     predict(particles, rigid bodies, dt)          # gravity, damping, x* = x + v dt, q* = exp(w dt) q
     collect contact candidates                    # particle-shape, inner (own core), particle-particle
