@@ -6,6 +6,8 @@ rewards, starting state, episode end, arguments, version history). The sources:
 - the env cards, the class docstrings of ``SoftGraspEnv`` and ``SoftGraspGoalEnv``
   (softgrasp_env/env.py), split at their ``## `` headings; the argument table is regenerated from
   ``softgrasp_env.arguments.argument_table()`` (``EnvArguments``' field metadata) on every build;
+  a lift-card section that belongs to one family (``FAMILY_SECTIONS``: the grip-force task) goes
+  on that family's page only;
 - the registered ids and their keywords (``softgrasp_env.registration.ENV_IDS``, gymnasium's
   registry): which family each id is in, the registered-ids table, the versions;
 - the observation names (``EnvArguments(...).obs_names``, built from softgrasp_env/observation.py's
@@ -43,6 +45,10 @@ FAMILY_PAGES: dict[str, tuple[str, str]] = {
              "`compute_reward`."),
 }
 """Each family's page name (``envs/<key>``), title and one-line summary, in the order of the index."""
+
+FAMILY_SECTIONS: dict[str, str] = {"grip": "grip-force task"}
+"""A section of the lift card (``SoftGraspEnv``) that belongs to one family (by its lower-cased
+heading): that family's page shows it right after the description, the other pages leave it out."""
 
 
 @dataclass
@@ -287,31 +293,34 @@ def render_family(fam: Family) -> str:
 
     base_pre, base = split_sections(card_text(SoftGraspEnv))
     base["arguments"] = fill_arguments(base.get("arguments", "<arguments>"))
+    gym_keys = {a for _, keys in GYM_SECTIONS for a in keys}
+    family_sections = set(FAMILY_SECTIONS.values())
     if fam.key == "goal":
         goal_pre, goal = goal_sections(card_text(fam.card))
         own = {"description": (goal_pre + "\n\n" + goal.get("description", "")).strip()}
-        for key in ("observation space", "rewards", "arguments"):
-            if key in goal:
-                own[key] = goal[key]
-        # what the goal card leaves to the lift card ("as SoftGraspEnv") follows its own text
+        for _, keys in GYM_SECTIONS[1:]:  # the description is the preamble and its own section, above
+            text = next((goal[k] for k in keys if k in goal), None)
+            if text is not None:
+                own[keys[0]] = text
+        own["arguments"] = (own.get("arguments", "") + "\n\n" + _goal_arguments_table()).strip()
+        # what the goal card leaves to the lift card ("as SoftGraspEnv") follows its own text; its
+        # reward replaces the lift card's
         inherit = "The lift family's card (`SoftGraspEnv`), which this env extends:"
-        sections = {
-            "description": own["description"] + f"\n\n{inherit}\n\n" + base.get("description", ""),
-            "action space": base.get("action space", ""),
-            "observation space": own.get("observation space", "") + f"\n\n{inherit}\n\n"
-            + base.get("observation space", ""),
-            "rewards": own.get("rewards", base.get("rewards", "")),
-            "starting state": base.get("starting state", ""),
-            "episode end": "As described above; otherwise as the lift family:\n\n" + base.get("episode end", ""),
-            "arguments": own.get("arguments", "") + "\n\n" + _goal_arguments_table() + f"\n\n{inherit}\n\n"
-            + base["arguments"],
-        }
-        rest = {k: v for k, v in goal.items() if k not in sections}
+        sections = {}
+        for _, keys in GYM_SECTIONS:
+            key, lift = keys[0], base.get(keys[0], "")
+            if key == "rewards":
+                sections[key] = own.get(key, lift)
+            elif own.get(key):
+                sections[key] = f"{own[key]}\n\n{inherit}\n\n{lift}"
+            else:
+                sections[key] = lift
+        rest = {k: v for k, v in goal.items() if k not in gym_keys and k != "version history"}
         history = goal.get("version history", base.get("version history", ""))
     else:
         sections = dict(base)
-        rest = {k: v for k, v in base.items() if k not in {a for _, keys in GYM_SECTIONS for a in keys}
-                and k != "version history"}  # fmt: skip
+        rest = {k: v for k, v in base.items() if k not in gym_keys and k != "version history"
+                and k not in family_sections}  # fmt: skip
         history = base.get("version history", "")
         own = {"description": base_pre}
     out = [f"# {fam.title} family", "",
@@ -320,6 +329,9 @@ def render_family(fam: Family) -> str:
            f"{fam.summary}", "", _summary_table(fam), ""]  # fmt: skip
     if fam.key != "goal" and own["description"]:
         out += [own["description"], ""]
+    family_section = FAMILY_SECTIONS.get(fam.key)
+    if family_section and family_section in sections:
+        out += [f"## {family_section[:1].upper()}{family_section[1:]}", "", sections[family_section], ""]
     for title, keys in GYM_SECTIONS:
         body = next((sections[k] for k in keys if k in sections), "")
         out += [f"## {title}", "", body, ""]
