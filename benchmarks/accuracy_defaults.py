@@ -25,7 +25,7 @@ import numpy as np
 
 from softgrasp_env import accuracy, presets
 from softgrasp_env.accuracy import GraspPlan, coulomb_hold_bound, find_hold_bound, run_grasp
-from softgrasp_env.config import COMPLIANT_DAMPING, STEP_DAMPING, SimConfig, TissueConfig
+from softgrasp_env.config import COMPLIANT_DAMPING, STEP_DAMPING, SimConfig, TissueConfig, kinetic_friction
 from softgrasp_env.scene import GraspScene, SceneConfig
 from softgrasp_env.tissue.builder import build_free_block
 from softgrasp_env.tissue.rigid import empty_colliders
@@ -53,17 +53,17 @@ def friction_rows() -> None:
     print(f"pad on a ramp (defaults: {sim.iterations} iterations, dt 1/{round(1 / sim.dt)} s, {t.material} material, "
           f"shear modulus {t.modulus:g} Pa, damping {damping:g} /s)")
     for mu_s in (0.3, 0.6, 0.9):
-        tissue = TissueConfig(friction_static=mu_s, friction_dynamic=mu_s * 7.0 / 9.0)
+        tissue = TissueConfig(friction_static=mu_s, friction_kinetic=mu_s * 7.0 / 9.0)
         tan = accuracy.ramp_breakaway(tissue, sim)
         theta = math.atan(mu_s + 0.15)
         a = accuracy.slide_acceleration(theta, tissue, sim)
-        a_ref = sim.gravity * (math.sin(theta) - tissue.friction_dynamic * math.cos(theta))
+        a_ref = sim.gravity * (math.sin(theta) - tissue.friction_kinetic * math.cos(theta))
         print(f"  mu_s {mu_s}: breaks loose at tan {tan:.4f} ({pct(tan, mu_s)}); "
               f"slides at {a:.4f} m/s^2 vs {a_ref:.4f} ({pct(a, a_ref)})")  # fmt: skip
     tissue = TissueConfig()
     for v0 in (0.25, 0.5, 1.0):
         d = accuracy.stop_distance(v0, tissue, sim)
-        ref = v0 * v0 / (2.0 * tissue.friction_kinetic * sim.gravity)
+        ref = v0 * v0 / (2.0 * kinetic_friction(tissue) * sim.gravity)
         print(f"  stops from {v0} m/s after {d * 1000:.2f} mm vs {ref * 1000:.2f} mm ({pct(d, ref)})")
 
 

@@ -33,7 +33,7 @@ from pathlib import Path
 
 from softgrasp_env import accuracy, presets
 from softgrasp_env.accuracy import GraspPlan, coulomb_hold_bound, find_hold_bound, run_grasp
-from softgrasp_env.config import SimConfig, TissueConfig
+from softgrasp_env.config import SimConfig, TissueConfig, kinetic_friction
 from softgrasp_env.scene import GraspScene, SceneConfig
 
 OUT = Path(__file__).resolve().parent / "out"
@@ -51,7 +51,7 @@ def _scene(kind: dict, sim: SimConfig, **kw) -> SceneConfig:
 def tissue_rows(sim: SimConfig) -> dict[str, tuple[float, float]]:
     """(figure, analytic) of the pad on the ramp and on the ground, at ``sim``."""
     tissue = TissueConfig()
-    mu_s, mu_k, g = tissue.friction_static, tissue.friction_kinetic, sim.gravity
+    mu_s, mu_k, g = tissue.friction_static, kinetic_friction(tissue), sim.gravity
     theta = math.atan(mu_s + 0.15)
     v0 = 0.5
     return {

@@ -29,8 +29,8 @@ from softgrasp_env.tasks.carry import CARRY_SLIDE_LIMIT
 ALIGNED = {"yaw": 0.0, "jaw_wedge": 0.0, "lateral_offset": 0.0, "cylinder_xy": (0.0, 0.0)}
 KINDS = {"soft": dict(fingers="tissue"), "soft-consistent": dict(fingers="tissue", coupling="consistent"),
          "rigid": dict(fingers="rigid"), "rigid_torsion": dict(fingers="rigid_torsion"),
-         "soft-mu_k=0.7": dict(fingers="tissue", friction_dynamic=0.7),
-         "soft-consistent-mu_k=0.7": dict(fingers="tissue", coupling="consistent", friction_dynamic=0.7)}  # fmt: skip
+         "soft-mu_k=0.7": dict(fingers="tissue", friction_kinetic=0.7),
+         "soft-consistent-mu_k=0.7": dict(fingers="tissue", coupling="consistent", friction_kinetic=0.7)}  # fmt: skip
 """The finger kinds compared (the tissue at its default mu_k = mu_s, pybullet's one coefficient),
 and the tissue with a two-coefficient law (mu_k 0.7 < mu_s 0.9)."""
 NO_SLIP = CARRY_SLIDE_LIMIT

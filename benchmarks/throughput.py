@@ -31,7 +31,7 @@ def steps_per_second(cfg: SceneConfig, steps: int, repeats: int = 3) -> tuple[fl
     for _ in range(repeats):
         scene = GraspScene(cfg)
         try:
-            squeeze = GripperControl(np.array([0.0, 0.0, scene.grasp_height + scene.palm_offset]), cfg.finger_max_opening)
+            squeeze = GripperControl(np.array([0.0, 0.0, scene.grasp_height + scene.palm_offset]), cfg.finger_stroke)
             scene.step(squeeze)
             for _ in range(239):  # settle into the squeeze, and compile anything not cached
                 scene.step()

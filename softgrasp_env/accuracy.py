@@ -20,7 +20,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .config import SimConfig, TissueConfig
+from .config import SimConfig, TissueConfig, kinetic_friction
 from .scene import GraspScene
 from .tissue.builder import build_free_block
 from .tissue.collision import SHAPE_CODES
@@ -156,7 +156,7 @@ def run_grasp(
     control = scene.control
     grasp = start.copy()
     grasp[2] = scene.grasp_height + scene.palm_offset
-    close_to = scene.config.finger_max_opening
+    close_to = scene.config.finger_stroke
 
     def n_steps(duration: float) -> int:
         return int(round(duration / dt))
@@ -431,7 +431,7 @@ def stop_distance(v0: float, tissue: TissueConfig, sim: SimConfig) -> float:
     state = pad.state
     state.particle_v[:, 1] += v0
     y0 = state.particle_x[:, 1].mean()
-    for _ in range(int(2.0 * v0 / (tissue.friction_kinetic * sim.gravity) / sim.dt) + 240):
+    for _ in range(int(2.0 * v0 / (kinetic_friction(tissue) * sim.gravity) / sim.dt) + 240):
         pad.step()
     return float(state.particle_x[:, 1].mean() - y0)
 

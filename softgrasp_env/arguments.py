@@ -16,13 +16,13 @@ from dataclasses import MISSING, dataclass, field, fields, replace
 from typing import Any
 
 from . import presets
-from .config import SimConfig, TissueConfig
+from .config import SimConfig, TissueConfig, kinetic_friction
 from .fingers import FINGERS, FemConfig, FingerConfig, TissueFingerConfig, finger_config
 from .fingers.tactile import MAX_TAXELS, TaxelGrid
 from .observation import CARRY_OBS_NAMES, OBS_NAMES, tactile_names, without_object
 from .scene import GRIP_TOP, GripperActions, SceneConfig, Workspace, fit_error, geometry_error
 from .scene.gripper import FINGER_ACTIONS, VelocityActions
-from .tasks import TASKS, CarryTest, LeastSqueeze, StartRanges, Task
+from .tasks import STARTS, CarryTest, GripForceTask, StartRanges, Task
 from .tasks.carry import (
     CARRY_ACCELERATION_RANGE,
     CARRY_DURATION,
@@ -35,7 +35,7 @@ from .tasks.reach import APPROACH
 from .validation import check_bool, check_choice, check_int, check_range, check_type, deprecated, retired_choice
 
 MAX_ARM_STEP = 1.0 / 120.0
-"""Farthest the arm's target may move in one physics step, gripper_speed * dt [m]: 3.3 cm tore
+"""Farthest the arm's target may move in one physics step, arm_speed * dt [m]: 3.3 cm tore
 the tissue in 2 of 5 probe episodes, 1.7 cm in 2 of 8 (1/60 s with the strongest fingers,
 tests/test_extremes.py); the default moves 0.6 mm."""
 GRIP_TOP_MARGIN = 0.01
@@ -52,6 +52,16 @@ RETIRED_CHOICES: tuple[tuple[str, Any, tuple[Any, ...]], ...] = (
 """Keywords removed after 0.6.0 because one choice is left: (name, the choice left, the retired
 ones). The one left is accepted with a DeprecationWarning, a retired one is a ValueError naming
 0.6.0 (:meth:`EnvArguments.from_kwargs`)."""
+
+
+RENAMED_KEYWORDS: dict[str, str] = {
+    "tissue_density": "particle_density",  # 0.3: one word meant particles per m^2 here, kg/m^3 in TissueConfig
+    "gripper_speed": "arm_speed",  # 0.7: SceneConfig's name
+    "friction_dynamic": "friction_kinetic",  # 0.7: TissueConfig's name
+    "task": "start",  # 0.7: it selects the start; "task" is the composed task (start, carry, grip force)
+}
+"""Keywords spelled differently before: the old spelling keeps working with a DeprecationWarning
+(:meth:`EnvArguments.from_kwargs`)."""
 
 
 def _arg(default: Any, doc: str, *, type_: str) -> Any:
@@ -72,21 +82,21 @@ class EnvArguments:
         "slower); None: 'coarse'", type_="str")
     preset: str = _arg("default", "Tissue and solver settings to start from ('fast', 'default', 'accurate', "
         "softgrasp_env/presets.py); `tissue`, `sim` and the tissue arguments override them", type_="str")
-    task: str = _arg("reach", "The start: 'reach' (above and away from the cylinder, misaligned fingers) or "
+    start: str = _arg("reach", "The start: 'reach' (above and away from the cylinder, misaligned fingers) or "
         "'easy' (v0's gentle start, for debugging)", type_="str")
     reward_type: str = _arg("dense", "'dense' (lift + reach) or 'sparse' (1 while held)", type_="str")
     control_frequency: float = _arg(20.0, "Env steps per second [Hz]; must divide the physics rate 1 / sim.dt",
                                     type_="float")
-    gripper_speed: float = _arg(0.15, "Arm speed at full action [m/s]: the action's x, y, z are the palm's "
+    arm_speed: float = _arg(0.15, "Arm speed at full action [m/s]: the action's x, y, z are the palm's "
         "velocity, followed along a speed- and acceleration-limited path; at most 2 and at most 1/120 m per physics "
-        "step (gripper_speed * sim.dt)", type_="float")
+        "step (arm_speed * sim.dt)", type_="float")
     arm_acceleration: float = _arg(1.5, "Largest acceleration of the arm's path [m/s²]; the palm starts and stops "
         "smoothly, the same at every dt", type_="float")
     particle_density: float | None = _arg(None, "Tissue particles per m² of core surface (None: the preset's, "
         "4,000); `tissue_density` before 0.3", type_="float")
     friction_static: float | None = _arg(None, "μ_s of the finger surface (None: the preset's, 0.9; the rigid "
         "kinds' pybullet coefficient)", type_="float")
-    friction_dynamic: float | None = _arg(None, "μ_k of the tissue, at most μ_s (None: the preset's: equal to μ_s, "
+    friction_kinetic: float | None = _arg(None, "μ_k of the tissue, at most μ_s (None: the preset's: equal to μ_s, "
         "one coefficient as pybullet's rigid contacts have)", type_="float")
     tissue_contact_cone: bool | None = _arg(None, "Coulomb's cone on every tissue contact as well as on each pad's "
         "patch (True) or on the patch alone (False: a pad squeezed on the way down can hold the cylinder after the "
@@ -106,7 +116,7 @@ class EnvArguments:
     reach_weight: float = _arg(0.1, "Weight of the reach shaping term", type_="float")
     max_tilt: float = _arg(math.pi / 4, "Tilt of the cylinder that ends the episode (knocked over) [rad]",
                            type_="float")
-    carry: bool | None = _arg(None, "The carry test (None: on for task 'reach', off for 'easy')", type_="bool")
+    carry: bool | None = _arg(None, "The carry test (None: on for start 'reach', off for 'easy')", type_="bool")
     carry_start: float = _arg(CARRY_START, "When the carry begins after reset [s]", type_="float")
     carry_duration: float = _arg(CARRY_DURATION, "How long the arm carries [s]", type_="float")
     carry_frequency: float | tuple[float, float] = _arg(CARRY_FREQUENCY_BAND, "The sway's frequency [Hz], or a "
@@ -118,13 +128,13 @@ class EnvArguments:
         type_="float or (float, float)")
     carry_slide_limit: float = _arg(CARRY_SLIDE_LIMIT, "Success needs the cylinder held at every step of the carry "
         "and its in-hand slide at most this [m]", type_="float")
-    cylinder_position_range: float | None = _arg(None, "Cylinder at U(±range) in x and y [m] (None: the task's, "
+    cylinder_position_range: float | None = _arg(None, "Cylinder at U(±range) in x and y [m] (None: the start's, "
         "0.07 reach / 0.01 easy)", type_="float")
     lateral_offset_range: float = _arg(0.005, "Palm offset along the faces, U(±range) [m]", type_="float")
     yaw_range: float | None = _arg(None, "Palm yaw U(±range) [rad] (None: π/4 reach / 5° easy)", type_="float")
     jaw_wedge_range: float | None = _arg(None, "Wedge between the faces U(±range) [rad] (None: 0.15 reach / 0 "
         "easy)", type_="float")
-    approach_range: tuple[float, float] = _arg(APPROACH, "task='reach': the annulus the grip starts in, around the "
+    approach_range: tuple[float, float] = _arg(APPROACH, "start='reach': the annulus the grip starts in, around the "
         "origin [m]", type_="(float, float)")
     friction_range: float = _arg(0.0, "Every friction coefficient × U(1 ± range)", type_="float")
     cylinder_radius_range: float = _arg(0.0, "Cylinder radius ± U(range) [m]", type_="float")
@@ -160,8 +170,8 @@ class EnvArguments:
         "follow aims at the bodies, fixed at the cylinder's start 12 cm up)", type_="(float, float, float)")
 
     # --- derived in __post_init__ ------------------------------------------------------------------
-    start: type = field(init=False, repr=False, compare=False)
-    """The task's class (TASKS[task])."""
+    start_class: type = field(init=False, repr=False, compare=False)
+    """The start's class (STARTS[start])."""
     substeps: int = field(init=False, repr=False, compare=False)
     """Physics steps per env step."""
     scene: SceneConfig = field(init=False, repr=False, compare=False)
@@ -174,15 +184,15 @@ class EnvArguments:
     """The pads' taxel grid of ``tactile`` (None without)."""
 
     def __post_init__(self) -> None:
-        check_choice("task", self.task, tuple(TASKS))
-        self._set("start", TASKS[self.task])
-        defaults = self.start.defaults
+        check_choice("start", self.start, tuple(STARTS))
+        self._set("start_class", STARTS[self.start])
+        defaults = self.start_class.defaults
         for name in ("cylinder_position", "yaw", "jaw_wedge"):
             if getattr(self, f"{name}_range") is None:
                 object.__setattr__(self, f"{name}_range", defaults[name])
         if self.carry is None:
             object.__setattr__(self, "carry", defaults["carry"])
-        check_bool("carry", self.carry, hint=" (or None: the task's default)")
+        check_bool("carry", self.carry, hint=" (or None: the start's default)")
         try:
             a_lo, a_hi = (float(v) for v in self.approach_range)
         except (TypeError, ValueError):
@@ -204,7 +214,7 @@ class EnvArguments:
         check_choice("reward_type", self.reward_type, ("dense", "sparse"))
         check_range("control_frequency", self.control_frequency, 0.5, 240.0)
         check_choice("finger_action", self.finger_action, FINGER_ACTIONS)
-        check_range("gripper_speed", self.gripper_speed, 0.0, 2.0, lo_open=True)
+        check_range("arm_speed", self.arm_speed, 0.0, 2.0, lo_open=True)
         check_range("arm_acceleration", self.arm_acceleration, 0.0, 50.0, lo_open=True)
         check_range("success_height", self.success_height, 0.0, 0.15, lo_open=True)
         check_range("reach_weight", self.reach_weight, 0.0, 10.0)
@@ -256,13 +266,13 @@ class EnvArguments:
         p_cfg = presets.scene_config(self.preset)
         tissue = self.tissue if self.tissue is not None else p_cfg.tissue
         check_type("tissue", tissue, TissueConfig)
-        if self.tissue is not None and None not in (tissue.friction_dynamic, self.friction_dynamic) \
-                and tissue.friction_dynamic != self.friction_dynamic:  # fmt: skip
-            raise ValueError(f"friction_dynamic={self.friction_dynamic!r} and "
-                             f"tissue.friction_dynamic={tissue.friction_dynamic!r} disagree: give one of them")
+        if self.tissue is not None and None not in (tissue.friction_kinetic, self.friction_kinetic) \
+                and tissue.friction_kinetic != self.friction_kinetic:  # fmt: skip
+            raise ValueError(f"friction_kinetic={self.friction_kinetic!r} and "
+                             f"tissue.friction_kinetic={tissue.friction_kinetic!r} disagree: give one of them")
         overrides = {k: v for k, v in (("particle_density", self.particle_density),
                                        ("friction_static", self.friction_static),
-                                       ("friction_dynamic", self.friction_dynamic),
+                                       ("friction_kinetic", self.friction_kinetic),
                                        ("contact_cone", self.tissue_contact_cone),
                                        ("shear_modulus", self.shear_modulus)) if v is not None}  # fmt: skip
         self._set("tissue", replace(tissue, **overrides))  # validated by TissueConfig
@@ -275,12 +285,12 @@ class EnvArguments:
             raise ValueError(f"control_frequency must divide the physics rate 1/sim.dt = {1.0 / sim.dt:g} Hz, "
                              f"got {self.control_frequency!r}")  # fmt: skip
         self._set("substeps", substeps)
-        if self.gripper_speed * sim.dt > MAX_ARM_STEP + 1e-12:
-            raise ValueError(f"gripper_speed={self.gripper_speed:g} m/s with sim.dt={sim.dt:g} s moves the arm "
-                             f"{self.gripper_speed * sim.dt * 100:.2f} cm per physics step, more than "
-                             f"{MAX_ARM_STEP * 100:.2f} cm; at this dt gripper_speed must be at most "
+        if self.arm_speed * sim.dt > MAX_ARM_STEP + 1e-12:
+            raise ValueError(f"arm_speed={self.arm_speed:g} m/s with sim.dt={sim.dt:g} s moves the arm "
+                             f"{self.arm_speed * sim.dt * 100:.2f} cm per physics step, more than "
+                             f"{MAX_ARM_STEP * 100:.2f} cm; at this dt arm_speed must be at most "
                              f"{MAX_ARM_STEP / sim.dt:.3g} m/s")  # fmt: skip
-        # (The carry's sway keeps within gripper_speed, _check_carry, so within MAX_ARM_STEP per step too.)
+        # (The carry's sway keeps within arm_speed, _check_carry, so within MAX_ARM_STEP per step too.)
 
     def _check_carry(self) -> None:
         """The carry's settings, each on its own, then the sway's corners against the arm's limits."""
@@ -304,7 +314,7 @@ class EnvArguments:
         check_range("carry_slide_limit", self.carry_slide_limit, 0.0, 0.1, lo_open=True)
         if self.carry:
             for f, amplitude in self._carry_corners():
-                problem = sway_limits_error(f, amplitude=amplitude, speed=self.gripper_speed,
+                problem = sway_limits_error(f, amplitude=amplitude, speed=self.arm_speed,
                                             arm_acceleration=self.arm_acceleration)  # fmt: skip
                 if problem:
                     raise ValueError(f"the carry's sway at {f:g} Hz ({amplitude * 100:.3g} cm) {problem}: lower "
@@ -324,24 +334,24 @@ class EnvArguments:
         check_range("cylinder_radius", self.cylinder_radius, 0.005, 0.2)
         field_defaults = SceneConfig.__dataclass_fields__
         fh = field_defaults["finger_half_extents"].default
-        max_opening = field_defaults["finger_max_opening"].default
+        stroke = field_defaults["finger_stroke"].default
         kind = FINGERS[self.fingers.kind]
         pad = kind.pad_thickness(self.fingers, self.tissue)
-        error = fit_error(cylinder_radius=self.cylinder_radius, jaw_wedge=0.0, finger_max_opening=max_opening,
+        error = fit_error(cylinder_radius=self.cylinder_radius, jaw_wedge=0.0, finger_stroke=stroke,
                           pad=pad, finger_half_height=fh[2], kind=self.fingers.kind)  # fmt: skip
         if error is not None:
             raise ValueError(error)
-        start_height = self.start.start_height(self.cylinder_height, fh[2], pad)
+        start_height = self.start_class.start_height(self.cylinder_height, fh[2], pad)
         top = GRIP_TOP - GRIP_TOP_MARGIN
         grip_z = 0.5 * self.cylinder_height + start_height
         if grip_z > top:
-            raise ValueError(f"cylinder_height={self.cylinder_height:g} m is too tall for task={self.task!r}: the grip "
+            raise ValueError(f"cylinder_height={self.cylinder_height:g} m is too tall for start={self.start!r}: the grip "
                              f"would start {grip_z:.3f} m up, too near the top of the arm's workspace ({GRIP_TOP:g} "
-                             f"m); at most {self.start.tallest_cylinder(top, fh[2], pad):.3f} m")  # fmt: skip
+                             f"m); at most {self.start_class.tallest_cylinder(top, fh[2], pad):.3f} m")  # fmt: skip
         base = SceneConfig(fingers=self.fingers, cylinder_radius=self.cylinder_radius,
                            cylinder_height=self.cylinder_height, cylinder_mass=self.cylinder_mass,
                            finger_force=self.finger_force, tissue=self.tissue, sim=self.sim,
-                           start_height=start_height, arm_speed=self.gripper_speed,
+                           start_height=start_height, arm_speed=self.arm_speed,
                            arm_acceleration=self.arm_acceleration)  # fmt: skip
         self._set("scene", base)
         if self.cylinder_radius - self.cylinder_radius_range < MIN_CYLINDER_RADIUS:
@@ -387,7 +397,7 @@ class EnvArguments:
                 raise ValueError(
                     f"the randomisation ranges reach a scene that cannot start (cylinder_position_range={p:g}, "
                     f"lateral_offset_range={lo:g}, yaw_range={yw:g}, jaw_wedge_range={w:g}, cylinder_radius_range="
-                    f"{rg.cylinder_radius:g}, task={self.task!r}): {error}")  # fmt: skip
+                    f"{rg.cylinder_radius:g}, start={self.start!r}): {error}")  # fmt: skip
         # (a 9 kg cylinder with cylinder_mass_range=0.9 used to fail at some reset, at 17 kg)
         for sign in (-1.0, 1.0):
             scale = 1.0 + sign * rg.friction
@@ -395,7 +405,7 @@ class EnvArguments:
                 check_range("cylinder_mass", b.cylinder_mass * (1.0 + sign * rg.cylinder_mass), 0.001, 10.0,
                             owner="SceneConfig")  # fmt: skip
                 check_range("friction_static", b.tissue.friction_static * scale, 0.0, 10.0, owner="TissueConfig")
-                check_range("friction_dynamic", b.tissue.friction_kinetic * scale, 0.0, 10.0, owner="TissueConfig")
+                check_range("friction_kinetic", kinetic_friction(b.tissue) * scale, 0.0, 10.0, owner="TissueConfig")
                 check_range("ground_friction", b.ground_friction * scale, 0.0, 10.0, owner="SceneConfig")
             except ValueError as e:
                 raise ValueError(
@@ -406,23 +416,23 @@ class EnvArguments:
 
     def make_task(self) -> Task:
         """A new task (it keeps per-episode state): the start, with the carry test if it is on."""
-        start = self.start(self.ranges, success_height=self.success_height, reach_weight=self.reach_weight,
+        start = self.start_class(self.ranges, success_height=self.success_height, reach_weight=self.reach_weight,
                            max_tilt=self.max_tilt, reward_type=self.reward_type,
-                           **({"approach": self.approach_range} if self.task == "reach" else {}))  # fmt: skip
+                           **({"approach": self.approach_range} if self.start == "reach" else {}))  # fmt: skip
         if not self.carry:
             return start
         carry = CarryTest(start, dt=self.sim.dt, workspace=self.workspace, start=self.carry_start,
                           duration=self.carry_duration, frequency=self.carry_frequency,
                           acceleration=self.carry_acceleration, slide_limit=self.carry_slide_limit,
-                          arm_speed=self.gripper_speed, arm_acceleration=self.arm_acceleration)  # fmt: skip
+                          arm_speed=self.arm_speed, arm_acceleration=self.arm_acceleration)  # fmt: skip
         if self.squeeze_weight == 0.0 and self.squeeze_factor is None:
             return carry
-        return LeastSqueeze(carry, squeeze_weight=self.squeeze_weight, squeeze_factor=self.squeeze_factor,
+        return GripForceTask(carry, squeeze_weight=self.squeeze_weight, squeeze_factor=self.squeeze_factor,
                             finger_force=self.finger_force)  # fmt: skip
 
     def make_actions(self) -> GripperActions:
-        return VelocityActions(self.gripper_speed, self.control_frequency, self.workspace, self.scene.finger_travel,
-                               finger=self.finger_action, max_force=self.scene.finger_force)  # fmt: skip
+        return VelocityActions(self.arm_speed, self.control_frequency, self.workspace, self.scene.finger_travel,
+                               finger=self.finger_action, finger_force=self.scene.finger_force)  # fmt: skip
 
     # --- construction from gym.make's kwargs -----------------------------------------------------
 
@@ -457,11 +467,12 @@ class EnvArguments:
                 if isinstance(given, FingerConfig) and kind != want:
                     raise ValueError(f"soft={soft} contradicts fingers={given!r}: give fingers= alone")
                 kwargs["fingers"] = given if kind == want else want
-        if "tissue_density" in kwargs:
-            if "particle_density" in kwargs:
-                raise TypeError("give particle_density= (the new name of tissue_density=), not both")
-            deprecated("the tissue_density= argument (particles per m^2)", "particle_density=", stacklevel=5)
-            kwargs["particle_density"] = kwargs.pop("tissue_density")
+        for old, new in RENAMED_KEYWORDS.items():
+            if old in kwargs:
+                if new in kwargs:
+                    raise TypeError(f"give {new}= (the new name of {old}=), not both")
+                deprecated(f"the {old}= argument", f"{new}=", stacklevel=5)
+                kwargs[new] = kwargs.pop(old)
         known = {f.name for f in fields(cls) if f.init}
         unknown = sorted(set(kwargs) - known)
         if unknown:

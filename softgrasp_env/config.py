@@ -73,8 +73,8 @@ class TissueConfig:
     check and diverge at the first step)."""
     friction_static: float = 0.9
     """Coulomb static friction coefficient mu_s of the tissue surface [-]."""
-    friction_dynamic: float | None = None
-    """Coulomb dynamic (kinetic) friction coefficient mu_k of the tissue surface [-]; None: equal to
+    friction_kinetic: float | None = None
+    """Coulomb kinetic friction coefficient mu_k of the tissue surface [-]; None: equal to
     mu_s, one coefficient, the law of pybullet's rigid contacts, so that every finger kind is
     compared under the same friction. A number below mu_s gives the two-coefficient law (Macklin et
     al. 2014)."""
@@ -104,18 +104,11 @@ class TissueConfig:
         check_range("radius_scale", self.radius_scale, 0.0, 2.0, lo_open=True, owner=o)
         check_range("normal_radius", self.normal_radius, 0.0, 0.1, lo_open=True, owner=o)
         check_range("friction_static", self.friction_static, 0.0, 10.0, owner=o)
-        if self.friction_dynamic is not None:
-            check_range("friction_dynamic", self.friction_dynamic, 0.0, 10.0, owner=o)
-        if self.friction_kinetic > self.friction_static:
-            raise ValueError(
-                "TissueConfig.friction_dynamic must not exceed friction_static, got "
-                f"{self.friction_dynamic!r} > {self.friction_static!r}"
-            )
-
-    @property
-    def friction_kinetic(self) -> float:
-        """mu_k as the solver uses it: ``friction_dynamic``, or mu_s when that is None."""
-        return self.friction_static if self.friction_dynamic is None else self.friction_dynamic
+        if self.friction_kinetic is not None:
+            check_range("friction_kinetic", self.friction_kinetic, 0.0, 10.0, owner=o)
+            if self.friction_kinetic > self.friction_static:
+                raise ValueError("TissueConfig.friction_kinetic must not exceed friction_static, got "
+                                 f"{self.friction_kinetic!r} > {self.friction_static!r}")  # fmt: skip
 
     @property
     def modulus(self) -> float:
@@ -201,10 +194,16 @@ def _retired_material(kwargs: dict) -> dict:
     return kwargs
 
 
-accept_old_names(TissueConfig, {"density": "particle_density", "tissue_density": "mass_density"},
-                 translate=_retired_material)  # fmt: skip
+def kinetic_friction(tissue: TissueConfig) -> float:
+    """mu_k as the solver uses it: ``tissue.friction_kinetic``, or mu_s when that is None."""
+    return tissue.friction_static if tissue.friction_kinetic is None else tissue.friction_kinetic
+
+
+accept_old_names(TissueConfig, {"density": "particle_density", "tissue_density": "mass_density",
+                                "friction_dynamic": "friction_kinetic"}, translate=_retired_material)  # fmt: skip
 """Before 0.3 ``density`` (particles per m^2) and ``tissue_density`` (kg/m^3) - while gym.make's
-``tissue_density`` meant particles per m^2: one word, two meanings. The old names keep working."""
+``tissue_density`` meant particles per m^2: one word, two meanings; before 0.7 ``friction_dynamic``
+(mu_k, read as ``friction_kinetic``). The old names keep working."""
 
 
 def field_names(cls: type) -> tuple[str, ...]:
@@ -228,4 +227,4 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = ["COUPLING_MODES", "CouplingMode", "SimConfig", "TissueConfig", "field_names", "replace"]
+__all__ = ["COUPLING_MODES", "CouplingMode", "SimConfig", "TissueConfig", "field_names", "kinetic_friction", "replace"]

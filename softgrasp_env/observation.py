@@ -142,7 +142,7 @@ def read(scene: GraspScene, force: np.ndarray, grid: TaxelGrid | None = None) ->
     axis = np.array([2.0 * (x * z + y * w), 2.0 * (y * z - x * w), 1.0 - 2.0 * (x * x + y * y)])
     px, py, pz, pw = palm_q
     yaw = math.atan2(2.0 * (pw * pz + px * py), 1.0 - 2.0 * (py * py + pz * pz))
-    gap = 2.0 * scene.config.finger_max_opening - float(scene.finger_closing().sum())
+    gap = 2.0 * scene.config.finger_stroke - float(scene.finger_closing().sum())
     return Reading(grip=grip, grip_v=palm_v.copy(), finger_gap=gap, cyl_rel=cyl_x - grip, cyl_axis=axis,
                    cyl_v=cyl_v.copy(), cyl_w=cyl_w.copy(), force=np.array(force, dtype=np.float64),
                    lift=float(cyl_x[2] - scene.cylinder_rest_z), gripper_yaw=yaw,

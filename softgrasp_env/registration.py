@@ -31,11 +31,11 @@ _SPECS: dict[str, tuple[str, dict]] = {
     # why). v3 keeps the end it was released with.
     "SoftGraspGoal-v4": (_GOAL, {"fingers": "tissue", "end_when_knocked_over": False}),
     "SoftGraspGoal-v3": (_GOAL, {"fingers": "tissue", "end_when_knocked_over": True}),
-    "SoftGraspEasy-v3": (_ENV, {"fingers": "tissue", "reward_type": "dense", "task": "easy"}),
-    "SoftGraspEasyRigid-v3": (_ENV, {"fingers": "rigid", "reward_type": "dense", "task": "easy"}),
+    "SoftGraspEasy-v3": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy"}),
+    "SoftGraspEasyRigid-v3": (_ENV, {"fingers": "rigid", "reward_type": "dense", "start": "easy"}),
     "SoftGraspRigidTorsion-v3": (_ENV, {"fingers": "rigid_torsion", "reward_type": "dense", "carry": True}),
-    "SoftGraspEasyRigidTorsion-v3": (_ENV, {"fingers": "rigid_torsion", "reward_type": "dense", "task": "easy"}),
-    **{f"SoftGraspGrip{name}-v3": (_ENV, {"fingers": kind, "reward_type": "dense", "task": "easy", "carry": True,
+    "SoftGraspEasyRigidTorsion-v3": (_ENV, {"fingers": "rigid_torsion", "reward_type": "dense", "start": "easy"}),
+    **{f"SoftGraspGrip{name}-v3": (_ENV, {"fingers": kind, "reward_type": "dense", "start": "easy", "carry": True,
                                           **GRIP_TASK})
        for name, kind in (("", "tissue"), ("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion"))},
 }
@@ -47,7 +47,7 @@ cylinder for the last 1.5 s, a sway drawn per episode; success means held throug
 soft fingers and the dense lift reward, its rigid-only twin, the torsional rigid peer, the
 sparse-reward variant, the goal-conditioned variant (dict observations, ``compute_reward`` for HER;
 SoftGraspGoal-v4: the v3 physics, and a knocked-over cylinder no longer ends its episode) and the
-gentle start (``task="easy"``: the open fingers around the cylinder's top, aligned) for debugging a
+gentle start (``start="easy"``: the open fingers around the cylinder's top, aligned) for debugging a
 policy or the physics; the grip-force task (SoftGraspGrip-v3, soft / rigid / torsional: the gentle
 start with the carry, the squeeze as the action, mass and friction drawn and not observed, the
 squeeze charged and success within 2 x the least that holds, 4 x 4 taxels per pad, the cylinder's

@@ -27,7 +27,7 @@ def test_an_unknown_argument_is_a_type_error_naming_the_known_ones():
 
 
 def test_the_arguments_make_the_scene_the_task_and_the_steps():
-    args = EnvArguments.from_kwargs(fingers="rigid", cylinder_mass=0.2, control_frequency=40.0, task="easy")
+    args = EnvArguments.from_kwargs(fingers="rigid", cylinder_mass=0.2, control_frequency=40.0, start="easy")
     assert args.scene.fingers == "rigid" and args.scene.cylinder_mass == 0.2 and args.substeps == 6
     assert args.carry is False and args.obs_names[-1] == "gripper_yaw"  # the easy task has no carry
     assert type(args.make_task()).__name__ == "EasyTask"

@@ -36,10 +36,14 @@ def _args(env_id: str, **kwargs):
         ("SoftGrasp-v3", dict(soft=False, fingers="segmented"), dict(fingers="segmented")),  # a kind soft never named
         ("SoftGrasp-v3", dict(tissue_density=5000.0), dict(particle_density=5000.0)),
         ("SoftGraspRigid-v3", dict(soft=True, tissue_density=5000.0), dict(fingers="tissue", particle_density=5000.0)),
+        ("SoftGrasp-v3", dict(gripper_speed=0.14), dict(arm_speed=0.14)),
+        ("SoftGrasp-v3", dict(friction_dynamic=0.7), dict(friction_kinetic=0.7)),
+        ("SoftGrasp-v3", dict(task="easy"), dict(start="easy")),
     ],
 )
 def test_gym_make_takes_the_old_arguments_with_a_warning(env_id, old, new):
-    with pytest.warns(DeprecationWarning, match=r"the (soft|tissue_density)= argument.* is deprecated, use "):
+    with pytest.warns(DeprecationWarning, match=r"the (soft|tissue_density|gripper_speed|friction_dynamic|task)= "
+                                                r"argument.* is deprecated, use "):  # fmt: skip
         was = _args(env_id, **old)
     now = _args(env_id, **new)
     assert was == now and was.scene == now.scene and was.tissue == now.tissue
@@ -53,6 +57,8 @@ def test_old_gym_make_arguments_that_cannot_mean_one_thing_are_refused():
         gym.make("SoftGrasp-v3", soft=True, fingers=RigidConfig())
     with pytest.raises(TypeError, match="not both"):
         gym.make("SoftGrasp-v3", tissue_density=5000.0, particle_density=5000.0)
+    with pytest.raises(TypeError, match=r"give start= \(the new name of task=\), not both"):
+        gym.make("SoftGrasp-v3", task="easy", start="easy")
 
 
 def test_gym_make_takes_a_kinds_own_argument_only_with_that_kind():
@@ -72,7 +78,8 @@ def test_gym_make_takes_a_kinds_own_argument_only_with_that_kind():
 
 
 @pytest.mark.parametrize("old, new, value", [("density", "particle_density", 5000.0),
-                                             ("tissue_density", "mass_density", 1200.0)])  # fmt: skip
+                                             ("tissue_density", "mass_density", 1200.0),
+                                             ("friction_dynamic", "friction_kinetic", 0.7)])  # fmt: skip
 def test_tissue_config_takes_and_reads_the_old_names_with_a_warning(old, new, value):
     with pytest.warns(DeprecationWarning, match=rf"TissueConfig\({old}=\.\.\.\) is deprecated, use TissueConfig\({new}="):
         cfg = TissueConfig(**{old: value})
@@ -139,6 +146,44 @@ def test_flat_settings_combine_and_the_default_kind_takes_only_its_own():
     # reading another kind's flat setting gives that kind's default, as the flat field of 0.2 held it
     with pytest.warns(DeprecationWarning):
         assert SceneConfig(fingers="rigid").finger_segments == SegmentedConfig().segments
+
+
+@pytest.mark.parametrize("old, new, value", [("finger_max_opening", "finger_stroke", 0.07), ("palm_force", "arm_force", 60.0)])
+def test_scene_config_takes_and_reads_the_old_names_with_a_warning(old, new, value):
+    with pytest.warns(DeprecationWarning, match=rf"SceneConfig\({old}=\.\.\.\) is deprecated, use SceneConfig\({new}="):
+        cfg = SceneConfig(fingers="rigid", **{old: value})
+    assert cfg == SceneConfig(fingers="rigid", **{new: value})
+    with pytest.warns(DeprecationWarning, match=rf"SceneConfig\.{old} is deprecated, use SceneConfig\.{new}"):
+        assert getattr(cfg, old) == value == getattr(cfg, new)
+
+
+def test_the_default_arm_force_is_still_the_grippers_weight_plus_the_push():
+    """``arm_force=None`` (the default, as ``palm_force=None`` was): the force in force is the
+    gripper's weight plus ARM_PUSH."""
+    from softgrasp_env.scene import arm_force_limit
+    from softgrasp_env.scene.config import ARM_PUSH
+
+    cfg = SceneConfig()
+    assert cfg.arm_force is None
+    assert arm_force_limit(cfg) == ARM_PUSH + (cfg.palm_mass + 2 * cfg.finger_mass) * cfg.sim.gravity
+    assert arm_force_limit(SceneConfig(arm_force=60.0)) == 60.0
+
+
+@pytest.mark.parametrize("old, new", [("TASKS", "STARTS"), ("LeastSqueeze", "GripForceTask")])
+def test_the_tasks_old_names_import_with_a_warning(old, new):
+    import softgrasp_env.tasks as tasks
+
+    with pytest.warns(DeprecationWarning, match=rf"softgrasp_env\.tasks\.{old} is deprecated, use softgrasp_env\.tasks\.{new}"):
+        assert getattr(tasks, old) is getattr(tasks, new)
+
+
+def test_gripper_actions_take_max_force_with_a_warning():
+    from softgrasp_env.scene import GripperActions, Workspace
+
+    ws = Workspace.of(SceneConfig(fingers="rigid"))
+    with pytest.warns(DeprecationWarning, match=r"GripperActions\(max_force=\.\.\.\) is deprecated"):
+        old = GripperActions(0.15, 20.0, ws, 0.06, finger="force", max_force=6.0)
+    assert old.finger_force == 6.0 == GripperActions(0.15, 20.0, ws, 0.06, finger="force", finger_force=6.0).finger_force
 
 
 # --- moved names ------------------------------------------------------------------------------------

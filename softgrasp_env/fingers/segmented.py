@@ -267,7 +267,7 @@ class SegmentedFingers(FingerKind):
             gear = c.createConstraint(g, k, g, carriage, p.JOINT_GEAR, [1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
             c.changeConstraint(gear, gearRatio=-1.0, maxForce=gear_force, erp=gear_erp)
             self.carriage_gears.append(gear)
-            c.changeDynamics(g, carriage, jointLowerLimit=0.0, jointUpperLimit=cfg.finger_max_opening)
+            c.changeDynamics(g, carriage, jointLowerLimit=0.0, jointUpperLimit=cfg.finger_stroke)
         mu = cfg.tissue.friction_static
         for link in self.segment_links[0] + self.segment_links[1]:
             # friction in a call of its own (pybullet drops a whole changeDynamics call on a link

@@ -53,7 +53,7 @@ class _GripPolicy:
         self.lift_to = float(lift_to)
         self.names = env.unwrapped.obs_names
         self.index = {n: k for k, n in enumerate(self.names)}
-        self.max_force = float(args.finger_force)
+        self.finger_force = float(args.finger_force)
         self.reset()
 
     def reset(self) -> None:
@@ -82,8 +82,8 @@ class _GripPolicy:
         action = np.zeros(4, dtype=np.float32)
         target = self.grasp_z + (self.lift_to if self.gripped else 0.0)
         action[:3] = self.mover.toward(np.array([0.0, 0.0, target - z]))
-        force = min(max(self.squeeze(obs), 0.0), self.max_force) if self.down else 0.0  # open on the way down
-        action[3] = 2.0 * force / self.max_force - 1.0
+        force = min(max(self.squeeze(obs), 0.0), self.finger_force) if self.down else 0.0  # open on the way down
+        action[3] = 2.0 * force / self.finger_force - 1.0
         return action
 
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
@@ -175,7 +175,7 @@ class TactileGripPolicy(_GripPolicy):
                 if self.judged <= self.settle:  # the pads settle at the floor: the weight read there
                     self.weight = self.traction(obs)
                 elif self.traction(obs) < (1.0 - self.tolerance) * self.weight:  # slipping: friction < weight
-                    self.phase, self.force = "hold", min(self.margin * self.held, self.max_force)
+                    self.phase, self.force = "hold", min(self.margin * self.held, self.finger_force)
                 elif self.judged % (1 + self.wait) == 0:  # this squeeze held through its steps: lower it
                     self.held = self.force
                     self.force *= self.step

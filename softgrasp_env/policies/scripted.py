@@ -38,7 +38,7 @@ class ScriptedGraspPolicy:
     also has SB3's ``predict`` (batched observations too), so tools that evaluate an SB3 model
     (``stable_baselines3.common.evaluation.evaluate_policy``, agents.evaluate) evaluate it alike.
 
-    The arm's actions are velocities (``speed`` at full action, the env's ``gripper_speed``
+    The arm's actions are velocities (``speed`` at full action, the env's ``arm_speed``
     [m/s]): the policy asks for the speed that, held for a control step (``control_period`` [s])
     and then braked at the arm's acceleration ``arm_acceleration`` [m/s^2], stops within the
     distance left, so it does not overshoot (:meth:`for_env` reads these from an env).
@@ -69,7 +69,7 @@ class ScriptedGraspPolicy:
         args = getattr(env.unwrapped, "args", None)
         if args is None:
             raise TypeError(f"ScriptedGraspPolicy.for_env needs a SoftGrasp env, got {env!r}")
-        return cls(speed=args.gripper_speed, arm_acceleration=args.arm_acceleration,
+        return cls(speed=args.arm_speed, arm_acceleration=args.arm_acceleration,
                    control_period=1.0 / args.control_frequency, **kwargs)  # fmt: skip
 
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):

@@ -6,6 +6,7 @@ from .config import (
     GEOMETRY_MARGIN,
     PALM_HALF_EXTENTS,
     SceneConfig,
+    arm_force_limit,
     fit_error,
     geometry_error,
     scale_friction,
@@ -14,5 +15,5 @@ from .gripper import GRIP_TOP, Gripper, GripperActions, GripperControl, Workspac
 from .scene import CYLINDER_SHAPE, SHAPES, SLOTS, GraspScene
 
 __all__ = ["CYLINDER_SHAPE", "FINGER_DROP", "GEOMETRY_MARGIN", "GRIP_TOP", "PALM_HALF_EXTENTS", "SHAPES", "SLOTS",
-           "GraspScene", "Gripper", "GripperActions", "GripperControl", "SceneConfig", "Workspace", "fit_error",
+           "GraspScene", "Gripper", "GripperActions", "GripperControl", "SceneConfig", "Workspace", "arm_force_limit", "fit_error",
            "geometry_error", "scale_friction"]

@@ -64,12 +64,16 @@ class SceneConfig:
     """Maximum closing speed of a finger [m/s]. The deepest tissue penetration of the grasp comes
     the moment the fingers meet the cylinder: 0.095 mm at 0.1 m/s, 0.058 mm at 0.05 m/s (thesis
     coupling)."""
-    finger_max_opening: float = 0.06
-    """Largest distance of a finger core's inner face from the gripper centre [m]."""
+    finger_stroke: float = 0.06
+    """Each finger core's stroke [m]: its prismatic joint's range, from fully open (the core's
+    inner face this far from the gripper centre) to the bare faces meeting at the centre. The
+    action commands the part of it up to the stop, :attr:`finger_travel` (``finger_max_opening``
+    before 0.7)."""
     palm_mass: float = 0.5
     """Mass of the gripper palm [kg]."""
-    palm_force: float | None = None
-    """Force limit of the constraint that drives the palm, the arm's strength [N]; None: the
+    arm_force: float | None = None
+    """Force limit of the constraint that drives the palm, the arm's strength [N] (``palm_force``
+    before 0.7; :func:`arm_force_limit` gives the value in force); None: the
     gripper's weight (palm and cores) plus :data:`ARM_PUSH` (40 N), as an arm that compensates
     gravity and pushes or pulls with at most 40 N more. 40 N carries the heaviest cylinder the grasp holds (0.5 kg at the lift's 1.5 m/s^2:
     6 N) with room to spare; 200 N pressed the tissue onto the cylinder's rim hard enough to tear
@@ -114,16 +118,10 @@ class SceneConfig:
 
     @property
     def finger_travel(self) -> float:
-        """Each finger's closing travel from fully open to its stop [m] (``finger_stop``)."""
+        """Each finger's closing travel from fully open to its stop [m]: the :attr:`finger_stroke`,
+        less the pad's thickness when the stop is where the pads meet (``finger_stop``)."""
         stop = self.finger_stop or "pads"
-        return self.finger_max_opening - (self.pad_thickness if stop == "pads" else 0.0)
-
-    @property
-    def arm_force(self) -> float:
-        """The palm constraint's force limit [N]: ``palm_force``, or the arm's default."""
-        if self.palm_force is not None:
-            return self.palm_force
-        return ARM_PUSH + (self.palm_mass + 2.0 * self.finger_mass) * self.sim.gravity
+        return self.finger_stroke - (self.pad_thickness if stop == "pads" else 0.0)
 
     def __post_init__(self) -> None:
         o = "SceneConfig"
@@ -139,10 +137,10 @@ class SceneConfig:
         check_range("finger_mass", self.finger_mass, 0.001, 10.0, owner=o)
         check_range("finger_force", self.finger_force, 0.0, 1000.0, lo_open=True, owner=o)
         check_range("finger_speed", self.finger_speed, 0.0, 10.0, lo_open=True, owner=o)
-        check_range("finger_max_opening", self.finger_max_opening, 0.005, 0.3, owner=o)
+        check_range("finger_stroke", self.finger_stroke, 0.005, 0.3, owner=o)
         check_range("palm_mass", self.palm_mass, 0.01, 100.0, owner=o)
-        if self.palm_force is not None:
-            check_range("palm_force", self.palm_force, 0.0, 1e4, lo_open=True, owner=o)
+        if self.arm_force is not None:
+            check_range("arm_force", self.arm_force, 0.0, 1e4, lo_open=True, owner=o)
         if self.finger_stop is not None:
             check_choice("finger_stop", self.finger_stop, ("pads", "faces"), owner=o)
         check_range("arm_speed", self.arm_speed, 0.0, 2.0, lo_open=True, owner=o)
@@ -181,19 +179,27 @@ class SceneConfig:
         return self.kind.pad_thickness(self.fingers, self.tissue)
 
 
-def open_half_gap(finger_max_opening: float, pad: float, finger_half_height: float, jaw_wedge: float) -> float:
+def arm_force_limit(cfg: SceneConfig) -> float:
+    """The palm constraint's force limit in force [N]: ``cfg.arm_force``, or, when that is None, the
+    gripper's weight (palm and cores) plus :data:`ARM_PUSH`."""
+    if cfg.arm_force is not None:
+        return cfg.arm_force
+    return ARM_PUSH + (cfg.palm_mass + 2.0 * cfg.finger_mass) * cfg.sim.gravity
+
+
+def open_half_gap(finger_stroke: float, pad: float, finger_half_height: float, jaw_wedge: float) -> float:
     """The narrowest half gap of the open fingers [m]: a wedge turns one edge of each face inwards."""
-    return finger_max_opening - pad - finger_half_height * math.sin(0.5 * abs(jaw_wedge))
+    return finger_stroke - pad - finger_half_height * math.sin(0.5 * abs(jaw_wedge))
 
 
-def fit_error(*, cylinder_radius: float, jaw_wedge: float, finger_max_opening: float, pad: float,
+def fit_error(*, cylinder_radius: float, jaw_wedge: float, finger_stroke: float, pad: float,
               finger_half_height: float, kind: str) -> str | None:  # fmt: skip
     """Why a cylinder of ``cylinder_radius`` does not fit between the open fingers with their pads
     on, or None."""
-    r, gap = cylinder_radius, open_half_gap(finger_max_opening, pad, finger_half_height, jaw_wedge)
+    r, gap = cylinder_radius, open_half_gap(finger_stroke, pad, finger_half_height, jaw_wedge)
     if r + GEOMETRY_MARGIN > gap:
         return (f"SceneConfig: the cylinder (cylinder_radius={r:g} m) does not fit between the open fingers: "
-                f"finger_max_opening={finger_max_opening:g} m less the {kind} pad ({pad:g} m) and the "
+                f"finger_stroke={finger_stroke:g} m less the {kind} pad ({pad:g} m) and the "
                 f"jaw_wedge={jaw_wedge:g} rad leave a half gap of {gap:.4f} m; the radius must be at most "
                 f"{gap - GEOMETRY_MARGIN:.4f} m")  # fmt: skip
     return None
@@ -211,11 +217,11 @@ def geometry_error(cfg: SceneConfig, **changes: Any) -> str | None:
     fh = cfg.finger_half_extents
     pad = cfg.pad_thickness
     wedge, r, h = get("jaw_wedge"), get("cylinder_radius"), get("cylinder_height")
-    error = fit_error(cylinder_radius=r, jaw_wedge=wedge, finger_max_opening=cfg.finger_max_opening, pad=pad,
+    error = fit_error(cylinder_radius=r, jaw_wedge=wedge, finger_stroke=cfg.finger_stroke, pad=pad,
                       finger_half_height=fh[2], kind=cfg.fingers.kind)  # fmt: skip
     if error is not None:
         return error
-    gap = open_half_gap(cfg.finger_max_opening, pad, fh[2], wedge)
+    gap = open_half_gap(cfg.finger_stroke, pad, fh[2], wedge)
     start_height, cyl_xy, grip_xy = get("start_height"), get("cylinder_xy"), get("gripper_xy")
     lateral, yaw = get("lateral_offset"), get("yaw")
     grip_z = 0.5 * h + start_height
@@ -242,9 +248,9 @@ def scale_friction(cfg: SceneConfig, scale: float) -> SceneConfig:
     """``cfg`` with every friction coefficient (the finger surface's static and kinetic, the
     ground's) scaled by ``scale``: how the env's ``friction_range`` and the ``friction_scale``
     reset option act."""
-    mu_k = cfg.tissue.friction_dynamic  # None (equal to mu_s) stays so
+    mu_k = cfg.tissue.friction_kinetic  # None (equal to mu_s) stays so
     tissue = replace(cfg.tissue, friction_static=cfg.tissue.friction_static * scale,
-                     friction_dynamic=None if mu_k is None else mu_k * scale)  # fmt: skip
+                     friction_kinetic=None if mu_k is None else mu_k * scale)  # fmt: skip
     return replace(cfg, tissue=tissue, ground_friction=cfg.ground_friction * scale)
 
 
@@ -284,7 +290,8 @@ def _translate_legacy(kwargs: dict) -> dict:
     return kwargs
 
 
-accept_old_names(SceneConfig, {}, translate=_translate_legacy)
+accept_old_names(SceneConfig, {"finger_max_opening": "finger_stroke", "palm_force": "arm_force"},
+                 translate=_translate_legacy)  # fmt: skip
 for _old, (_cls, _new) in _LEGACY_FIELDS.items():
 
     def _read(self, _old=_old, _cls=_cls, _new=_new):
@@ -294,4 +301,4 @@ for _old, (_cls, _new) in _LEGACY_FIELDS.items():
     setattr(SceneConfig, _old, property(_read, doc=f"Deprecated: ``fingers.{_new}`` of a {_cls.__name__}."))
 
 
-__all__ = ["ARM_PUSH", "FINGER_DROP", "GEOMETRY_MARGIN", "PALM_HALF_EXTENTS", "SceneConfig", "fit_error", "geometry_error", "open_half_gap", "scale_friction"]
+__all__ = ["ARM_PUSH", "FINGER_DROP", "GEOMETRY_MARGIN", "PALM_HALF_EXTENTS", "SceneConfig", "arm_force_limit", "fit_error", "geometry_error", "open_half_gap", "scale_friction"]

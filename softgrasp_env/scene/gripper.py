@@ -23,7 +23,9 @@ import pybullet as p
 from gymnasium import spaces
 from pybullet_utils.bullet_client import BulletClient
 
-from .config import FINGER_DROP, PALM_HALF_EXTENTS, SceneConfig
+from ..fingers.base import CORE_RGBA
+from ..validation import deprecated
+from .config import FINGER_DROP, PALM_HALF_EXTENTS, SceneConfig, arm_force_limit
 
 if TYPE_CHECKING:
     from ..fingers import FingerKind
@@ -34,7 +36,6 @@ FINGER_GEAR_ERP = 0.2
 """Share of the gear's position error corrected per step: pybullet's gear constraint acts on
 velocities only by default (erp 0), and the travel difference then drifted by 3 mm in 60 s."""
 PALM_RGBA = (0.4, 0.4, 0.45, 1.0)
-CORE_RGBA = (0.3, 0.3, 0.8, 1.0)
 
 GRIP_TOP = 0.20
 """Highest the arm takes the grip point [m]."""
@@ -159,7 +160,7 @@ class Gripper:
         palm_vis = c.createVisualShape(p.GEOM_BOX, halfExtents=PALM_HALF_EXTENTS, rgbaColor=list(PALM_RGBA))
         fin_col = c.createCollisionShape(p.GEOM_BOX, halfExtents=fh)
         fin_vis = c.createVisualShape(p.GEOM_BOX, halfExtents=fh, rgbaColor=list(CORE_RGBA))
-        open_x = cfg.finger_max_opening + fh[0]  # finger centre when fully open
+        open_x = cfg.finger_stroke + fh[0]  # finger centre when fully open
         # Jaw wedge: each finger tilted by half the wedge about y, the left (-x) one by -w/2 and the
         # right one by +w/2 (the gap wider at the top for w > 0, measured: inner faces 6.3 cm from
         # the centre at the top, 5.7 at the bottom for w = 0.2). A prismatic joint's axis is given
@@ -245,7 +246,7 @@ class Gripper:
     def _set_palm_target(self, pos) -> None:
         self.client.changeConstraint(self.palm_constraint, jointChildPivot=[float(v) for v in pos],
                                      jointChildFrameOrientation=self._orientation,
-                                     maxForce=self.config.arm_force)  # fmt: skip
+                                     maxForce=arm_force_limit(self.config))  # fmt: skip
 
     def _set_finger_closing(self, closing: float, force: float | None = None) -> None:
         cfg = self.config
@@ -304,36 +305,43 @@ class GripperActions:
     """The env's action, ``Box(-1, 1, (4,))``, as a gripper control: x, y, z move the grip point,
     kept in the workspace; the last entry commands the fingers. How x, y, z move the arm is the
     subclass's (:class:`VelocityActions`). The last entry: with ``finger="position"`` the
-    closing travel (-1 fully open, +1 the faces meeting), the motors limited to the scene's
-    ``finger_force``; with ``finger="force"`` the squeeze, 0 at -1 to ``max_force`` at +1, the
+    closing travel (-1 fully open, +1 closed to the stop, ``finger_travel``), the motors limited to the scene's
+    ``finger_force``; with ``finger="force"`` the squeeze, 0 at -1 to ``finger_force`` at +1, the
     motors driving the fingers closed with that force (they close until they meet resistance and
     never open: the grip-force task starts with the cylinder between them)."""
 
     space = spaces.Box(-1.0, 1.0, shape=(4,), dtype=np.float32)
 
-    def __init__(self, speed: float, control_frequency: float, workspace: Workspace, finger_max_opening: float, *,
-                 finger: str = "position", max_force: float | None = None) -> None:  # fmt: skip
+    def __init__(self, speed: float, control_frequency: float, workspace: Workspace, finger_travel: float, *,
+                 finger: str = "position", finger_force: float | None = None, max_force: float | None = None) -> None:  # fmt: skip
+        if max_force is not None:
+            deprecated("GripperActions(max_force=...)", "GripperActions(finger_force=...)")
+            if finger_force is not None:
+                raise TypeError("GripperActions: give finger_force= (the new name of max_force=), not both")
+            finger_force = max_force
         self.speed = float(speed)
         self.control_frequency = float(control_frequency)
         self.workspace = workspace
-        self.finger_max_opening = float(finger_max_opening)
+        self.finger_travel = float(finger_travel)
+        """Each finger's closing travel from fully open to its stop [m] (``SceneConfig.finger_travel``)."""
         if finger not in FINGER_ACTIONS:
             raise ValueError(f"finger must be one of {FINGER_ACTIONS}, got {finger!r}")
-        if finger == "force" and not (max_force is not None and math.isfinite(max_force) and max_force > 0.0):
-            raise ValueError(f"finger='force' needs max_force > 0 [N], got {max_force!r}")
+        if finger == "force" and not (finger_force is not None and math.isfinite(finger_force) and finger_force > 0.0):
+            raise ValueError(f"finger='force' needs finger_force > 0 [N], got {finger_force!r}")
         self.finger = finger
-        self.max_force = None if max_force is None else float(max_force)
+        self.finger_force = None if finger_force is None else float(finger_force)
+        """The squeeze at full action with ``finger="force"`` [N] (the scene's ``finger_force``)."""
 
     def closing(self, action: np.ndarray) -> float:
         """The finger closing for ``action``'s last entry [m] (fully closed when it sets the force)."""
         if self.finger == "force":
-            return self.finger_max_opening
-        return 0.5 * (float(action[3]) + 1.0) * self.finger_max_opening
+            return self.finger_travel
+        return 0.5 * (float(action[3]) + 1.0) * self.finger_travel
 
     def squeeze(self, action: np.ndarray) -> float | None:
         """The motors' force limit for ``action``'s last entry [N] (None: the scene's)."""
         if self.finger == "force":
-            return 0.5 * (float(action[3]) + 1.0) * self.max_force
+            return 0.5 * (float(action[3]) + 1.0) * self.finger_force
         return None
 
     def control(self, action: np.ndarray, scene: PalmReadout) -> GripperControl:

@@ -77,7 +77,7 @@ def sway_limits_error(frequency: float, *, amplitude: float | None = None, accel
                 f"arm_acceleration={arm_acceleration:g} m/s^2")  # fmt: skip
     if v > speed * (1 + 1e-12):
         return (f"peaks at {v:.3g} m/s ({steady / omega:.3g} steady, more while it ramps in), above the arm's "
-                f"gripper_speed={speed:g} m/s")  # fmt: skip
+                f"arm_speed={speed:g} m/s")  # fmt: skip
     return None
 
 

@@ -61,7 +61,7 @@ def least_squeeze(mass: float, mu_s: float, accelerations: np.ndarray, jaw_axis:
     return float(mass * across.max() / (2.0 * mu_s)) if across.size else 0.0
 
 
-class LeastSqueeze(TaskWrapper):
+class GripForceTask(TaskWrapper):
     """``carry`` (a :class:`CarryTest`) judged as the grip-force task (module docstring):
     ``squeeze_weight`` charges the squeeze in the reward; ``squeeze_factor`` (None: the carry's
     success alone) bounds the carry's mean squeeze by that many times the least that holds;
@@ -70,7 +70,7 @@ class LeastSqueeze(TaskWrapper):
     def __init__(self, carry: CarryTest, *, squeeze_weight: float, squeeze_factor: float | None,
                  finger_force: float) -> None:  # fmt: skip
         if not isinstance(carry, CarryTest):
-            raise TypeError(f"LeastSqueeze wraps a CarryTest (its accelerations judge the squeeze), got {carry!r}")
+            raise TypeError(f"GripForceTask wraps a CarryTest (its accelerations judge the squeeze), got {carry!r}")
         super().__init__(carry)
         self.reward_terms = carry.reward_terms + ("squeeze",)
         self.info_keys = carry.info_keys + GRIP_INFO
@@ -119,4 +119,13 @@ class LeastSqueeze(TaskWrapper):
                        info={**out.info, "carry_squeeze": mean, "least_squeeze": least})  # fmt: skip
 
 
-__all__ = ["GRIP_INFO", "LeastSqueeze", "least_squeeze"]
+def __getattr__(name: str):
+    if name == "LeastSqueeze":  # the class's name before 0.7
+        from ..validation import deprecated
+
+        deprecated("softgrasp_env.tasks.grip.LeastSqueeze", "GripForceTask", stacklevel=3)
+        return GripForceTask
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+__all__ = ["GRIP_INFO", "GripForceTask", "least_squeeze"]

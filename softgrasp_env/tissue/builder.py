@@ -14,7 +14,7 @@ from typing import Literal
 import numba as nb
 import numpy as np
 
-from ..config import TissueConfig
+from ..config import TissueConfig, kinetic_friction
 from .model import TissueModel
 
 ShapeKind = Literal["box", "cylinder", "capsule", "sphere"]
@@ -345,7 +345,7 @@ def _single_body_model(
         group_rest_offset=rest_offset,
         body_particle_offsets=np.array([0, n], dtype=np.int32),
         body_core_shape=np.array([-1], dtype=np.int32),
-        body_friction=np.array([[tissue.friction_static, tissue.friction_kinetic]]),
+        body_friction=np.array([[tissue.friction_static, kinetic_friction(tissue)]]),
         group_kappa=kappa,
         body_max_deviation=np.array([tissue.deviation_limit]),
         body_contact_cone=np.array([tissue.contact_cone]),

@@ -79,10 +79,35 @@ def test_a_changed_card_section_changes_the_page(monkeypatch):
 
 def test_a_changed_goal_card_changes_the_goal_page(monkeypatch):
     marker = "compute_reward pays a bonus in this test"
-    doc = SoftGraspGoalEnv.__doc__.replace("- Reward: ", f"- Reward: {marker}; ", 1)
+    doc = SoftGraspGoalEnv.__doc__.replace("## Rewards\n", f"## Rewards\n    {marker}.\n", 1)
+    assert marker in doc
     monkeypatch.setattr(SoftGraspGoalEnv, "__doc__", doc)
     page = envpages.render_pages()["goal.md"]
-    assert marker in page.split("## Rewards\n", 1)[1].split("\n## ", 1)[0]
+    rewards = page.split("## Rewards\n", 1)[1].split("\n## ", 1)[0]
+    assert marker in rewards
+    assert "success_height" not in rewards  # the goal's reward replaces the lift card's
+
+
+def test_the_goal_card_has_gymnasiums_sections_of_its_own():
+    """The goal card's own ## sections lead its page's sections, the lift card's follow."""
+    _, sections = envpages.split_sections(envpages.card_text(SoftGraspGoalEnv))
+    for key in ("description", "observation space", "rewards", "starting state", "episode end", "arguments",
+                "version history"):  # fmt: skip
+        assert sections.get(key), key
+    page = envpages.render_pages()["goal.md"]
+    episode_end = page.split("## Episode End\n", 1)[1].split("\n## ", 1)[0]
+    assert episode_end.index("end_when_knocked_over") < episode_end.index("The lift family's card")
+    history = page.split("## Version History\n", 1)[1]
+    assert "- v4:" in history and "- v3:" in history
+
+
+def test_the_grip_force_section_is_on_the_grip_page_only(pages):
+    _, sections = envpages.split_sections(envpages.card_text(SoftGraspEnv))
+    assert "grip-force task" in sections
+    grip = pages["grip.md"]
+    assert "## Grip-force task" in grip
+    assert grip.index("## Grip-force task") < grip.index("## Action Space")
+    assert "## Grip-force task" not in pages["lift.md"] and "## Grip-force task" not in pages["goal.md"]
 
 
 def test_a_changed_argument_changes_the_arguments_table(monkeypatch):
@@ -99,7 +124,7 @@ def test_a_changed_argument_changes_the_arguments_table(monkeypatch):
 def test_a_new_registered_id_gets_onto_its_page(monkeypatch):
     """A grip-task id registered tomorrow lands on the grip page, with its version line."""
     env_id = "SoftGraspGripTest-v9"
-    kwargs = {"fingers": "rigid", "reward_type": "dense", "task": "easy", "carry": True, **registration.GRIP_TASK}
+    kwargs = {"fingers": "rigid", "reward_type": "dense", "start": "easy", "carry": True, **registration.GRIP_TASK}
     gym.register(id=env_id, entry_point="softgrasp_env.env:SoftGraspEnv", kwargs=kwargs, max_episode_steps=100)
     try:
         monkeypatch.setattr(registration, "ENV_IDS", (*registration.ENV_IDS, env_id))

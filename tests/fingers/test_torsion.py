@@ -107,7 +107,7 @@ def _twist(ratio: float, *, lever: float = PATCH_SPINNING_FRICTION, mu_cylinder:
     c, dt = sc.client, cfg.sim.dt
     try:
         c.setGravity(0.0, 0.0, 0.0)  # no weight to carry: the contacts hold only the torque
-        control = replace(sc.control, finger_closing=cfg.finger_max_opening)
+        control = replace(sc.control, finger_closing=cfg.finger_stroke)
         for _ in range(int(0.6 / dt)):
             sc.step(control)
         control = replace(control, palm_target=sc.palm_target + np.array([0.0, 0.0, 0.01]))

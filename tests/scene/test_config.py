@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from softgrasp_env.config import COUPLING_MODES, SimConfig, TissueConfig, field_names, replace
+from softgrasp_env.config import COUPLING_MODES, SimConfig, TissueConfig, field_names, kinetic_friction, replace
 from softgrasp_env.scene import SceneConfig
 
 NAN = float("nan")
@@ -18,7 +18,7 @@ INF = float("inf")
 def test_defaults_construct():
     t, s, c = TissueConfig(), SimConfig(), SceneConfig()
     assert isinstance(c.tissue, TissueConfig) and isinstance(c.sim, SimConfig)
-    assert t.friction_dynamic is None and t.friction_kinetic == t.friction_static == 0.9  # one coefficient, as pybullet
+    assert t.friction_kinetic is None and kinetic_friction(t) == t.friction_static == 0.9  # one coefficient, as pybullet
     assert s.coupling in COUPLING_MODES
     assert c.soft is True
 
@@ -48,10 +48,10 @@ def test_spacing_follows_density():
         (dict(radius_scale=0.0), "radius_scale"),
         (dict(radius_scale=2.5), "radius_scale"),
         (dict(normal_radius=0.0), "normal_radius"),
-        (dict(friction_static=-0.1, friction_dynamic=0.0), "friction_static"),
+        (dict(friction_static=-0.1, friction_kinetic=0.0), "friction_static"),
         (dict(friction_static=NAN), "friction_static"),
-        (dict(friction_dynamic=0.95), "friction_dynamic"),
-        (dict(friction_static=0.3, friction_dynamic=0.31), "friction_dynamic"),
+        (dict(friction_kinetic=0.95), "friction_kinetic"),
+        (dict(friction_static=0.3, friction_kinetic=0.31), "friction_kinetic"),
         (dict(stiffness=0.5), "stiffness"),  # the retired per-step material's
         (dict(material="per_step"), "material"),  # retired: names 0.6.0
         (dict(shear_modulus=999.0), "shear_modulus"),
@@ -77,8 +77,8 @@ def test_tissue_config_rejects(kwargs, field):
         dict(particle_density=100.0),
         dict(particle_density=1e7),
         dict(extrude=0.1),
-        dict(friction_static=0.5, friction_dynamic=0.5),  # equal coefficients allowed
-        dict(friction_static=0.0, friction_dynamic=0.0),
+        dict(friction_static=0.5, friction_kinetic=0.5),  # equal coefficients allowed
+        dict(friction_static=0.0, friction_kinetic=0.0),
         dict(shear_modulus=1e3),
         dict(shear_modulus=1e6),
         dict(max_deviation=1e-3),
@@ -174,7 +174,7 @@ def test_sim_config_accepts(kwargs):
         (dict(lateral_offset=0.5), "lateral_offset"),
         (dict(finger_force=0.0), "finger_force"),
         (dict(finger_speed=0.0), "finger_speed"),
-        (dict(palm_force=0.0), "palm_force"),
+        (dict(arm_force=0.0), "arm_force"),
         (dict(ground_friction=-0.5), "ground_friction"),
         (dict(finger_half_extents=(0.008, 0.02)), "finger_half_extents"),
         (dict(finger_half_extents=(0.008, 0.0, 0.03)), r"finger_half_extents\[1\]"),

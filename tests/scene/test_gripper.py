@@ -52,13 +52,13 @@ def test_the_arm_keyword_is_retired():
 
 
 def test_a_smooth_arm_action_is_a_velocity_with_the_workspace_as_its_box():
-    actions = VelocityActions(0.15, 20.0, WS, CFG.finger_max_opening)
+    actions = VelocityActions(0.15, 20.0, WS, CFG.finger_travel)
     c = actions.control(np.array([1.0, -0.5, 0.0, 1.0]), _scene([0.0, 0.0, 0.2]))
     assert c.palm_target is None
     np.testing.assert_allclose(c.palm_velocity, [0.15, -0.075, 0.0], atol=1e-15)
     np.testing.assert_allclose(c.palm_box[0], WS.low + G2P)
     np.testing.assert_allclose(c.palm_box[1], WS.high + G2P)
-    assert c.finger_closing == pytest.approx(CFG.finger_max_opening)
+    assert c.finger_closing == pytest.approx(CFG.finger_travel)
     assert actions.control(np.zeros(4), _scene([0.0, 0.0, 0.2])).finger_closing == pytest.approx(0.03)
 
 
@@ -140,7 +140,7 @@ def test_the_palm_itself_stays_under_the_acceleration_limit_under_bang_bang_acti
     (release 0.6.0's v1/v2) kicked it at 86 m/s^2 (1/240 s)."""
     cfg = SceneConfig(fingers="rigid", sim=SimConfig(dt=dt))
     sc = GraspScene(cfg)
-    actions = VelocityActions(cfg.arm_speed, 20.0, Workspace.of(cfg), cfg.finger_max_opening)
+    actions = VelocityActions(cfg.arm_speed, 20.0, Workspace.of(cfg), cfg.finger_travel)
     rng = np.random.default_rng(0)
     per_control = int(round(1 / (20.0 * dt)))
     try:

@@ -24,7 +24,7 @@ def squeeze(sim: SimConfig, tissue: TissueConfig | None = None, seconds: float =
     cfg = SceneConfig(sim=sim, tissue=tissue or TissueConfig())
     scene = GraspScene(cfg)
     try:
-        control = replace(scene.control, finger_closing=cfg.finger_max_opening, palm_velocity=None)
+        control = replace(scene.control, finger_closing=cfg.finger_stroke, palm_velocity=None)
         fx, r, pad = cfg.finger_half_extents[0], cfg.cylinder_radius, cfg.pad_thickness
         out = []
         for _ in range(round(seconds / sim.dt)):

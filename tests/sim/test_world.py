@@ -118,7 +118,7 @@ def test_world_is_deterministic():
     """Two worlds built alike and driven alike stay bit-identical (their own pybullet clients)."""
 
     def run(scene, steps):
-        close = replace(scene.control, finger_closing=scene.config.finger_max_opening)
+        close = replace(scene.control, finger_closing=scene.config.finger_stroke)
         for _ in range(steps):
             scene.step(close)
         return scene.world.state.particle_x.copy(), scene.cylinder_pose()[0]
@@ -147,7 +147,7 @@ def test_a_world_without_tissue_reads_rigid_states_when_asked(fingers):
     try:
         world = scene.world
         assert world.solver is None
-        close = replace(scene.control, finger_closing=scene.config.finger_max_opening)
+        close = replace(scene.control, finger_closing=scene.config.finger_stroke)
         for _ in range(30):
             scene.step(close)
         assert world._stale  # nothing read since the last step
@@ -172,7 +172,7 @@ def test_restore_returns_bodies_and_tissue_to_the_snapshot():
         snap = scene.world.save()
         x0 = scene.world.state.particle_x.copy()
         c0 = scene.cylinder_pose()[0]
-        close = replace(scene.control, finger_closing=scene.config.finger_max_opening)
+        close = replace(scene.control, finger_closing=scene.config.finger_stroke)
         for _ in range(60):
             scene.step(close)
         assert np.abs(scene.world.state.particle_x - x0).max() > 1e-3

@@ -87,7 +87,7 @@ def test_a_sway_the_arm_cannot_follow_is_refused_at_reset_and_at_make(make_env):
     with pytest.raises(ValueError, match=r"peaks at 1.52 m/s\^2 \(1.45 steady"):
         env.reset(seed=0, options=dict(carry_frequency=2.0, carry_acceleration=1.45))
     env.reset(seed=0, options=dict(carry_frequency=2.0, carry_acceleration=1.4))  # 1.47 while ramping: followed
-    with pytest.raises(ValueError, match=r"peaks at 0.161 m/s \(0.159 steady.*gripper_speed=0.15"):
+    with pytest.raises(ValueError, match=r"peaks at 0.161 m/s \(0.159 steady.*arm_speed=0.15"):
         env.reset(seed=0, options=dict(carry_frequency=1.0, carry_acceleration=1.0))
     with pytest.raises(ValueError, match="reset option 'carry_frequency' must be in"):
         env.reset(seed=0, options=dict(carry_frequency=0.0))

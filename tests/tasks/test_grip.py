@@ -12,7 +12,7 @@ import pytest
 
 from softgrasp_env.policies.grip import ConstantGripPolicy, TactileGripPolicy
 from softgrasp_env.registration import GRIP_TASK
-from softgrasp_env.tasks import CarryTest, LeastSqueeze
+from softgrasp_env.tasks import CarryTest, GripForceTask
 from softgrasp_env.tasks.grip import least_squeeze
 from tests.helpers import assert_same, rollout
 
@@ -37,11 +37,11 @@ def test_grip_ids_are_the_task(make_env):
     for env_id, kind in (("SoftGraspGrip-v3", "tissue"), ("SoftGraspGripRigid-v3", "rigid"),
                          ("SoftGraspGripRigidTorsion-v3", "rigid_torsion")):  # fmt: skip
         spec = gym.spec(env_id)
-        assert spec.kwargs["fingers"] == kind and spec.kwargs["task"] == "easy" and spec.kwargs["carry"] is True
+        assert spec.kwargs["fingers"] == kind and spec.kwargs["start"] == "easy" and spec.kwargs["carry"] is True
         assert {k: spec.kwargs[k] for k in GRIP_TASK} == GRIP_TASK
     env = make_env("SoftGraspGripRigid-v3")
     u = env.unwrapped
-    assert isinstance(u.task, LeastSqueeze) and isinstance(u.task.find(CarryTest), CarryTest)
+    assert isinstance(u.task, GripForceTask) and isinstance(u.task.find(CarryTest), CarryTest)
     assert u.task.reward_terms == ("lift", "reach", "squeeze")
     assert u.obs_names[-1] == "tactile_right_r3_c3_shear_z" and len(u.obs_names) == 11 + 2 * 16 * 5
     # what the gripper itself senses: not the cylinder's pose or motion

@@ -1,4 +1,4 @@
-"""The reach task (``task="reach"``, softgrasp_env/tasks/reach.py; every id but the Easy and grip ones, the
+"""The reach task (``start="reach"``, softgrasp_env/tasks/reach.py; every id but the Easy and grip ones, the
 carry test on top: tests/tasks/test_carry.py): it needs a closed-loop policy. The gripper
 starts above the cylinder's top, 4-14 cm from the origin in a random direction, the cylinder
 anywhere within +-7 cm, the fingers misaligned (jaw wedge up to +-0.15 rad, yaw up to +-pi/4)."""
@@ -117,9 +117,9 @@ def test_reach_start_is_above_and_away_and_options_fix_it(make_env):
     assert cfg.gripper_xy == (0.05, -0.02) and cfg.jaw_wedge == 0.1
 
 
-def test_task_is_validated():
-    with pytest.raises(ValueError, match="task must be one of"):
-        gym.make("SoftGrasp-v3", task="fly")
+def test_start_is_validated():
+    with pytest.raises(ValueError, match="start must be one of"):
+        gym.make("SoftGrasp-v3", start="fly")
     with pytest.raises(ValueError, match="approach_range"):
         gym.make("SoftGrasp-v3", approach_range=(0.05, 0.2))
 
@@ -129,10 +129,10 @@ def test_task_is_validated():
     [
         (dict(cylinder_radius=0.2), r"does not fit between the open fingers.*at most 0\.0480 m"),
         (dict(cylinder_radius=0.08), r"does not fit between the open fingers"),
-        (dict(cylinder_height=0.5), r"too tall for task='reach'.*at most 0\.140 m"),
-        (dict(cylinder_height=0.5, task="easy"), r"too tall for task='easy'"),
+        (dict(cylinder_height=0.5), r"too tall for start='reach'.*at most 0\.140 m"),
+        (dict(cylinder_height=0.5, start="easy"), r"too tall for start='easy'"),
         (dict(cylinder_radius=0.047), r"randomisation ranges reach a scene that cannot start.*jaw_wedge_range=0\.15"),
-        (dict(task="easy", cylinder_position_range=0.05), r"cylinder_position_range=0\.05.*fingers start inside the cylinder"),
+        (dict(start="easy", cylinder_position_range=0.05), r"cylinder_position_range=0\.05.*fingers start inside the cylinder"),
     ],
 )
 def test_geometry_that_cannot_start_is_refused_when_the_env_is_made(kwargs, match):

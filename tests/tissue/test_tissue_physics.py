@@ -9,7 +9,7 @@ import pytest
 
 from softgrasp_env import accuracy
 from softgrasp_env.accuracy import momenta
-from softgrasp_env.config import SimConfig, TissueConfig
+from softgrasp_env.config import SimConfig, TissueConfig, kinetic_friction
 from softgrasp_env.tissue.builder import CoreShape, build_combined_body, build_free_block
 from softgrasp_env.tissue.model import with_core_shapes
 from softgrasp_env.tissue.rigid import Colliders, empty_colliders
@@ -211,7 +211,7 @@ def test_pad_breaks_loose_at_the_friction_angle(mu_s, mu_k):
     """A two-layer pad on a slowly tilted ramp breaks loose at tan theta = mu_s, at the default
     iterations and stiffness. Measured: +0.15 / +0.09 / +0.08 % (detection lag; -7.6 / -10.2 /
     -15.0 % before friction was decided per patch with anchors)."""
-    tan = accuracy.ramp_breakaway(TissueConfig(friction_static=mu_s, friction_dynamic=mu_k), SimConfig())
+    tan = accuracy.ramp_breakaway(TissueConfig(friction_static=mu_s, friction_kinetic=mu_k), SimConfig())
     assert abs(tan / mu_s - 1.0) < 0.005, f"breaks loose at tan {tan:.4f}, mu_s {mu_s}"
 
 
@@ -220,7 +220,7 @@ def test_pad_with_contact_cones_breaks_loose_at_the_friction_angle(mu_s, mu_k):
     """The same with Coulomb's cone on every contact (TissueConfig.contact_cone): what the lightly
     loaded contacts shed is handed to the patch's others, so the pad still breaks loose at mu_s.
     Without the handing on it broke loose at 0.898 mu_s (mu_s 0.3)."""
-    tissue = TissueConfig(friction_static=mu_s, friction_dynamic=mu_k, contact_cone=True)
+    tissue = TissueConfig(friction_static=mu_s, friction_kinetic=mu_k, contact_cone=True)
     tan = accuracy.ramp_breakaway(tissue, SimConfig())
     assert abs(tan / mu_s - 1.0) < 0.005, f"breaks loose at tan {tan:.4f}, mu_s {mu_s}"
 
@@ -230,7 +230,7 @@ def test_pad_slides_down_a_steeper_ramp_at_the_coulomb_rate(mu_s, mu_k):
     """Above the friction angle the pad accelerates at g (sin theta - mu_k cos theta)."""
     theta = math.atan(mu_s + 0.15)
     sim = SimConfig()
-    a = accuracy.slide_acceleration(theta, TissueConfig(friction_static=mu_s, friction_dynamic=mu_k), sim)
+    a = accuracy.slide_acceleration(theta, TissueConfig(friction_static=mu_s, friction_kinetic=mu_k), sim)
     expected = sim.gravity * (math.sin(theta) - mu_k * math.cos(theta))
     assert abs(a / expected - 1.0) < 0.002, f"{a:.4f} m/s^2, Coulomb {expected:.4f}"
 
@@ -242,7 +242,7 @@ def test_pad_slides_to_a_stop_at_the_coulomb_distance(v0):
     alone stopped it v0 dt / 2 short: -12.9 / -6.2 / -3.0 % before)."""
     tissue, sim = TissueConfig(), SimConfig()
     d = accuracy.stop_distance(v0, tissue, sim)
-    expected = v0 * v0 / (2.0 * tissue.friction_kinetic * sim.gravity)
+    expected = v0 * v0 / (2.0 * kinetic_friction(tissue) * sim.gravity)
     assert abs(d / expected - 1.0) < 0.02, f"{d * 1000:.2f} mm, Coulomb {expected * 1000:.2f} mm"
 
 
