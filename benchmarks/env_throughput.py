@@ -90,7 +90,7 @@ def main(argv: list[str] | None = None) -> None:
     print(f"{'env id':<{width}}{'random env steps/s':>20}{'scripted env steps/s':>22}{'physics steps/s (random)':>26}")
     for spec, env_id, kwargs in runs:
         probe = gym.make(env_id, **kwargs)
-        sub = probe.unwrapped.args.substeps
+        sub = probe.unwrapped.plan.substeps
         probe.close()
         rnd = env_steps_per_second(env_id, args.steps, scripted=False, **kwargs)
         scr = env_steps_per_second(env_id, args.steps, scripted=True, **kwargs)

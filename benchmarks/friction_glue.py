@@ -75,7 +75,7 @@ def glue(seed: int = 1013, report=print, cones: bool = False) -> dict:
 
     world.solver.step = watched_solve
     report(" step  commanded  measured (left, right)  tissue on cores  lift    contacts over mu_s (median, max ratio)")
-    dt = u.args.sim.dt * u.args.substeps
+    dt = u.plan.scene.sim.dt * u.plan.substeps
     for k in range(env.spec.max_episode_steps):
         if floor is None:
             up = obs[i["lift"]] >= arm.lift_to - 0.002 and abs(obs[i["cyl_vz"]]) < 0.005
@@ -87,7 +87,7 @@ def glue(seed: int = 1013, report=print, cones: bool = False) -> dict:
         elif k % 2 == 0:
             force = max(force * 0.9, 0.05)
         action = arm(obs)
-        action[3] = 2.0 * force / u.args.finger_force - 1.0
+        action[3] = 2.0 * force / u.args.control.finger_force - 1.0
         impulses[:] = 0.0
         obs, _, terminated, _, info = env.step(action)
         n, over, med, top = contact_cone(world, mu)

@@ -125,7 +125,7 @@ def scripted_episode(kind: dict, version: str, *, dt: float = 1.0 / 240.0, optio
             obs, _, term, trunc, info = env.step(policy(obs))
             done = term or trunc
             deviation = max(deviation, u.scene.world.tissue_deviation())
-        pad = u.args.scene.pad_thickness
+        pad = u.plan.scene.pad_thickness
         return {"held": bool(info["is_success"]), "lift": float(info["lift_height"]), "in_hand": rec.in_hand_motion(),
                 "compression": pad - rec.gap[-1], "pad": pad, "peak_accel": rec.peak_acceleration(dt),
                 "cyl_accel": rec.cylinder_peak_acceleration(dt),

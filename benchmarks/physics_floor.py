@@ -54,7 +54,7 @@ def floor(env_id: str, seconds: float) -> tuple[float, float]:
     env = _grasped(env_id)
     scene = env.unwrapped.scene
     client = scene.client
-    h = env.unwrapped.args.scene.sim.dt / (scene.bullet_steps * scene.world_steps)
+    h = env.unwrapped.plan.scene.sim.dt / (scene.bullet_steps * scene.world_steps)
     n, tic = 0, time.perf_counter()
     while time.perf_counter() - tic < seconds:
         for _ in range(100):
@@ -128,7 +128,7 @@ def env_rate(env_id: str, seconds: float, *, breakdown: bool) -> tuple[float, di
             per_step["solver call"] = per_step.pop("tissue call") - per_step.get("kernel", 0.0)
         per_step["env"] = wall / n - sum(per_step.values())
     scene = env.unwrapped.scene
-    pybullet_per_env_step = env.unwrapped.args.substeps * scene.bullet_steps * scene.world_steps
+    pybullet_per_env_step = env.unwrapped.plan.substeps * scene.bullet_steps * scene.world_steps
     env.close()
     return n / wall, per_step, pybullet_per_env_step
 

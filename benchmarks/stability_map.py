@@ -177,7 +177,7 @@ def policy_for(env) -> ScriptedGraspPolicy:
     finger the default threshold (0.5 N) is the motor's whole force, the contact force dips below
     it and the policy never lifts, or lifts by chance (the consistent coupling once "held" 0.1 kg
     at 0.5 N, below Coulomb's 0.55 N, with it; every method agrees with Coulomb at 0.25 N)."""
-    force = env.unwrapped.args.finger_force
+    force = env.unwrapped.args.control.finger_force
     return ScriptedGraspPolicy.for_env(env, grip_force=min(GRIP_FORCE, 0.5 * force))
 
 

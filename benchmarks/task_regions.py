@@ -55,7 +55,7 @@ QUANTITIES = {
 def start_of(env) -> dict[str, float]:
     """The quantities this episode's start drew, read back from the scene and the carry task."""
     u = env.unwrapped
-    cfg, base = u.scene.config, u.args.scene
+    cfg, base = u.scene.config, u.plan.scene
     dx = np.subtract(cfg.gripper_xy, cfg.cylinder_xy)
     carry = u.task
     omega = 2.0 * math.pi * carry.frequency

@@ -1,8 +1,8 @@
 """Gymnasium environments: two fingers pick up a cylinder. A thin composition of the scene
 (softgrasp_env/scene/), a finger kind (softgrasp_env/fingers/) and a task (softgrasp_env/tasks/),
 made from ``gym.make``'s keywords by softgrasp_env/arguments.py. The class docstrings are the env
-cards; ``softgrasp_env/registration.py`` lists the registered ids; docs/ARCHITECTURE.md follows
-one step through it all.
+cards; ``softgrasp_env/registration.py`` lists the registered ids; the package's documentation
+(Architecture) follows one step through it all.
 """
 
 from __future__ import annotations
@@ -16,13 +16,12 @@ import numpy as np
 from gymnasium import spaces
 
 from ._jit_cache import ensure_compiled
-from .arguments import EnvArguments, argument_table
+from .arguments import EnvArguments, EnvPlan, GoalConfig, argument_table, check_reset_options
 from .observation import CARRY_OBS_NAMES, OBS_GROUPS, OBS_NAMES, Reading, read
 from .scene import GraspScene
 from .sim.world import SimulationDiverged
-from .tasks import GoalTask, Outcome, check_option
+from .tasks import GoalTask, Outcome
 from .tasks.goal import DISTANCE_THRESHOLD, GOAL_HEIGHT_RANGE
-from .validation import check_range
 
 OBS_BOUNDS: dict[str, tuple[float, float]] = {
     "cyl_axis": (-1.0, 1.0),  # a unit vector's components, from a unit quaternion
@@ -32,7 +31,7 @@ OBS_BOUNDS: dict[str, tuple[float, float]] = {
 }
 """The observation groups whose bounds hold whatever happens; every other entry is unbounded.
 Not bounded though they look it: ``finger_gap`` (pybullet's joint limits are soft: 1.2e-8 m past
-fully open was measured, so ``[0, 2 * finger_max_opening]`` would not contain every observation),
+fully open was measured, so ``[0, 2 * finger_stroke]`` would not contain every observation),
 ``lift`` (a cylinder pushed into the ground goes below its resting height), the grip point and the
 cylinder (the arm's target is kept in the workspace, the palm and a thrown cylinder are not)."""
 
@@ -71,21 +70,21 @@ class SoftGraspEnv(gym.Env):
     4-14 cm away from the origin, the cylinder anywhere within 7 cm of it, and the fingers are
     only approximately aligned (thesis: "only approximate orientation of the fingers relative to
     the object"): a jaw wedge, a yaw and a lateral offset. Physics runs at 240 Hz; one env step
-    holds the action for ``240 / control_frequency`` physics steps. docs/RESULTS.md has the
-    measurements behind these choices.
+    holds the action for ``240 / control_frequency`` physics steps. The package's documentation
+    (Results: the env's design, measured) has the measurements behind these choices.
 
     ## Action space
     ``Box(-1, 1, (4,), float32)``:
 
     | index | meaning | scaling |
     |---|---|---|
-    | 0, 1, 2 | palm velocity x, y, z (world frame; ignored during the carry test) | ``a * gripper_speed`` m/s (0.15 at full action; the vector capped at that speed), reached with the arm's acceleration limit ``arm_acceleration`` |
+    | 0, 1, 2 | palm velocity x, y, z (world frame; ignored during the carry test) | ``a * arm_speed`` m/s (0.15 at full action; the vector capped at that speed), reached with the arm's acceleration limit ``arm_acceleration`` |
     | 3 | finger closing | target travel ``(a + 1) / 2 * travel`` from fully open: -1 fully open, +1 closed to the stop, where the pads meet; the force limit sets the squeeze. With ``finger_action="force"``: the squeeze itself, ``(a + 1) / 2 * finger_force`` N, the fingers closing until they meet resistance (they never open) |
 
     The arm brakes before the workspace's walls (x, y within ±15 cm of the origin, fingertip
     height between just above the ground and 20 cm) and waits for a palm that is blocked 2 cm
-    behind it. Peak palm acceleration under any action sequence, measured at every physics step:
-    1.5 m/s^2 (at most 2, tests/scene/test_gripper.py).
+    behind it. Peak palm acceleration under any action sequence, at every physics step: 1.5 m/s^2
+    (the package's tests bound it by 2).
     Out-of-range actions are clipped to [-1, 1] and ``info["action_clipped"]`` says so; a NaN/inf
     action or one of the wrong shape raises ``ValueError``, one that is not real numbers
     ``TypeError``.
@@ -121,16 +120,14 @@ class SoftGraspEnv(gym.Env):
     success_height, 0, 1)`` (1 once the cylinder is 5 cm up) and ``reach = -reach_weight *
     min(d, 0.1 m) / 0.1 m`` with ``d`` the grip point's distance to the cylinder centre; both terms
     are in ``info["reward_terms"]``. ``reward_type="sparse"`` (``SoftGraspSparse-v3``): 1 on steps
-    where ``info["held"]``, else 0. The grip-force task (``SoftGraspGrip-v3`` and its rigid twins;
-    ``squeeze_weight``) adds ``squeeze = -squeeze_weight * mean(force_left, force_right) /
-    finger_force`` (0.5 on the grip ids), its own term.
+    where ``info["held"]``, else 0. The grip ids add a squeeze term (Grip-force task).
 
     ## Starting state
-    ``task="reach"``: fingers fully open, the fingertips 2 cm above the cylinder's top, the grip
+    ``start="reach"``: fingers fully open, the fingertips 2 cm above the cylinder's top, the grip
     point uniformly over the annulus ``approach_range`` (4-14 cm) around the origin; the cylinder
     at U(±cylinder_position_range) (7 cm) in x and y; a jaw wedge U(±jaw_wedge_range) (0.15 rad;
     positive opens the gap at the top) and a yaw U(±yaw_range) (π/4); the palm offset along the
-    faces by U(±lateral_offset_range). ``task="easy"`` (the Easy ids): the open fingers around the
+    faces by U(±lateral_offset_range). ``start="easy"`` (the Easy ids): the open fingers around the
     cylinder's top over the origin, no wedge, yaw U(±5°), the cylinder at U(±1 cm). Friction,
     cylinder radius and mass are randomised too if their ranges are non-zero (the grip ids, on the
     easy start: mass 0.17 kg × U(1 ± 0.75), every friction × U(1 ± 0.45), neither observed: the
@@ -145,12 +142,8 @@ class SoftGraspEnv(gym.Env):
     - ``info["is_success"]``: ``info["held"]`` - lifted ≥ ``success_height``, both fingers pressing
       (≥ 0.05 N each), tilted no more than ``max_tilt`` - and, with the carry test, the carry over
       (``info["carrying"]`` while it runs) with the cylinder held at every env step of it and its
-      in-hand slide at most ``carry_slide_limit`` (5 mm). The
-      grip-force task (``squeeze_factor``, 2 on the grip ids) also needs the carry's mean squeeze
-      ``info["carry_squeeze"]`` at most that many times ``info["least_squeeze"]``, the least force
-      per finger that holds this cylinder through this carry: Coulomb, ``m max|a - g| / (2 mu_s)``
-      across the jaw axis with the cylinder's accelerations over each env step of the carry (both
-      0 before it; softgrasp_env/tasks/grip.py).
+      in-hand slide at most ``carry_slide_limit`` (5 mm). The grip ids also bound the squeeze
+      (Grip-force task).
     - Terminated: the cylinder tilts more than ``max_tilt`` (knocked over), leaves the workspace
       (more than 15 cm from the origin horizontally, below the ground or above 50 cm), or the
       simulation diverges (non-finite numbers, a body faster than 20 m/s, tissue torn more than
@@ -167,12 +160,29 @@ class SoftGraspEnv(gym.Env):
     <arguments>
 
     Deprecated spellings that keep working with a ``DeprecationWarning``: ``soft=True/False``
-    (``fingers="tissue"/"rigid"``), ``tissue_density=`` (``particle_density=``), and the only
+    (``fingers="tissue"/"rigid"``), ``tissue_density=`` (``particle_density=``), ``gripper_speed=``
+    (``arm_speed=``), ``friction_dynamic=`` (``friction_kinetic=``), ``task=`` (``start=``), and the only
     choice left of an argument removed after 0.6.0 (``arm="smooth"``,
     ``tissue_material="compliant"``, ``carry_direction="any"``). Its retired choices
     (``arm="jump"``, ``tissue_material="per_step"``, ``carry_direction="across"``,
     ``carry_amplitude=``, ``carry_slide_limit=None``) are a ``ValueError`` naming release 0.6.0,
     which has them.
+
+    ## Grip-force task
+    The grip ids (``SoftGraspGrip-v3``, ``SoftGraspGripRigid-v3``, ``SoftGraspGripRigidTorsion-v3``)
+    ask for the least squeeze that holds. They take the easy start with the carry test; the
+    action's last entry is the squeeze itself (``finger_action="force"``, up to ``finger_force`` =
+    6 N); the cylinder's mass (0.17 kg × U(1 ± 0.75)) and every friction (× U(1 ± 0.45)) are drawn
+    per episode and not observed, so the least force that holds spans 0.16-3.0 N; the observation
+    leaves out the cylinder (``observe_object=False``) and adds a 4 × 4 taxel grid on each pad
+    (``tactile=(4, 4)``). The reward adds ``squeeze = -squeeze_weight * mean(force_left,
+    force_right) / finger_force`` (``squeeze_weight`` 0.5), its own term in
+    ``info["reward_terms"]``. Success also needs the carry's mean squeeze ``info["carry_squeeze"]``
+    at most ``squeeze_factor`` (2) times ``info["least_squeeze"]``, the least force per finger that
+    holds this cylinder through this carry: Coulomb, ``m max|a - g| / (2 mu_s)`` across the jaw axis
+    with the cylinder's accelerations over each env step of the carry (both 0 before it;
+    :mod:`softgrasp_env.tasks.grip`). :mod:`softgrasp_env.policies.grip` has a tactile and a
+    force-blind scripted policy.
 
     ## Rendering
     ``render_mode="rgb_array"`` draws the scene with pybullet's CPU renderer in a viewer server of
@@ -218,15 +228,18 @@ class SoftGraspEnv(gym.Env):
             raise ValueError("render_mode='human' opens the pybullet GUI and needs a display (DISPLAY is not set); "
                              "use render_mode='rgb_array' headless")  # fmt: skip
         self.args = args = EnvArguments.from_kwargs(**kwargs)
-        """The validated arguments, and the base scene and settings derived from them."""
-        self.task = self._make_task(args)
-        self.actions = args.make_actions()
+        """The validated arguments, grouped into configs (softgrasp_env.arguments)."""
+        self.plan = plan = EnvPlan.of(args)
+        """What the env is made of, derived from the arguments: the base scene, the physics steps per
+        env step, the observation's names, the taxel grid."""
+        self.task = self._make_task(plan)
+        self.actions = plan.make_actions()
         self.render_mode = render_mode
-        self.fingers = args.fingers.kind
-        self.soft = args.scene.soft
-        self.carry = bool(args.carry)
-        self.control_frequency = float(args.control_frequency)
-        self.obs_names = args.obs_names
+        self.fingers = args.physics.fingers.kind
+        self.soft = plan.scene.soft
+        self.carry = bool(args.carry_test.on)
+        self.control_frequency = float(args.control.frequency)
+        self.obs_names = plan.obs_names
         """The observation's entries, in order (``OBS_NAMES``, and ``time`` with the carry test)."""
         # The instance lists the render modes that work where it runs: without a display the GUI
         # cannot open (pybullet would end the process), so checkers must not try "human" there.
@@ -243,23 +256,16 @@ class SoftGraspEnv(gym.Env):
         self._episode_over, self._divergence = False, None
         # A cold numba cache compiles here, with a line before and after, not silently in the
         # first reset and step (half a minute); a warm one costs a scene build, once per process.
-        ensure_compiled(args.scene)
+        ensure_compiled(plan.scene)
 
-    def _make_task(self, args: EnvArguments):
-        return args.make_task()
+    def _make_task(self, plan: EnvPlan):
+        return plan.make_task()
 
     # --- gym API -----------------------------------------------------------------------------------
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)
-        if options is not None and not isinstance(options, dict):
-            raise TypeError(f"reset options must be a dict (or None), got {type(options).__name__}: {options!r}")
-        options = dict(options or {})
-        allowed = self.task.reset_options
-        unknown = set(options) - set(allowed)
-        if unknown:
-            raise ValueError(f"unknown reset option(s) {sorted(unknown)}; allowed: {allowed}")
-        options = {k: check_option(k, v) for k, v in options.items()}
+        options = check_reset_options(options, self.task.reset_options)
         # What a copy needs to rebuild this episode exactly: the generator before the draws.
         self._reset_record = (self.np_random.bit_generator.state, options)
         self._actions = []
@@ -297,10 +303,9 @@ class SoftGraspEnv(gym.Env):
         from .render import Camera, SceneRenderer
 
         if self._renderer is None:
-            a = self.args
-            camera = Camera(a.render_camera, a.camera_distance, a.camera_yaw, a.camera_pitch, a.camera_target)
-            self._renderer = SceneRenderer(a.render_width, a.render_height, human=self.render_mode == "human",
-                                           camera=camera)  # fmt: skip
+            c = self.args.camera
+            camera = Camera(c.mode, c.distance, c.yaw, c.pitch, c.target)
+            self._renderer = SceneRenderer(c.width, c.height, human=self.render_mode == "human", camera=camera)
         return self._renderer.render(self.scene)
 
     def close(self) -> None:
@@ -329,7 +334,7 @@ class SoftGraspEnv(gym.Env):
     def _build(self, options: dict[str, Any]) -> None:
         """The episode's scene: the task's draw, built (in the same physics server after the first
         reset), and the task told it begins."""
-        cfg = self.task.draw(self.np_random, options, self.args.scene)
+        cfg = self.task.draw(self.np_random, options, self.plan.scene)
         client = None if self.scene is None else self.scene.client
         self.scene = GraspScene(cfg, gui=self.render_mode == "human", client=client)
         if self._renderer is not None:
@@ -347,13 +352,13 @@ class SoftGraspEnv(gym.Env):
         control = self.actions.control(act, sc)
         forces = np.zeros(2)
         try:
-            for _ in range(self.args.substeps):
+            for _ in range(self.plan.substeps):
                 sc.step(self.task.steer(sc, control))
                 forces += sc.finger_forces()
         except SimulationDiverged:
             self._episode_over, self._divergence = True, "non-finite tissue solve"
             return True
-        self._forces = forces / self.args.substeps
+        self._forces = forces / self.plan.substeps
         self._divergence = sc.divergence()
         if self._divergence is not None:
             self._episode_over = True
@@ -361,7 +366,7 @@ class SoftGraspEnv(gym.Env):
         return False
 
     def _read(self) -> Reading:
-        return read(self.scene, self._forces, self.args.taxel_grid)
+        return read(self.scene, self._forces, self.plan.taxel_grid)
 
     def _info(self, reading: Reading, outcome: Outcome | None, *, clipped: bool) -> dict[str, Any]:
         """``outcome`` None: the step diverged (nothing held, no reward, the last finite reading)."""
@@ -412,24 +417,50 @@ class SoftGraspEnv(gym.Env):
 class SoftGraspGoalEnv(SoftGraspEnv):
     """Goal-conditioned SoftGrasp (``SoftGraspGoal-v4``, ``-v3``) for hindsight experience replay.
 
-    As :class:`SoftGraspEnv` (same actions, physics, starting state and time limit; no carry
-    test), with the goal task (softgrasp_env/tasks/goal.py). By default (``SoftGraspGoal-v4``) a
-    knocked-over or pushed-away cylinder does not end the episode (it runs to the time limit at -1
-    per step: an early end would pay less, and HER + SAC learned to knock the cylinder over for
-    it); only a physics failure does (the cylinder below the ground or flung out, a diverged step).
+    ## Description
+    As :class:`SoftGraspEnv` - the same actions, physics, starting state and time limit, with soft
+    fingers - but with the goal task (:mod:`softgrasp_env.tasks.goal`) and no carry test: bring the
+    cylinder centre to a goal above the cylinder's start. HER relabels goals alone, so reward and
+    success are the goal's and nothing else (a time-bound test would break the relabelling).
 
-    - Observation: ``Dict(observation=Box(23), achieved_goal=Box(3), desired_goal=Box(3))``:
-      ``observation`` is SoftGraspEnv's vector, ``achieved_goal`` the cylinder centre [m],
-      ``desired_goal`` the target for it: above the cylinder's start, at its resting height plus
-      U(goal_height_range) (default 5-8 cm).
-    - Reward: ``compute_reward(achieved_goal, desired_goal, info)`` = -1 while the cylinder centre
-      is farther than ``distance_threshold`` (2 cm) from the goal, else 0 (vectorised over leading
-      batch dimensions, as HER needs); -1 on a diverged step. ``info["is_success"]`` is exactly
-      ``compute_reward(...) == 0``.
+    ## Action space
+    As SoftGraspEnv's.
 
-    Extra arguments: ``distance_threshold`` (0.02 m), ``goal_height_range`` ((0.05, 0.08) m),
-    ``end_when_knocked_over`` (False; True on SoftGraspGoal-v3: the lift task's episode
-    ends, as it was released with).
+    ## Observation space
+    ``Dict(observation=Box(23), achieved_goal=Box(3), desired_goal=Box(3))``: ``observation`` is
+    SoftGraspEnv's vector without the carry test's time, ``achieved_goal`` the cylinder centre [m],
+    ``desired_goal`` the target for it [m].
+
+    ## Rewards
+    ``compute_reward(achieved_goal, desired_goal, info)``: -1 while the cylinder centre is farther
+    than ``distance_threshold`` (2 cm) from the goal, else 0, vectorised over leading batch
+    dimensions (as HER needs); -1 on a diverged step. ``info["is_success"]`` is exactly
+    ``compute_reward(...) == 0``.
+
+    ## Starting state
+    As SoftGraspEnv's (the reach start unless ``start=`` says otherwise); the goal is drawn with
+    it, above the cylinder's start at its resting height plus U(goal_height_range) (default 5-8 cm).
+
+    ## Episode end
+    ``SoftGraspGoal-v4`` (``end_when_knocked_over=False``): only a physics failure ends an episode
+    early - the cylinder below the ground or flung above the workspace, a diverged step; a
+    knocked-over or pushed-away cylinder runs on to the time limit at -1 per step (an early end
+    would pay less, and a learner would learn to end it). ``SoftGraspGoal-v3``
+    (``end_when_knocked_over=True``) keeps the lift task's ends. Truncated by the time limit (100
+    steps).
+
+    ## Arguments
+    SoftGraspEnv's, but ``reward_type`` (the reward is the goal's) and ``carry=True`` (no carry
+    test), each a ``ValueError``; and its own: ``distance_threshold`` (0.02 m), ``goal_height_range``
+    ((0.05, 0.08) m), ``end_when_knocked_over`` (False; True on ``SoftGraspGoal-v3``).
+
+    ## Version history
+    - v4: v3's physics and goal; a knocked-over or pushed-away cylinder no longer ends the episode
+      (only a physics failure does). HER + SAC on v3 learned to topple the cylinder to end its
+      episodes early; v4's episodes run to the time limit.
+    - v3: the v3 physics (SoftGraspEnv's v3) with the lift task's ends: a knocked-over cylinder or
+      one that leaves the workspace ends the episode.
+    - v1: retired after 0.6.0 (``pip install softgrasp-env==0.6.0`` reproduces it).
     """
 
     def __init__(self, render_mode: str | None = None, *, distance_threshold: float = DISTANCE_THRESHOLD,
@@ -440,13 +471,11 @@ class SoftGraspGoalEnv(SoftGraspEnv):
         if kwargs.get("carry"):
             raise ValueError("SoftGraspGoalEnv has no carry test (carry=True): its reward and success are the goal's "
                              "alone (compute_reward), which a time-bound test would break for HER's relabelling")  # fmt: skip
-        check_range("distance_threshold", distance_threshold, 0.0, 0.1, lo_open=True)
-        if len(goal_height_range) != 2 or not 0.0 <= goal_height_range[0] <= goal_height_range[1] <= 0.15:
-            raise ValueError(f"goal_height_range must be (lo, hi) with 0 <= lo <= hi <= 0.15 m, got {goal_height_range!r}")
-        if not isinstance(end_when_knocked_over, (bool, np.bool_)):
-            raise TypeError(f"end_when_knocked_over must be True or False, got {end_when_knocked_over!r}")
-        self._goal_kwargs = {"distance_threshold": distance_threshold, "goal_height_range": tuple(goal_height_range),
-                             "end_when_knocked_over": bool(end_when_knocked_over)}  # fmt: skip
+        goal = GoalConfig.of(distance_threshold=distance_threshold, goal_height_range=goal_height_range,
+                             end_when_knocked_over=end_when_knocked_over)  # fmt: skip
+        self._goal_kwargs = {"distance_threshold": goal.distance_threshold,
+                             "goal_height_range": goal.goal_height_range,
+                             "end_when_knocked_over": goal.end_when_knocked_over}  # fmt: skip
         super().__init__(render_mode, **{**kwargs, "carry": False, "reward_type": "sparse"})
         self._init_kwargs = {"render_mode": render_mode, **self._goal_kwargs, **kwargs}
         box = spaces.Box(-np.inf, np.inf, shape=(3,), dtype=np.float32)
@@ -456,8 +485,8 @@ class SoftGraspGoalEnv(SoftGraspEnv):
             "desired_goal": box,
         })  # fmt: skip
 
-    def _make_task(self, args: EnvArguments) -> GoalTask:
-        return GoalTask(args.make_task(), **self._goal_kwargs)
+    def _make_task(self, plan: EnvPlan) -> GoalTask:
+        return GoalTask(plan.make_task(), **self._goal_kwargs)
 
     @property
     def distance_threshold(self) -> float:

@@ -85,12 +85,12 @@ def steps_to_succeed(env: gym.Env) -> int | None:
     from .tasks import CarryTest, TaskWrapper
 
     base = env.unwrapped
-    task, args = getattr(base, "task", None), getattr(base, "args", None)
+    task, plan = getattr(base, "task", None), getattr(base, "plan", None)
     if isinstance(task, TaskWrapper):  # the carry under what wraps it (the grip-force task)
         task = task.find(CarryTest)
-    if not isinstance(task, CarryTest) or args is None:
+    if not isinstance(task, CarryTest) or plan is None:
         return None
-    per_step = args.substeps
+    per_step = plan.substeps
     n = max(1, math.floor((task.start + task.duration) / (task.dt * per_step)) - 1)
     while not task.over(n * per_step):  # the task's own rule decides, rounding included
         n += 1

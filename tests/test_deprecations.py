@@ -27,6 +27,12 @@ def _args(env_id: str, **kwargs):
         env.close()
 
 
+def _plan(args):
+    from softgrasp_env.arguments import EnvPlan
+
+    return EnvPlan.of(args)
+
+
 @pytest.mark.parametrize(
     "env_id, old, new",
     [
@@ -46,8 +52,8 @@ def test_gym_make_takes_the_old_arguments_with_a_warning(env_id, old, new):
                                                 r"argument.* is deprecated, use "):  # fmt: skip
         was = _args(env_id, **old)
     now = _args(env_id, **new)
-    assert was == now and was.scene == now.scene and was.tissue == now.tissue
-    assert was.scene.fingers == new.get("fingers", "tissue")
+    assert was == now and _plan(was).scene == _plan(now).scene and was.physics.tissue == now.physics.tissue
+    assert _plan(was).scene.fingers == new.get("fingers", "tissue")
 
 
 def test_old_gym_make_arguments_that_cannot_mean_one_thing_are_refused():
@@ -64,10 +70,9 @@ def test_old_gym_make_arguments_that_cannot_mean_one_thing_are_refused():
 def test_gym_make_takes_a_kinds_own_argument_only_with_that_kind():
     """``tissue_faces=`` and ``fem_resolution=`` are the kinds' settings as gym.make arguments: the
     same as the kind's config, and an error with another kind (it would be lost)."""
-    assert _args("SoftGrasp-v3", tissue_faces="all").scene == _args(
-        "SoftGrasp-v3", fingers=TissueFingerConfig(faces="all")).scene  # fmt: skip
-    assert _args("SoftGrasp-v3", fingers="fem", fem_resolution="fine").scene == _args(
-        "SoftGrasp-v3", fingers=FemConfig(resolution="fine")).scene  # fmt: skip
+    assert _args("SoftGrasp-v3", tissue_faces="all") == _args("SoftGrasp-v3", fingers=TissueFingerConfig(faces="all"))
+    assert _args("SoftGrasp-v3", fingers="fem", fem_resolution="fine") == _args(
+        "SoftGrasp-v3", fingers=FemConfig(resolution="fine"))  # fmt: skip
     with pytest.raises(ValueError, match="tissue_faces is a setting of fingers='tissue', but fingers='rigid'"):
         gym.make("SoftGraspRigid-v3", tissue_faces="all")
     with pytest.raises(ValueError, match="fem_resolution is a setting of fingers='fem', but fingers='tissue'"):

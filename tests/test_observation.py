@@ -21,7 +21,7 @@ def test_names_and_groups_agree():
 def test_every_entry_is_the_reading_of_its_name(env_id, make_env, scripted):
     env = make_env(env_id)
     obs, _ = env.reset(seed=1)
-    if env.unwrapped.args.finger_action == "force":  # the grip ids: their own policy drives them
+    if env.unwrapped.args.control.finger_action == "force":  # the grip ids: their own policy drives them
         from softgrasp_env.policies.grip import ConstantGripPolicy
 
         scripted = ConstantGripPolicy(env, 3.0)
@@ -67,7 +67,7 @@ def test_tactile_entries_are_the_pads_taxels(fingers, make_env):
     assert grid.shape == (2, 4, 3, len(TAXEL_CHANNELS))
     np.testing.assert_array_equal(grid, u._last.tactile.astype(np.float32))
     np.testing.assert_array_equal(obs[: len(base.unwrapped.obs_names)], run(base))  # the rest as without taxels
-    assert (grid[..., 0].sum(axis=(1, 2)) * u.args.taxel_grid.area > 1.0).all()  # the grasp presses both pads
+    assert (grid[..., 0].sum(axis=(1, 2)) * u.plan.taxel_grid.area > 1.0).all()  # the grasp presses both pads
     np.testing.assert_array_equal(run(env), obs)  # seeded: the same again
     check_env(u, skip_render_check=True)
 

@@ -41,7 +41,7 @@ def test_steps_to_succeed_is_the_first_step_the_carry_is_over():
     try:
         assert steps_to_succeed(env) == 30
         base = env.unwrapped
-        assert base.task.over(30 * base.args.substeps) and not base.task.over(29 * base.args.substeps)
+        assert base.task.over(30 * base.plan.substeps) and not base.task.over(29 * base.plan.substeps)
     finally:
         env.close()
     env = gym.make("SoftGraspGoal-v3")

@@ -5,12 +5,12 @@ rewards, starting state, episode end, arguments, version history). The sources:
 
 - the env cards, the class docstrings of ``SoftGraspEnv`` and ``SoftGraspGoalEnv``
   (softgrasp_env/env.py), split at their ``## `` headings; the argument table is regenerated from
-  ``softgrasp_env.arguments.argument_table()`` (``EnvArguments``' field metadata) on every build;
+  ``softgrasp_env.arguments.argument_table()`` (the keywords' table, ``KEYWORDS``) on every build;
   a lift-card section that belongs to one family (``FAMILY_SECTIONS``: the grip-force task) goes
   on that family's page only;
 - the registered ids and their keywords (``softgrasp_env.registration.ENV_IDS``, gymnasium's
   registry): which family each id is in, the registered-ids table, the versions;
-- the observation names (``EnvArguments(...).obs_names``, built from softgrasp_env/observation.py's
+- the observation names (``EnvPlan.of(args).obs_names``, built from softgrasp_env/observation.py's
   ``OBS_GROUPS``): every entry of every id's observation, by index.
 
 ``write_pages(folder)`` writes them (a test calls it); as a Sphinx extension the pages are written
@@ -167,18 +167,19 @@ def split_id(env_id: str) -> tuple[str, str]:
     return name, version
 
 
-def env_arguments(env_id: str):
-    """The ``EnvArguments`` an id's env is made with (without making the env: no physics is built)."""
+def env_plan(env_id: str):
+    """The ``EnvPlan`` of the arguments an id's env is made with (without making the env: no physics
+    is built)."""
     import gymnasium as gym
 
-    from softgrasp_env.arguments import EnvArguments
+    from softgrasp_env.arguments import EnvArguments, EnvPlan
 
     kwargs = dict(gym.spec(env_id).kwargs)
     if family_of(env_id) == "goal":  # SoftGraspGoalEnv's own keywords, and what it passes on
         for name in goal_parameters():
             kwargs.pop(name, None)
         kwargs.update(carry=False, reward_type="sparse")
-    return EnvArguments.from_kwargs(**kwargs)
+    return EnvPlan.of(EnvArguments.from_kwargs(**kwargs))
 
 
 def goal_parameters() -> dict[str, inspect.Parameter]:
@@ -202,7 +203,7 @@ def _ids_table(fam: Family) -> str:
     rows = ["| id | `gym.make` keywords (beyond the defaults) | observation |", "|---|---|---|"]
     for env_id in fam.ids:
         kwargs = ", ".join(f"`{k}={v!r}`" for k, v in gym.spec(env_id).kwargs.items())
-        n = len(env_arguments(env_id).obs_names)
+        n = len(env_plan(env_id).obs_names)
         obs = (f"`Dict(observation=Box({n}), achieved_goal=Box(3), desired_goal=Box(3))`" if fam.key == "goal"
                else f"`Box({n})`")
         rows.append(f"| `{env_id}` | {kwargs} | {obs} |")
@@ -213,7 +214,7 @@ def _summary_table(fam: Family) -> str:
     import gymnasium as gym
 
     spec = gym.spec(fam.ids[0])
-    sizes = sorted({len(env_arguments(i).obs_names) for i in fam.ids})
+    sizes = sorted({len(env_plan(i).obs_names) for i in fam.ids})
     obs = " or ".join(f"`Box(low, high, ({n},), float32)`" for n in sizes)
     if fam.key == "goal":
         obs = f"`Dict(observation={obs.strip('`')}, achieved_goal=Box(3), desired_goal=Box(3))`"
@@ -244,7 +245,7 @@ def _observation_entries(fam: Family) -> str:
 
     layouts: dict[tuple[str, ...], list[str]] = {}
     for env_id in fam.ids:
-        layouts.setdefault(env_arguments(env_id).obs_names, []).append(env_id)
+        layouts.setdefault(env_plan(env_id).obs_names, []).append(env_id)
     out = ["### Observation entries by id",
            "Generated from each id's arguments (`env.obs_names`); the groups are "
            "`softgrasp_env.observation.OBS_GROUPS`" + (" (the goal ids: the `observation` entry)." if fam.key == "goal"

@@ -29,14 +29,15 @@ from ..validation import check_int, check_range
 from .scripted import ScriptedGraspPolicy
 
 
-def _env_args(env):
-    args = getattr(env.unwrapped, "args", None)
-    if args is None:
+def _env_plan(env):
+    """The env's plan (softgrasp_env.arguments.EnvPlan; its ``args`` the arguments)."""
+    plan = getattr(env.unwrapped, "plan", None)
+    if plan is None:
         raise TypeError(f"needs a SoftGrasp env, got {env!r}")
-    if args.finger_action != "force":
+    if plan.args.control.finger_action != "force":
         raise ValueError("a grip-force policy sets the squeeze: make the env with finger_action='force' (the "
-                         f"SoftGraspGrip ids), got finger_action={args.finger_action!r}")  # fmt: skip
-    return args
+                         f"SoftGraspGrip ids), got finger_action={plan.args.control.finger_action!r}")  # fmt: skip
+    return plan
 
 
 class _GripPolicy:
@@ -47,13 +48,13 @@ class _GripPolicy:
     :meth:`squeeze` [N]."""
 
     def __init__(self, env, *, descend: float = 0.03, lift_to: float = 0.065) -> None:
-        args = _env_args(env)
+        plan = _env_plan(env)
         self.mover = ScriptedGraspPolicy.for_env(env)  # its speed profile (toward): stops where it is sent
         self.descend = float(descend)
         self.lift_to = float(lift_to)
         self.names = env.unwrapped.obs_names
         self.index = {n: k for k, n in enumerate(self.names)}
-        self.finger_force = float(args.finger_force)
+        self.finger_force = float(plan.args.control.finger_force)
         self.reset()
 
     def reset(self) -> None:
@@ -104,7 +105,7 @@ class ConstantGripPolicy(_GripPolicy):
     """The force-blind baseline: squeeze with ``force`` [N] throughout (module docstring)."""
 
     def __init__(self, env, force: float, **kwargs) -> None:
-        self.force = check_range("force", force, 0.0, float(_env_args(env).finger_force), owner="ConstantGripPolicy")
+        self.force = check_range("force", force, 0.0, float(_env_plan(env).args.control.finger_force), owner="ConstantGripPolicy")
         super().__init__(env, **kwargs)
 
     def squeeze(self, obs: np.ndarray) -> float:
@@ -126,11 +127,11 @@ class TactileGripPolicy(_GripPolicy):
     def __init__(self, env, *, start_force: float = 4.0, fast: float = 0.8, step: float = 0.85, wait: int = 1,
                  settle: int = 2, tolerance: float = 0.05, mu_min: float = 0.45, margin: float = 1.5,
                  deadline: float | None = None, **kwargs) -> None:  # fmt: skip
-        args = _env_args(env)
-        if args.taxel_grid is None:
+        plan = _env_plan(env)
+        if plan.taxel_grid is None:
             raise ValueError("TactileGripPolicy reads the pads' taxels: make the env with tactile=(rows, cols)")
-        self.area = args.taxel_grid.area
-        self.start_force = check_range("start_force", start_force, 0.0, args.finger_force, lo_open=True,
+        self.area = plan.taxel_grid.area
+        self.start_force = check_range("start_force", start_force, 0.0, plan.args.control.finger_force, lo_open=True,
                                        owner="TactileGripPolicy")  # fmt: skip
         self.fast = check_range("fast", fast, 0.0, 1.0, lo_open=True, hi_open=True, owner="TactileGripPolicy")
         self.step = check_range("step", step, 0.0, 1.0, lo_open=True, hi_open=True, owner="TactileGripPolicy")
@@ -139,7 +140,7 @@ class TactileGripPolicy(_GripPolicy):
         self.tolerance = check_range("tolerance", tolerance, 0.0, 1.0, lo_open=True, owner="TactileGripPolicy")
         self.mu_min = check_range("mu_min", mu_min, 0.0, 10.0, lo_open=True, owner="TactileGripPolicy")
         self.margin = check_range("margin", margin, 1.0, 10.0, owner="TactileGripPolicy")
-        self.deadline = float(deadline) if deadline is not None else float(args.carry_start) - 0.05
+        self.deadline = float(deadline) if deadline is not None else float(plan.args.carry_test.start) - 0.05
         super().__init__(env, **kwargs)
 
     def reset(self) -> None:

@@ -69,8 +69,9 @@ class ScriptedGraspPolicy:
         args = getattr(env.unwrapped, "args", None)
         if args is None:
             raise TypeError(f"ScriptedGraspPolicy.for_env needs a SoftGrasp env, got {env!r}")
-        return cls(speed=args.arm_speed, arm_acceleration=args.arm_acceleration,
-                   control_period=1.0 / args.control_frequency, **kwargs)  # fmt: skip
+        c = args.control
+        return cls(speed=c.arm_speed, arm_acceleration=c.arm_acceleration, control_period=1.0 / c.frequency,
+                   **kwargs)  # fmt: skip
 
     def predict(self, observation, state=None, episode_start=None, deterministic: bool = True):
         """SB3's policy interface: ``(action, state)``. ``observation`` is one observation or a

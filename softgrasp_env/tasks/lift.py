@@ -23,7 +23,7 @@ import numpy as np
 
 from ..scene.config import scale_friction
 from ..scene.gripper import WORKSPACE_HALF_WIDTH
-from ..validation import is_real
+from ..validation import check_range, is_real
 from .base import Outcome, Task
 
 if TYPE_CHECKING:
@@ -62,6 +62,13 @@ class StartRanges:
     """Cylinder radius: base +- U(cylinder_radius) [m]."""
     cylinder_mass: float
     """Cylinder mass: base x U(1 +- cylinder_mass) [-]."""
+
+    def __post_init__(self) -> None:
+        # each named by its gym.make keyword (``yaw_range``), the only place these come from
+        for name, hi in (("cylinder_position", 0.08), ("lateral_offset", 0.05), ("yaw", math.pi / 4),
+                         ("jaw_wedge", math.pi / 6), ("friction", 0.9), ("cylinder_radius", 0.02),
+                         ("cylinder_mass", 0.9)):  # fmt: skip
+            check_range(f"{name}_range", getattr(self, name), 0.0, hi)
 
 
 def check_option(name: str, value: Any):

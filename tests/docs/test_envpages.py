@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
-import types
 
 import envpages
 import gymnasium as gym
@@ -43,7 +43,7 @@ def test_every_observation_name_is_on_its_page(pages):
     for fam in envpages.families().values():
         text = pages[f"{fam.key}.md"]
         for env_id in fam.ids:
-            names = envpages.env_arguments(env_id).obs_names
+            names = envpages.env_plan(env_id).obs_names
             assert names, env_id
             missing = [n for n in names if f"`{n}`" not in text]
             assert not missing, (env_id, missing[:5])
@@ -111,10 +111,12 @@ def test_the_grip_force_section_is_on_the_grip_page_only(pages):
 
 
 def test_a_changed_argument_changes_the_arguments_table(monkeypatch):
-    """The table is made from EnvArguments' field metadata at build time, not the docstring's copy."""
-    field = arguments.EnvArguments.__dataclass_fields__["reach_weight"]
+    """The table is made from the keywords' table (``arguments.KEYWORDS``) at build time, not the
+    docstring's copy."""
     new_doc = "Weight of the reach term, changed by this test"
-    monkeypatch.setattr(field, "metadata", types.MappingProxyType({**field.metadata, "doc": new_doc}))
+    keywords = tuple(dataclasses.replace(k, doc=new_doc) if k.name == "reach_weight" else k
+                     for k in arguments.KEYWORDS)  # fmt: skip
+    monkeypatch.setattr(arguments, "KEYWORDS", keywords)
     page = envpages.render_pages()["lift.md"]
     section = page.split("## Arguments\n", 1)[1].split("\n## ", 1)[0]
     assert f"| `reach_weight` | float | `0.1` | {new_doc} |" in section

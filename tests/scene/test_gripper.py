@@ -174,7 +174,7 @@ def test_force_actions_squeeze_with_the_commanded_force(fingers):
             u = env.unwrapped
             policy = ScriptedGraspPolicy.for_env(env)
             obs, _ = env.reset(seed=0)
-            a3 = 2.0 * squeeze / u.args.finger_force - 1.0
+            a3 = 2.0 * squeeze / u.args.control.finger_force - 1.0
             carried = 0
             for _ in range(100):  # the episode, its carry included
                 action = policy(obs)
@@ -184,7 +184,7 @@ def test_force_actions_squeeze_with_the_commanded_force(fingers):
                     carried += 1
                     assert u.scene.control.finger_force == pytest.approx(squeeze)
             assert carried >= 20 and info["held"] and info["lift_height"] > 0.04
-            grid = u.args.taxel_grid
+            grid = u.plan.taxel_grid
             pressed = u._last.tactile[..., 0].sum(axis=(1, 2)) * grid.area
             np.testing.assert_allclose(pressed, squeeze, rtol=5e-3)
         finally:

@@ -171,11 +171,9 @@ def _verdicts(held, slides, slide_limit=CARRY_SLIDE_LIMIT):
 def test_the_carry_test_defaults_to_the_envs_sway():
     """CarryTest on its own draws the sway gym.make's defaults give: the same band, range, window
     and slide limit."""
-    from dataclasses import fields
+    from softgrasp_env.arguments import KEYWORDS
 
-    from softgrasp_env.arguments import EnvArguments
-
-    defaults = {f.name: f.default for f in fields(EnvArguments)}
+    defaults = {k.name: k.default for k in KEYWORDS}
     cfg = SceneConfig(fingers="rigid")
     carry = CarryTest(_Script([True] * 10), dt=1 / 240, workspace=Workspace.of(cfg))
     assert carry.frequency_band == defaults["carry_frequency"] == (1.2, 3.0)

@@ -74,7 +74,7 @@ def test_knocking_the_cylinder_over_ends_the_lift_task_but_not_the_goal_episode(
     # The lift task ends the episode when the cylinder topples ...
     env = make_env("SoftGrasp-v3")
     lift = _knock_over(env)
-    assert lift[-1][1] and len(lift) < 30 and env.unwrapped._last.tilt > env.unwrapped.args.max_tilt
+    assert lift[-1][1] and len(lift) < 30 and env.unwrapped._last.tilt > env.unwrapped.args.lift.max_tilt
     # ... SoftGraspGoal-v4 runs on to its time limit at -1 a step: ending early would pay less (with -1
     # per step HER + SAC learned to topple the cylinder for it), so it is not on offer.
     goal = _knock_over(make_env("SoftGraspGoal-v4"))
