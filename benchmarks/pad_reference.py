@@ -1,0 +1,439 @@
+"""An independent reference for the tissue pad: a plane-strain finite-element model of the same pad,
+pressed by the same rigid cylinder, that shares no code with the oriented-particle solver.
+
+    PYTHONPATH=. python benchmarks/pad_reference.py [--quick] [--plot docs/results/pad_reference.png]
+
+Needs scikit-fem (``pip install softgrasp-env[reference]`` or ``pip install scikit-fem``).
+
+The model
+---------
+A finger's inner face is a box face 40 mm wide (y) and 60 mm high (z) (SceneConfig.finger_half_extents
+(0.008, 0.02, 0.03)); the tissue on it is a layer whose attached particles sit on the core's face
+and whose outer partners sit ``TissueConfig.extrude`` = 8 mm further out along the face normal
+(tissue/builder.py, build_combined_body: each attached/outer pair "stands for a prism of tissue
+(area x extrude)", its mass rho * area * extrude). The elastic layer is therefore 8 mm thick. The
+outer particles' ellipsoids reach ``normal_radius`` = 3 mm beyond it (the pad's 11 mm,
+TissueFingers.pad_thickness), but an ellipsoid is rigid: it moves the contact surface out without
+adding compliance, so indentation measured from first touch is the layer's. The cylinder (radius
+30 mm, SceneConfig.cylinder_radius) stands upright and touches the face along its whole height, so
+the cross-section at any height is the same: plane strain in the horizontal (x, y) plane, x across
+the layer (x = 0 bonded to the rigid core, x = h the free surface), y across the face (free edges
+at y = +-20 mm). A load F on the pad is F / H per unit length, H = 60 mm the face's height.
+
+- Material: linear elastic, isotropic, shear modulus G (TissueConfig's default 4,000 Pa) and a
+  Poisson ratio nu. Which nu the oriented-particle tissue behaves like is part of the question, so
+  every result is given for several (0.0, 0.3, 0.45).
+- Elements: 6-node quadratic triangles (P2) on a tensor mesh of the layer, finest at the contact
+  surface: element size e = h / n there, growing linearly to 2 e at the core (n the resolution
+  level below), e across the face's width.
+- Contact: a rigid frictionless cylinder of radius R, its axis at x = h + R - delta (delta the
+  indentation from first touch). Each surface node i (vertex and edge-midpoint, at y_i) must stay
+  outside it, u_x,i <= R - delta - sqrt(R^2 - y_i^2) (small-strain, node-to-surface, the exact
+  circle). With the layer condensed onto the surface nodes' normal displacements (compliance
+  matrix C = S K^-1 S^T, one factorisation), the contact is the linear complementarity problem
+  f >= 0, C f - d >= 0, f . (C f - d) = 0 (f the nodal contact forces, d the interference), solved
+  exactly as the equivalent non-negative least-squares problem (Lawson-Hanson active set,
+  scipy.optimize.nnls): at the solution no node penetrates by more than 1e-9 of the indentation
+  and no node pulls (checked, ``contact``). The load for a given force is found by Brent's method
+  on delta to 1e-10 relative.
+- Pressure profile: nodal forces over each node's share of the surface (the integral of its shape
+  function: exact for uniform pressure). Contact half-width: where the gap outside the contact,
+  which opens as (|y| - a)^1.5, extrapolates to zero from the first two free nodes.
+- Tangential compliance: the cylinder pulled along its own axis (z) with the contact stuck is
+  anti-plane shear of the layer: G Laplace(w) = 0, w = 0 on the core, w = U on the contact strip
+  (the frictionless contact's strip at that load), free elsewhere; compliance U / (H q), q the
+  strip's force per unit length (one pad; a grasp's two pads carrying the load together give half).
+  Anti-plane shear does not depend on nu except through the strip's width.
+
+Verification (``verify``): the laterally confined layer under uniform pressure against
+u = p h (1 - 2 nu) / (2 G (1 - nu)); a thin layer under a cylinder against its thin-layer limit, in
+which every point compresses as the confined layer does (the layer as an elastic foundation of
+modulus M / h, M = 2 G (1 - nu) / (1 - 2 nu); Johnson, Contact Mechanics, 1985, sec. 5.9): a
+line load P = (4 / 3) (M / h) sqrt(2 R) delta^(3/2) on a half-width a = sqrt(2 R delta); and the
+model's own mesh convergence (observed order from three successive levels).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+NUS = (0.0, 0.3, 0.45)
+"""Poisson ratios the reference is computed for."""
+LOADS = (1.0, 3.0, 6.0)
+"""Total normal loads on one pad [N]."""
+LEVEL = 16
+"""Default resolution: elements across the layer's thickness at the contact surface (e = h / 16 =
+0.5 mm; benchmarks/spatial_convergence.py). Measured against level 32 (``verify``): the indentation
+under 3 N within 0.03 %, the contact half-width within 0.4 %, the tangential compliance within 0.2 %."""
+
+
+@dataclass(frozen=True)
+class Pad:
+    """The pad's geometry and material [SI]."""
+
+    thickness: float
+    """h, the elastic layer: TissueConfig.extrude [m]."""
+    width: float
+    """W, the finger face across (y) [m]."""
+    height: float
+    """H, the finger face along the cylinder's axis (z) [m]."""
+    radius: float
+    """R, the cylinder's radius [m]."""
+    shear_modulus: float
+    """G [Pa]."""
+
+
+def default_pad() -> Pad:
+    """The pad of the default scene: TissueConfig's extrude and shear modulus, the finger's inner
+    face, the cylinder's radius."""
+    from softgrasp_env.config import TissueConfig
+    from softgrasp_env.scene import SceneConfig
+
+    scene, tissue = SceneConfig(), TissueConfig()
+    _, hy, hz = scene.finger_half_extents
+    return Pad(tissue.extrude, 2.0 * hy, 2.0 * hz, scene.cylinder_radius, tissue.modulus)
+
+
+def confined_compression(p: float, h: float, shear_modulus: float, nu: float) -> float:
+    """Compression of a laterally confined layer under uniform pressure p: p h (1 - 2 nu) / (2 G (1 - nu)) [m]."""
+    return p * h * (1.0 - 2.0 * nu) / (2.0 * shear_modulus * (1.0 - nu))
+
+
+def foundation_modulus(shear_modulus: float, nu: float) -> float:
+    """M = 2 G (1 - nu) / (1 - 2 nu), the confined (oedometric) modulus [Pa]."""
+    return 2.0 * shear_modulus * (1.0 - nu) / (1.0 - 2.0 * nu)
+
+
+def thin_layer_load(delta: float, pad: Pad, nu: float, *, parabolic: bool = False) -> float:
+    """The thin-layer limit's line load for indentation ``delta`` [N/m]: (M / h) times the integral
+    of the interference delta - (R - sqrt(R^2 - y^2)) over the contact; with ``parabolic`` the
+    cylinder's usual parabola, (4/3) (M / h) sqrt(2 R) delta^1.5 (0.25 % more at delta = 0.5 mm, R
+    30 mm: the circle's y^4 / 8 R^3)."""
+    m = foundation_modulus(pad.shear_modulus, nu)
+    r = pad.radius
+    if parabolic:
+        return 4.0 / 3.0 * m / pad.thickness * math.sqrt(2.0 * r) * delta**1.5
+    a = math.sqrt(r * r - (r - delta) ** 2)
+    # integral of delta - r + sqrt(r^2 - y^2) over |y| <= a
+    area = 2.0 * ((delta - r) * a + 0.5 * (a * math.sqrt(r * r - a * a) + r * r * math.asin(a / r)))
+    return m / pad.thickness * area
+
+
+class LayerModel:
+    """The pad as a plane-strain P2 model at resolution ``level`` (elements across the thickness at
+    the surface). ``sides``: 'free' (the finger's face edges) or 'roller' (u_y = 0 there: the
+    laterally confined layer of the analytic check). ``across``: the element size across the width
+    [m], if not e."""
+
+    def __init__(self, pad: Pad, nu: float, level: int = LEVEL, *, sides: str = "free",
+                 across: float | None = None) -> None:
+        from skfem import Basis, BilinearForm, ElementTriP2, ElementVector, FacetBasis, LinearForm, MeshTri, asm
+        from skfem.models.elasticity import linear_elasticity
+
+        if not 0.0 <= nu < 0.5:
+            raise ValueError(f"nu must be in [0, 0.5), got {nu!r}")
+        self.pad, self.nu, self.level = pad, nu, level
+        h, half = pad.thickness, 0.5 * pad.width
+        e = h / level
+        # x: finest (e) at the surface x = h, growing linearly to 2e at the core
+        n_x = max(1, round(h / (1.5 * e)))
+        s = np.linspace(0.0, 1.0, n_x + 1)
+        xs = h * (2.0 * s - 0.5 * s * s) / 1.5  # spacing ~ (2 - s): 2e at the core (s = 0), e at the surface
+        ys = np.linspace(-half, half, max(2, round(pad.width / (across or e))) + 1)
+        self.mesh = MeshTri.init_tensor(xs, ys)
+        self.basis = Basis(self.mesh, ElementVector(ElementTriP2()))
+        g = pad.shear_modulus
+        lam = 2.0 * g * nu / (1.0 - 2.0 * nu)
+        self.K = asm(linear_elasticity(lam, g), self.basis).tocsc()
+        m = self.mesh
+        base = self.basis.get_dofs(m.facets_satisfying(lambda x: np.isclose(x[0], 0.0))).all()
+        fixed = [base]
+        if sides == "roller":
+            for y0 in (-half, half):
+                fixed.append(self.basis.get_dofs(m.facets_satisfying(lambda x, y0=y0: np.isclose(x[1], y0))).all("u^2"))
+        elif sides != "free":
+            raise ValueError(f"sides must be 'free' or 'roller', got {sides!r}")
+        self.fixed = np.unique(np.concatenate(fixed))
+        self.free = np.setdiff1d(np.arange(self.basis.N), self.fixed)
+        top = m.facets_satisfying(lambda x: np.isclose(x[0], h))
+        dofs = self.basis.get_dofs(top).all("u^1")
+        y = self.basis.doflocs[1, dofs]
+        order = np.argsort(y)
+        self.surface = dofs[order]
+        """x-displacement DOFs of the surface nodes, by y."""
+        self.y = y[order]
+        """Their y [m]."""
+        fb = FacetBasis(self.mesh, self.basis.elem, facets=top)
+        share = asm(LinearForm(lambda v, w: v[0]), fb)
+        self.share = share[self.surface]
+        """Each surface node's share of the surface, the integral of its shape function [m]."""
+        self._facet_basis, self._bilinear, self._asm = fb, BilinearForm, asm
+        from scipy.sparse.linalg import splu
+
+        self._lu = splu(self.K[self.free][:, self.free].tocsc())
+        self.element_size = e
+        self.dof_count = self.basis.N
+
+    def solve(self, load: np.ndarray) -> np.ndarray:
+        """Displacements under nodal ``load`` (fixed DOFs held at 0)."""
+        u = np.zeros(self.basis.N)
+        u[self.free] = self._lu.solve(load[self.free])
+        return u
+
+    def uniform_pressure(self, p: float) -> np.ndarray:
+        """The surface nodes' x displacement under uniform pressure p [Pa] on the whole surface [m]."""
+        load = np.zeros(self.basis.N)
+        load[self.surface] = -p * self.share
+        return self.solve(load)[self.surface]
+
+    @cached_property
+    def compliance(self) -> np.ndarray:
+        """C[i, j]: surface node i's inward (-x) displacement per unit inward force at node j [m/(N/m)]."""
+        rhs = np.zeros((self.basis.N, self.surface.size))
+        rhs[self.surface, np.arange(self.surface.size)] = 1.0
+        sol = self._lu.solve(rhs[self.free])
+        u = np.zeros_like(rhs)
+        u[self.free] = sol
+        return u[self.surface]
+
+    @cached_property
+    def _chol(self) -> np.ndarray:
+        c = 0.5 * (self.compliance + self.compliance.T)
+        return np.linalg.cholesky(c)  # lower L, C = L L^T
+
+    def contact(self, delta: float) -> dict:
+        """The frictionless cylinder pressed ``delta`` [m] into the surface: line load P [N/m], nodal
+        forces f [N/m], pressure p [Pa] per surface node, the contact mask, half-width a [m] (the
+        face's half-width if the whole surface touches), and the solution's residuals (largest
+        penetration, largest pull) [m, N/m]."""
+        from scipy.linalg import solve_triangular
+        from scipy.optimize import nnls
+
+        r = self.pad.radius
+        d = delta - (r - np.sqrt(np.maximum(r * r - self.y**2, 0.0)))
+        d[np.abs(self.y) >= r] = -np.inf
+        live = d > -10.0 * abs(delta) - 1e-9  # nodes far outside cannot touch
+        d = np.where(np.isfinite(d), d, -1.0)
+        # min 1/2 f C f - d f, f >= 0  <=>  min |L^T f - L^-1 d|^2, f >= 0 (C = L L^T)
+        lo = self._chol
+        b = solve_triangular(lo, d, lower=True)
+        f = np.zeros_like(d)
+        sol, _ = nnls(lo.T[:, live], b, maxiter=50 * int(live.sum()) + 100)
+        f[live] = sol
+        gap = self.compliance @ f - d  # inward displacement - interference: >= 0
+        touch = f > 0.0
+        a = self._half_width(touch, gap)
+        return {"P": float(f.sum()), "f": f, "pressure": f / self.share, "touch": touch, "a": float(a),
+                "penetration": float(max(0.0, -gap.min())), "pull": float(max(0.0, -f.min()))}  # fmt: skip
+
+    def _half_width(self, touch: np.ndarray, gap: np.ndarray) -> float:
+        """The contact's half-width [m]: near a frictionless contact's edge the gap opens as
+        (|y| - a)^1.5, so gap^(2/3) of the first two free nodes outside the contact, extrapolated
+        linearly to zero, within the interval between the last node in contact and the first
+        free one (the mean of the two sides)."""
+        if touch.all():
+            return 0.5 * self.pad.width
+        if not touch.any():
+            return 0.0
+        k = np.flatnonzero(touch)
+        ends = []
+        for i, step in ((k.max(), 1), (k.min(), -1)):
+            o1, o2 = i + step, i + 2 * step
+            yi, y1 = abs(self.y[i]), abs(self.y[o1])
+            if 0 <= o2 < self.y.size:
+                g1, g2 = max(gap[o1], 0.0) ** (2 / 3), max(gap[o2], 0.0) ** (2 / 3)
+                y2 = abs(self.y[o2])
+                edge = y1 - g1 * (y2 - y1) / (g2 - g1) if g2 > g1 else 0.5 * (yi + y1)
+                ends.append(min(max(edge, yi), y1))
+            else:
+                ends.append(0.5 * (yi + y1))
+        return float(np.mean(ends))
+
+    def indentation(self, force: float, *, rtol: float = 1e-10) -> tuple[float, dict]:
+        """(delta, contact) for a total load ``force`` [N] on the pad (force / height per unit length)."""
+        from scipy.optimize import brentq
+
+        target = force / self.pad.height
+        hi = 1e-4
+        while self.contact(hi)["P"] < target:
+            hi *= 2.0
+            if hi > self.pad.thickness:
+                raise ValueError(f"{force} N presses the cylinder deeper than the layer")
+        delta = brentq(lambda x: self.contact(x)["P"] - target, 0.0 if hi <= 1e-4 else hi / 2, hi, rtol=rtol, xtol=1e-15)
+        return delta, self.contact(delta)
+
+    def tangential_compliance(self, a: float) -> float:
+        """One pad's compliance along the cylinder's axis with the strip |y| <= a stuck to it [m/N]:
+        anti-plane shear, G Laplace(w) = 0. The strip is held at the surface nodes; between two
+        nodes the compliance is interpolated linearly in a (so that it moves smoothly with the load
+        and the mesh instead of jumping from node to node)."""
+        y = np.sort(np.abs(self.y))
+        inside = y[y <= a + 1e-15]
+        lo = inside.max() if inside.size else y.min()
+        outside = y[y > a + 1e-15]
+        if not outside.size:
+            return self._strip_compliance(np.abs(self.y) <= lo + 1e-12)
+        hi = outside.min()
+        c_lo = self._strip_compliance(np.abs(self.y) <= lo + 1e-12)
+        c_hi = self._strip_compliance(np.abs(self.y) <= hi + 1e-12)
+        t = (a - lo) / (hi - lo)
+        return float((1.0 - t) * c_lo + t * c_hi)
+
+    def _strip_compliance(self, touch: np.ndarray) -> float:
+        """One pad's tangential compliance with the surface nodes ``touch`` held [m/N]."""
+        from skfem import Basis, ElementTriP2
+        from skfem.models.poisson import laplace
+
+        if not hasattr(self, "_anti"):
+            sb = Basis(self.mesh, ElementTriP2())
+            k = self._asm(laplace, sb).tocsc() * self.pad.shear_modulus
+            base = sb.get_dofs(self.mesh.facets_satisfying(lambda x: np.isclose(x[0], 0.0))).all()
+            top = sb.get_dofs(self.mesh.facets_satisfying(lambda x: np.isclose(x[0], self.pad.thickness))).all()
+            y = sb.doflocs[1, top]
+            self._anti = (sb, k, base, top[np.argsort(y)])
+        sb, k, base, top = self._anti
+        if touch.shape != top.shape:
+            raise ValueError("touch must be a mask over the surface nodes")
+        held = top[touch]
+        fixed = np.union1d(base, held)
+        free = np.setdiff1d(np.arange(sb.N), fixed)
+        w = np.zeros(sb.N)
+        w[held] = 1.0
+        from scipy.sparse.linalg import spsolve
+
+        w[free] = spsolve(k[free][:, free].tocsc(), -(k[free][:, held] @ w[held]))
+        q = float((k @ w)[held].sum())  # force per unit length holding the strip at U = 1 m
+        return 1.0 / (q * self.pad.height)
+
+
+def reference(pad: Pad | None = None, *, nus=NUS, loads=LOADS, level: int = LEVEL) -> list[dict]:
+    """One row per (nu, load): indentation [m], half-width [m], peak pressure [Pa], one pad's
+    tangential compliance along the cylinder's axis [m/N], and the pressure profile (y, p)."""
+    pad = pad or default_pad()
+    rows = []
+    for nu in nus:
+        model = LayerModel(pad, nu, level)
+        for load in loads:
+            delta, c = model.indentation(load)
+            rows.append({"nu": nu, "load": load, "delta": delta, "a": c["a"], "p_max": float(c["pressure"].max()),
+                         "compliance": model.tangential_compliance(c["a"]), "y": model.y.copy(),
+                         "pressure": c["pressure"].copy(), "penetration": c["penetration"]})  # fmt: skip
+    return rows
+
+
+def verify(pad: Pad | None = None, *, levels=(2, 4, 8, 16, 32), quick: bool = False) -> dict:
+    """The reference against analytic limits and itself; returns every number it prints."""
+    pad = pad or default_pad()
+    out: dict = {}
+    print("1. laterally confined layer (roller sides) under uniform pressure 1 kPa, level 4:")
+    out["confined"] = {}
+    for nu in NUS:
+        u = -LayerModel(pad, nu, 4, sides="roller").uniform_pressure(1000.0)
+        exact = confined_compression(1000.0, pad.thickness, pad.shear_modulus, nu)
+        err = float(np.abs(u - exact).max() / exact)
+        out["confined"][nu] = err
+        print(f"   nu {nu:<5} FE {u.mean() * 1e3:.6f} mm, exact {exact * 1e3:.6f} mm, largest relative error {err:.1e}")
+    print("   the finger's face (free sides) under the same pressure: mean compression / confined")
+    for nu in NUS:
+        u = -LayerModel(pad, nu, 8).uniform_pressure(1000.0)
+        print(f"   nu {nu:<5} {u.mean() / confined_compression(1000.0, pad.thickness, pad.shear_modulus, nu):.4f}")
+    print("2. thin layer under the cylinder (face 8 a wide, delta 0.5 mm) against the thin-layer limit\n"
+          "   P = (M / h) * integral of the interference (the circle), a = sqrt(R^2 - (R - delta)^2);\n"
+          "   ratios FE / limit as h / a falls:")  # fmt: skip
+    out["thin"] = {}
+    delta = 5e-4
+    a = math.sqrt(pad.radius**2 - (pad.radius - delta) ** 2)
+    for nu in (0.0, 0.3):
+        ratios = []
+        for h in ((2e-3, 1e-3, 5e-4) if quick else (2e-3, 1e-3, 5e-4, 2.5e-4)):
+            thin = Pad(h, 8 * a, pad.height, pad.radius, pad.shear_modulus)
+            model = LayerModel(thin, nu, 4, across=min(h / 4, a / 60))
+            c = model.contact(delta)
+            ratios.append((h / a, c["P"] / thin_layer_load(delta, thin, nu), c["a"] / a))
+        out["thin"][nu] = ratios
+        print(f"   nu {nu}: " + ", ".join(f"h/a {r:.3f}: P {p:.4f}, a {s:.3f}" for r, p, s in ratios))
+    print("3. mesh convergence, indentation under 3 N and tangential compliance (e = h / level at the surface):")
+    out["mesh"] = {}
+    for nu in (0.3,) if quick else NUS:
+        vals = []
+        for lvl in levels:
+            tic = time.perf_counter()
+            model = LayerModel(pad, nu, lvl)
+            d, c = model.indentation(3.0)
+            comp = model.tangential_compliance(c["a"])
+            vals.append((lvl, model.dof_count, d, c["a"], comp, time.perf_counter() - tic))
+        orders = []
+        for k in range(len(vals) - 2):
+            e1 = abs(vals[k][2] - vals[k + 1][2])
+            e2 = abs(vals[k + 1][2] - vals[k + 2][2])
+            orders.append(math.log2(e1 / e2) if e2 > 0 and e1 > 0 else math.nan)
+        out["mesh"][nu] = {"rows": vals, "orders": orders}
+        print(f"   nu {nu}:")
+        for (lvl, dofs, d, a_, comp, secs), ref in zip(vals, [None] + vals[:-1], strict=True):
+            step = "" if ref is None else f"  change {(d - ref[2]) / d:+.2e}"
+            print(f"     level {lvl:>2} ({dofs:>6} dofs, {secs:5.1f} s): delta {d * 1e3:.5f} mm{step}, "
+                  f"a {a_ * 1e3:.3f} mm, compliance {comp * 1e3:.5f} mm/N")  # fmt: skip
+        print("     observed order of delta: " + ", ".join(f"{o:.2f}" for o in orders))
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--quick", action="store_true", help="fewer levels and Poisson ratios")
+    parser.add_argument("--plot", default=None, help="draw the load-indentation curves and pressure profiles to this PNG")
+    ns = parser.parse_args(argv)
+    pad = default_pad()
+    print(f"pad: layer h {pad.thickness * 1e3:g} mm, face {pad.width * 1e3:g} x {pad.height * 1e3:g} mm, "
+          f"cylinder R {pad.radius * 1e3:g} mm, G {pad.shear_modulus:g} Pa")  # fmt: skip
+    tic = time.perf_counter()
+    verify(pad, levels=(2, 4, 8, 16) if ns.quick else (2, 4, 8, 16, 32), quick=ns.quick)
+    print(f"\nreference at level {LEVEL}:")
+    print(f"{'nu':>5}{'load N':>8}{'delta mm':>10}{'a mm':>8}{'p_max Pa':>10}{'tang. mm/N':>12}")
+    for r in reference(pad):
+        print(f"{r['nu']:>5}{r['load']:>8g}{r['delta'] * 1e3:>10.4f}{r['a'] * 1e3:>8.2f}{r['p_max']:>10.0f}"
+              f"{r['compliance'] * 1e3:>12.4f}")  # fmt: skip
+    print(f"\n{time.perf_counter() - tic:.1f} s")
+    if ns.plot:
+        plot(pad, ns.plot)
+    return 0
+
+
+def plot(pad: Pad, path: str) -> None:
+    """Load against indentation for each nu, and the pressure across the contact strip at 1, 3, 6 N."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(8.0, 3.2))
+    forces = np.linspace(0.25, 6.0, 24)
+    for nu, style in zip(NUS, (":", "--", "-."), strict=True):
+        model = LayerModel(pad, nu, LEVEL)
+        axes[0].plot([model.indentation(f)[0] * 1e3 for f in forces], forces, style, label=f"nu {nu:g}")
+        for load, colour in zip(LOADS, ("C0", "C1", "C2"), strict=True):
+            _, c = model.indentation(load)
+            axes[1].plot(model.y * 1e3, c["pressure"], style, color=colour, lw=1,
+                         label=f"{load:g} N" if nu == NUS[0] else None)  # fmt: skip
+    axes[0].set_xlabel("indentation [mm]", fontsize=8)
+    axes[0].set_ylabel("load on the pad [N]", fontsize=8)
+    axes[0].legend(fontsize=7)
+    axes[1].set_xlabel("y across the face [mm]", fontsize=8)
+    axes[1].set_ylabel("contact pressure [Pa]", fontsize=8)
+    axes[1].set_title("dotted nu 0, dashed 0.3, dash-dot 0.45", fontsize=8)
+    axes[1].legend(fontsize=7)
+    for ax in axes:
+        ax.tick_params(labelsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    print(f"wrote {path}")
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,90 @@
+"""The pad's finite-element reference (benchmarks/pad_reference.py) against analytic limits and its
+own mesh refinement, and the spatial convergence benchmark's tissue rig
+(benchmarks/spatial_convergence.py). These record, not assert, whether the tissue converges in
+space: that is the material's open question (docs/results/spatial-convergence.md)."""
+
+from __future__ import annotations
+
+import csv
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _skfem():
+    return pytest.importorskip("skfem", reason="the pad reference needs scikit-fem (pip install softgrasp-env[reference])")
+
+
+@pytest.mark.parametrize("nu", [0.0, 0.3, 0.45])
+def test_a_confined_layer_under_uniform_pressure_compresses_as_the_analytic_layer(nu):
+    """u = p h (1 - 2 nu) / (2 G (1 - nu)): a linear field, which P2 elements hold exactly; the
+    largest error measured is 8e-15 of it (round-off)."""
+    _skfem()
+    from benchmarks.pad_reference import LayerModel, confined_compression, default_pad
+
+    pad = default_pad()
+    u = -LayerModel(pad, nu, 4, sides="roller").uniform_pressure(1000.0)
+    exact = confined_compression(1000.0, pad.thickness, pad.shear_modulus, nu)
+    assert abs(u - exact).max() < 5e-14 * exact
+
+
+def test_a_thin_layer_under_the_cylinder_meets_its_thin_layer_limit():
+    """At h / a = 0.09 the line load is within 0.08 % of the elastic-foundation limit (measured
+    1.0001 at nu 0, 0.9992 at nu 0.3), and the contact's half-width within 2 % (0.983, 0.987)."""
+    _skfem()
+    from benchmarks.pad_reference import LayerModel, Pad, default_pad, thin_layer_load
+
+    base = default_pad()
+    delta = 5e-4
+    a = math.sqrt(base.radius**2 - (base.radius - delta) ** 2)
+    for nu in (0.0, 0.3):
+        thin = Pad(5e-4, 8 * a, base.height, base.radius, base.shear_modulus)
+        c = LayerModel(thin, nu, 4, across=min(thin.thickness / 4, a / 60)).contact(delta)
+        assert c["P"] / thin_layer_load(delta, thin, nu) == pytest.approx(1.0, abs=3e-3)
+        assert c["a"] / a == pytest.approx(1.0, abs=0.03)
+        assert c["penetration"] < 1e-9 * delta and c["pull"] == 0.0
+
+
+def test_refining_the_reference_moves_it_toward_a_limit():
+    """The indentation under 3 N (nu 0.3) at 4, 8 and 16 elements across the layer: each change
+    smaller than the last (measured -1.3e-3, then +1.4e-3 and +1.8e-4 of it), the last under 5e-4."""
+    _skfem()
+    from benchmarks.pad_reference import LayerModel, default_pad
+
+    pad = default_pad()
+    d = [LayerModel(pad, 0.3, level).indentation(3.0)[0] for level in (4, 8, 16)]
+    assert abs(d[2] - d[1]) < abs(d[1] - d[0])
+    assert abs(d[2] - d[1]) < 5e-4 * d[2]
+    assert 1.5e-3 < d[2] < 2.5e-3  # 1.994 mm
+
+
+def test_the_tissue_rig_compresses_more_under_more_load_at_the_default_density():
+    """The benchmark's rig at TissueConfig's default density: a finite compression at 1 and 3 N,
+    larger at 3 N (measured 3.74 mm at 3 N). Whether it matches the reference is not asserted."""
+    from benchmarks.spatial_convergence import PadRig
+    from softgrasp_env.config import TissueConfig
+
+    rig = PadRig(TissueConfig().particle_density, friction=0.0)
+    c1, f1 = rig.press_to(1.0, guess=2e-3)
+    c3, f3 = rig.press_to(3.0, guess=1.5 * c1)
+    assert math.isfinite(c1) and math.isfinite(c3)
+    assert f1 == pytest.approx(1.0, rel=0.01) and f3 == pytest.approx(3.0, rel=0.01)
+    assert 0.0 < c1 < c3 < rig.pad
+
+
+def test_the_benchmark_quick_run_writes_its_table_and_figure(tmp_path):
+    _skfem()
+    proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "spatial_convergence.py"), "--quick", "--out",
+                           str(tmp_path)], cwd=ROOT, capture_output=True, text=True, timeout=600,
+                          env={"PYTHONPATH": str(ROOT), "PATH": ""})  # fmt: skip
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    rows = list(csv.DictReader(open(tmp_path / "spatial_convergence.csv")))
+    assert {r["quantity"] for r in rows} == {"compression", "tangential_compliance"}
+    assert {r["density_per_m2"] for r in rows} == {"4000", "16000"}
+    assert all(math.isfinite(float(r["tissue"])) and float(r["tissue"]) > 0 for r in rows)
+    assert (tmp_path / "spatial_convergence.png").stat().st_size > 5_000
