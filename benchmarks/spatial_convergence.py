@@ -2,7 +2,7 @@
 per m^2 of face (others with ``--densities``), at the default dt and iterations, against the
 independent finite-element reference of the same pad (benchmarks/pad_reference.py).
 
-    PYTHONPATH=. python benchmarks/spatial_convergence.py [--quick] [--env] [--out benchmarks/out]
+    PYTHONPATH=. python benchmarks/spatial_convergence.py [--quick] [--env] [--material continuum] [--out benchmarks/out]
 
 The rig (``PadRig``) is as close to the reference as the tissue allows: one finger core (the
 scene's 16 x 40 x 60 mm box) held still, tissue on its inner face only (the face the cylinder
@@ -44,7 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
-from softgrasp_env.config import SimConfig, TissueConfig
+from softgrasp_env.config import GROUP_ENERGIES, SimConfig, TissueConfig
 from softgrasp_env.scene import SceneConfig
 from softgrasp_env.tissue.builder import CoreShape, build_combined_body
 from softgrasp_env.tissue.collision import SHAPE_CODES
@@ -189,10 +189,12 @@ class PadRig:
         return float(np.mean(ls)), float(np.mean(shares))
 
 
-def measure_tissue(density: float, loads=LOADS, *, tangential: bool = True) -> dict:
-    """Everything the rig measures at one density."""
+def measure_tissue(density: float, loads=LOADS, *, tangential: bool = True, material: str = "shape_matching") -> dict:
+    """Everything the rig measures at one density, with each group's energy ``material``
+    (TissueConfig.group_energy)."""
     tic = time.perf_counter()
-    rig = PadRig(density, friction=0.0)
+    tissue = TissueConfig(group_energy=material)
+    rig = PadRig(density, friction=0.0, tissue=tissue)
     radius, share = rig.group_radius()
     out = {"density": density, "particles": rig.particle_count, "substeps": rig.substeps, "l": radius,
            "normal_share": share, "core_stiffness": float(core_stiffness(rig.model)[0])}  # fmt: skip
@@ -203,7 +205,7 @@ def measure_tissue(density: float, loads=LOADS, *, tangential: bool = True) -> d
         out[f"held_{load:g}N"] = f
         guess = c * (1.6 if load < 3 else 1.4)
     if tangential:
-        rig = PadRig(density)  # default friction: the contact sticks
+        rig = PadRig(density, tissue=tissue)  # default friction: the contact sticks
         c, f = rig.press_to(3.0, guess=out.get("compression_3N", 2e-3))
         # incremental: from SHEAR / 2 to 3 SHEAR / 2 down the axis (the first tenths of a mm carry an
         # offset of a few hundredths of a N while the contact's anchors take hold)
@@ -237,8 +239,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--quick", action="store_true", help="4,000 and 16,000 per m^2, 3 N only")
     parser.add_argument("--densities", default=None, help="comma-separated particles per m^2")
     parser.add_argument("--env", action="store_true", help="also the env's scripted grasp per density")
+    parser.add_argument("--material", choices=GROUP_ENERGIES, default="shape_matching",
+                        help="each group's energy (TissueConfig.group_energy); the CSV and figure get a suffix for "
+                             "any but the default")  # fmt: skip
     parser.add_argument("--out", type=Path, default=OUT)
     ns = parser.parse_args(argv)
+    if ns.env and ns.material != "shape_matching":
+        parser.error("--env runs the env's own material only (gym.make has no group_energy keyword yet)")
     from benchmarks.pad_reference import NUS, default_pad, reference
 
     densities = [float(d) for d in ns.densities.split(",")] if ns.densities else (
@@ -257,7 +264,7 @@ def main(argv: list[str] | None = None) -> int:
               + f"; tangential {refs[(nu, 3.0)]['compliance'] * 1e3:.3f} mm/N at 3 N")  # fmt: skip
     rows = []
     for d in densities:
-        r = measure_tissue(d, loads)
+        r = measure_tissue(d, loads, material=ns.material)
         if ns.env:
             t = time.perf_counter()
             r["env_compression_3N"] = measure_env(d)
@@ -269,12 +276,12 @@ def main(argv: list[str] | None = None) -> int:
               + f"; tangential {r['compliance'] * 1e3:.3f} mm/N ({r['seconds']:.1f} s)"
               + (f"; env {r['env_compression_3N'] * 1e3:.3f} mm ({r['env_seconds']:.1f} s)" if ns.env else ""),
               flush=True)  # fmt: skip
-    report(rows, refs, loads, ns.out, ns.env)
+    report(rows, refs, loads, ns.out, ns.env, "" if ns.material == "shape_matching" else f"_{ns.material}")
     print(f"\ntotal {time.perf_counter() - tic:.1f} s")
     return 0
 
 
-def report(rows: list[dict], refs: dict, loads, out: Path, env: bool) -> None:
+def report(rows: list[dict], refs: dict, loads, out: Path, env: bool, suffix: str = "") -> None:
     from benchmarks.pad_reference import NUS
 
     out.mkdir(parents=True, exist_ok=True)
@@ -318,17 +325,17 @@ def report(rows: list[dict], refs: dict, loads, out: Path, env: bool) -> None:
             for nu in NUS:
                 table.append(("env_compression", 3.0, r["density"], r["particles"], r["l"], r["env_compression_3N"],
                               nu, refs[(nu, 3.0)]["delta"], r["env_compression_3N"] / refs[(nu, 3.0)]["delta"] - 1))  # fmt: skip
-    with open(out / "spatial_convergence.csv", "w", newline="") as f:
+    with open(out / f"spatial_convergence{suffix}.csv", "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["quantity", "load_N", "density_per_m2", "particles", "group_radius_m", "tissue", "nu",
                     "reference", "relative_error"])  # fmt: skip
         w.writerows([(q, f"{ld:g}", f"{d:.0f}", n, f"{gl:.6g}", f"{v:.6g}", f"{nu:g}", f"{rf:.6g}", f"{e:.6g}")
                      for q, ld, d, n, gl, v, nu, rf, e in table])  # fmt: skip
-    print(f"\nwrote {out / 'spatial_convergence.csv'}")
-    plot(rows, refs, loads, out, env)
+    print(f"\nwrote {out / f'spatial_convergence{suffix}.csv'}")
+    plot(rows, refs, loads, out, env, suffix)
 
 
-def plot(rows: list[dict], refs: dict, loads, out: Path, env: bool) -> None:
+def plot(rows: list[dict], refs: dict, loads, out: Path, env: bool, suffix: str = "") -> None:
     try:
         import matplotlib
     except ImportError:
@@ -361,9 +368,9 @@ def plot(rows: list[dict], refs: dict, loads, out: Path, env: bool) -> None:
         ax.tick_params(labelsize=7)
     axes[0, 0].legend(fontsize=6)
     fig.tight_layout()
-    fig.savefig(out / "spatial_convergence.png", dpi=90)
+    fig.savefig(out / f"spatial_convergence{suffix}.png", dpi=90)
     plt.close(fig)
-    print(f"wrote {out / 'spatial_convergence.png'}")
+    print(f"wrote {out / f'spatial_convergence{suffix}.png'}")
 
 
 if __name__ == "__main__":

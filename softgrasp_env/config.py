@@ -23,6 +23,8 @@ DEFAULT_MAX_DEVIATION = 0.02
 COMPLIANT_DAMPING = 300.0
 """SimConfig.damping for the compliant tissue when none is given [1/s]."""
 COUPLING_MODES: tuple[str, ...] = ("thesis", "consistent")
+GroupEnergy = Literal["shape_matching", "continuum"]
+GROUP_ENERGIES: tuple[str, ...] = ("shape_matching", "continuum")
 
 
 @dataclass(frozen=True)
@@ -78,6 +80,15 @@ class TissueConfig:
     mu_s, one coefficient, the law of pybullet's rigid contacts, so that every finger kind is
     compared under the same friction. A number below mu_s gives the two-coefficient law (Macklin et
     al. 2014)."""
+    group_energy: GroupEnergy = "shape_matching"
+    """Each implicit group's elastic energy. "shape_matching", the default: E = sum_j kappa m_j
+    |x_j - g_j|^2 / 2, kappa = G / (rho l^2) (Mueller & Chentanez 2011; builder.group_kappa), which
+    weighs a group's strain by its second moment and so changes with the groups' shape: the same G
+    is a different pad at every particle_density. "continuum" (opt-in): E = G V ||F - R||_F^2, F the
+    group's least-squares deformation gradient A_pq A_qq^-1, R its rotation and V the volume it
+    stands for (linear elasticity with nu = 0 for small strain; tissue/compliant.py,
+    continuum_group), independent of the group's shape. The package's documentation (Results:
+    convergence in space) measures both against a finite-element reference."""
     contact_cone: bool = False
     """Coulomb per contact as well as per patch (tissue/friction.py, _apply_with_cones): each tissue
     contact's friction at most mu_s times its normal force, what that sheds handed to the patch's
@@ -97,6 +108,8 @@ class TissueConfig:
         check_int("group_size", self.group_size, 4, 16, owner=o)
         check_range("mass_density", self.mass_density, 100.0, 1e4, owner=o)
         check_bool("contact_cone", self.contact_cone, owner=o)
+        if self.group_energy not in GROUP_ENERGIES:
+            raise ValueError(f"TissueConfig.group_energy must be one of {GROUP_ENERGIES}, got {self.group_energy!r}")
         if self.shear_modulus is not None:
             check_range("shear_modulus", self.shear_modulus, 1e3, 1e6, owner=o)
         if self.max_deviation is not None:

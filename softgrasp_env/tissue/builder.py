@@ -331,6 +331,9 @@ def _single_body_model(
     offsets, members, rest_offset = build_groups(rest_x, mass, partner, tissue.group_size)
     n = rest_x.shape[0]
     kappa = group_kappa(offsets, members, rest_offset, mass, tissue.modulus, tissue.mass_density)
+    cont = None
+    if tissue.group_energy == "continuum":
+        cont, kappa = continuum_groups(offsets, members, rest_offset, mass, tissue.modulus, tissue.mass_density)
     return TissueModel(
         particle_rest_x=np.ascontiguousarray(rest_x, dtype=np.float64),
         particle_rest_q=np.ascontiguousarray(rest_q, dtype=np.float64),
@@ -349,6 +352,7 @@ def _single_body_model(
         group_kappa=kappa,
         body_max_deviation=np.array([tissue.deviation_limit]),
         body_contact_cone=np.array([tissue.contact_cone]),
+        group_continuum=cont,
     )
 
 
@@ -373,6 +377,48 @@ def group_kappa(offsets: np.ndarray, members: np.ndarray, rest_offset: np.ndarra
         l2 = float((m * (rest_offset[e] ** 2).sum(axis=1)).sum() / m.sum())
         out[i] = modulus / (density * l2)
     return out
+
+
+PINV_RTOL = 1e-6
+"""Eigenvalues of a group's rest second moment A_qq below this fraction of its largest are taken as
+zero (continuum_groups: a planar or collinear group's A_qq^+ is its pseudo-inverse)."""
+
+
+def continuum_groups(offsets: np.ndarray, members: np.ndarray, rest_offset: np.ndarray, mass: np.ndarray,
+                     modulus: float, density: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """The continuum group energy's rest data (TissueConfig.group_energy "continuum";
+    compliant.continuum_group): ((N, 7) [A_qq^+ (xx, xy, xz, yy, yz, zz), 2 G V], (N,) kappa).
+
+    E_g = G V_g ||F - R||_F^2 with F = A_pq A_qq^-1, A_pq = sum_j m_j (x_j - c) q_j^T and
+    A_qq = sum_j m_j q_j q_j^T (q_j the rest offsets; the least-squares deformation gradient of
+    the group, Mueller et al. 2005). For a small strain F - R is the strain eps, so E_g is
+    V_g mu eps:eps, linear elasticity with mu = G and lambda = 0 (nu = 0), whatever the group's
+    shape. V_g = sum_j V_j / n_j, V_j = m_j / rho a member's volume and n_j the groups it is in:
+    every particle's volume counted once over the groups.
+
+    kappa, the largest stiffness per unit mass of the group's Hessian (the world's substep rule,
+    compliant.substeps_for): with R held, d^2 E / dx_j dx_k = 2 G V (b_j . b_k) I, b_j = A_qq^-1 m_j
+    q_j, and M^-1/2 H M^-1/2 has the eigenvalues of 2 G V sum_j b_j b_j^T / m_j (3 x 3)."""
+    n = offsets.shape[0] - 1
+    mem = members.astype(np.int64)
+    share = 1.0 / np.bincount(mem, minlength=mass.shape[0]).astype(np.float64)  # 1 / n_j
+    vol = mass / density
+    cont = np.zeros((n, 7))
+    kappa = np.empty(n)
+    for i in range(n):
+        e = slice(int(offsets[i]), int(offsets[i + 1]))
+        j = mem[e]
+        m = mass[j]
+        q = rest_offset[e]
+        aqq = (m[:, None, None] * q[:, :, None] * q[:, None, :]).sum(axis=0)
+        w, v = np.linalg.eigh(aqq)
+        inv = np.where(w > PINV_RTOL * w.max(), 1.0 / np.where(w > 0.0, w, 1.0), 0.0)
+        ainv = (v * inv) @ v.T
+        k2 = 2.0 * modulus * float((vol[j] * share[j]).sum())
+        b = (m[:, None] * q) @ ainv
+        kappa[i] = k2 * float(np.linalg.eigvalsh((b[:, :, None] * b[:, None, :] / m[:, None, None]).sum(axis=0)).max())
+        cont[i] = (ainv[0, 0], ainv[0, 1], ainv[0, 2], ainv[1, 1], ainv[1, 2], ainv[2, 2], k2)
+    return cont, kappa
 
 
 BYTES_PER_PARTICLE = 3200

@@ -41,7 +41,7 @@ import numpy as np
 from .linalg import solve_sym3
 from .model import TissueModel
 from .rigid import rigid_apply
-from .rotation import qmat
+from .rotation import extract_rotation_unit_t, qmat
 from .shape_matching import _fit_group, _turn_centre
 
 MAX_STEP_STIFFNESS = 0.25
@@ -60,7 +60,9 @@ step late (thesis 5.2.2), and beyond about 1 it rings."""
 
 def substeps_for(model: TissueModel, dt: float) -> int:
     """The fewest steps of dt / n that keep every group's s = kappa (dt / n)^2 at most
-    MAX_STEP_STIFFNESS."""
+    MAX_STEP_STIFFNESS (kappa: the group's largest stiffness per unit mass, G / (rho l^2) for shape
+    matching, the largest eigenvalue of M^-1/2 H M^-1/2 for a continuum group:
+    builder.continuum_groups)."""
     if model.group_kappa.size == 0:
         return 1
     kappa = float(model.group_kappa.max())
@@ -74,11 +76,22 @@ def core_stiffness(model: TissueModel) -> np.ndarray:
     between them: project_group's column). 1,310 N/m for a default pad (G 4,000 Pa), against
     G A / extrude = 1,520 N/m for the layer it stands for."""
     out = np.zeros(model.body_count)
+    cont = model.group_continuum
     for b in range(model.body_count):
         for i in range(int(model.body_particle_offsets[b]), int(model.body_particle_offsets[b + 1])):
-            members = model.group_members[model.group_offsets[i]:model.group_offsets[i + 1]]
+            e = slice(int(model.group_offsets[i]), int(model.group_offsets[i + 1]))
+            members = model.group_members[e]
             m = model.particle_mass[members]
             fix = model.particle_attached[members]
+            if cont[i, 6] > 0.0:
+                # continuum group (continuum_group): its free members moved by d against the fixed
+                # ones change F by d beta^T, beta = sum_free b_j, an energy of at most
+                # G V |d|^2 |beta|^2: a spring 2 G V |beta|^2
+                p = cont[i]
+                ainv = np.array([[p[0], p[1], p[2]], [p[1], p[3], p[4]], [p[2], p[4], p[5]]])
+                beta = ainv @ (m[~fix, None] * model.group_rest_offset[e][~fix]).sum(axis=0)
+                out[b] += p[6] * float(beta @ beta)
+                continue
             out[b] += model.group_kappa[i] * m[fix].sum() * m[~fix].sum() / m.sum()
     return out
 
@@ -355,3 +368,232 @@ def _apply_deformation(i, start, end, g_mem, g_pack, frame, xs, xp, g_u, g_raw):
         g_u[e, 0] += dx
         g_u[e, 1] += dy
         g_u[e, 2] += dz
+
+
+# =================================================================================================
+# the continuum group energy (TissueConfig.group_energy "continuum")
+# =================================================================================================
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def continuum_sweep(iterations, rot_iters, body_off, group_kappa, g_cont, dt, g_off, g_mem, g_pack, frame, attached,
+                    fixed, rest_q, rest_moment, xs, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape,
+                    shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang,
+                    coupling_imp):  # fmt: skip
+    """compliant_sweep for a model with continuum groups (g_cont[i, 6] > 0: continuum_group; the
+    rest, shape matching: project_group). The centre of a group turns toward quat(R) q_bar as in
+    compliant_sweep, s = kappa dt^2 with kappa the group's largest stiffness per unit mass."""
+    for b in range(body_off.shape[0] - 1):
+        cs = body_core_shape[b]
+        core = shape_rigid[cs] if cs >= 0 else -1
+        m_att = 0.0
+        for k in range(body_off[b], body_off[b + 1]):
+            if fixed[k]:
+                m_att += mass[k]
+        for i in range(body_off[b], body_off[b + 1]):
+            s = group_kappa[i] * dt * dt
+            if g_cont[i, 6] > 0.0:
+                qr = continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs, xp, group_q, fixed,
+                                     g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin,
+                                     imp_ang, coupling_imp, dt)  # fmt: skip
+            else:
+                qr = project_group(i, s, core, body_off[b], body_off[b + 1], m_att, rot_iters, g_off, g_mem, g_pack,
+                                   frame, xs, xp, group_q, moment, fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass,
+                                   rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+            if not attached[i]:
+                _turn_centre(i, qr, 1.0 - (1.0 / (1.0 + s)) ** (1.0 / iterations), rest_q, qp, rest_moment, moment)
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs, xp, group_q, fixed, g_u, g_raw, mass,
+                    rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang, coupling_imp, dt):  # fmt: skip
+    """One Newton step of group i's implicit equations under E = G V ||F - R||_F^2; returns quat(R).
+
+    F = sum_j x_j b_j^T, b_j = A_qq^-1 m_j q_j (sum_j b_j = 0: F ignores translation), so with R
+    held (the polar factor of F, warm-started from the group's last rotation, Mueller et al. 2016;
+    its derivative drops out, as ||F - R|| is least over rotations there) the energy is quadratic:
+
+        grad_j E = k (F - R) b_j,   d^2 E / dx_j dx_k = k (b_j . b_k) I,   k = 2 G V
+
+    (the projective-dynamics strain energy, Bouaziz et al. 2014, per group; ARAP's). The group's
+    part of the implicit step, m_j u_j + dt^2 grad_j E = 0 (u_j what this group moved member j this
+    step), for the free members: (M + c B B^T) dx = -r, c = k dt^2, r_j = m_j u_j + dt^2 grad_j E,
+    B the rows b_j^T. Woodbury, one symmetric 3 x 3 solve with three right-hand sides:
+
+        z_j = r_j / m_j,   S = I / c + sum_free b_j b_j^T / m_j,   Y = S^-1 sum_free b_j z_j^T
+        dx_j = -(z_j - Y^T b_j / m_j)
+
+    exact for the group (R held). A member held by its core (``fixed``) does not move; what is left
+    of its residual after the step goes to the core as an impulse (deliver_to_core), so
+    sum_j m_j u_j = -dt^2 sum_j grad_j E = 0: momentum is exact every pass, as in project_group.
+    Under the consistent coupling the core is held inside this step too (no core unknown: its
+    impulse reaches it afterwards). A group with no fixed member is made free of momentum and
+    angular momentum about the step's start positions (_apply_deformation)."""
+    i = np.uint64(i)
+    start = np.uint64(g_off[i])
+    end = np.uint64(g_off[i + 1])
+    p00, p01, p02, p11, p12, p22 = g_cont[i, 0], g_cont[i, 1], g_cont[i, 2], g_cont[i, 3], g_cont[i, 4], g_cont[i, 5]
+    k = g_cont[i, 6]
+    c = k * dt * dt
+    # A_pq = sum_j x_j (m_j q_j)^T (sum_j m_j q_j = 0: no centre needed)
+    a00 = a01 = a02 = a10 = a11 = a12 = a20 = a21 = a22 = 0.0
+    for e in range(start, end):
+        j = np.uint64(g_mem[e])
+        x0 = xp[j, 0]
+        x1 = xp[j, 1]
+        x2 = xp[j, 2]
+        q0 = g_pack[e, 1]
+        q1 = g_pack[e, 2]
+        q2 = g_pack[e, 3]
+        a00 += x0 * q0
+        a01 += x0 * q1
+        a02 += x0 * q2
+        a10 += x1 * q0
+        a11 += x1 * q1
+        a12 += x1 * q2
+        a20 += x2 * q0
+        a21 += x2 * q1
+        a22 += x2 * q2
+    # F = A_pq A_qq^-1
+    f00 = a00 * p00 + a01 * p01 + a02 * p02
+    f01 = a00 * p01 + a01 * p11 + a02 * p12
+    f02 = a00 * p02 + a01 * p12 + a02 * p22
+    f10 = a10 * p00 + a11 * p01 + a12 * p02
+    f11 = a10 * p01 + a11 * p11 + a12 * p12
+    f12 = a10 * p02 + a11 * p12 + a12 * p22
+    f20 = a20 * p00 + a21 * p01 + a22 * p02
+    f21 = a20 * p01 + a21 * p11 + a22 * p12
+    f22 = a20 * p02 + a21 * p12 + a22 * p22
+    qr = extract_rotation_unit_t((f00, f01, f02, f10, f11, f12, f20, f21, f22),
+                                 (group_q[i, 0], group_q[i, 1], group_q[i, 2], group_q[i, 3]), rot_iters, 1e-10)  # fmt: skip
+    group_q[i, 0] = qr[0]
+    group_q[i, 1] = qr[1]
+    group_q[i, 2] = qr[2]
+    group_q[i, 3] = qr[3]
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = qmat(qr)
+    # D = dt^2 k (F - R): the residual's elastic part is D b_j
+    h = dt * dt * k
+    d00, d01, d02 = h * (f00 - r00), h * (f01 - r01), h * (f02 - r02)
+    d10, d11, d12 = h * (f10 - r10), h * (f11 - r11), h * (f12 - r12)
+    d20, d21, d22 = h * (f20 - r20), h * (f21 - r21), h * (f22 - r22)
+    s00 = s01 = s02 = s11 = s12 = s22 = 0.0  # sum_free b b^T / m
+    w00 = w01 = w02 = w10 = w11 = w12 = w20 = w21 = w22 = 0.0  # sum_free b z^T, row a = b's component
+    held = False
+    for e in range(start, end):
+        j = np.uint64(g_mem[e])
+        m = mass[j]
+        q0 = g_pack[e, 1]
+        q1 = g_pack[e, 2]
+        q2 = g_pack[e, 3]
+        b0 = p00 * q0 + p01 * q1 + p02 * q2
+        b1 = p01 * q0 + p11 * q1 + p12 * q2
+        b2 = p02 * q0 + p12 * q1 + p22 * q2
+        # z_j = u_j + D b_j / m_j (per unit mass)
+        inv_m = 1.0 / m
+        zx = g_u[e, 0] + (d00 * b0 + d01 * b1 + d02 * b2) * inv_m
+        zy = g_u[e, 1] + (d10 * b0 + d11 * b1 + d12 * b2) * inv_m
+        zz = g_u[e, 2] + (d20 * b0 + d21 * b1 + d22 * b2) * inv_m
+        g_raw[e, 0] = zx
+        g_raw[e, 1] = zy
+        g_raw[e, 2] = zz
+        if fixed[j]:
+            held = True
+            continue
+        s00 += b0 * b0 * inv_m
+        s01 += b0 * b1 * inv_m
+        s02 += b0 * b2 * inv_m
+        s11 += b1 * b1 * inv_m
+        s12 += b1 * b2 * inv_m
+        s22 += b2 * b2 * inv_m
+        w00 += b0 * zx
+        w01 += b0 * zy
+        w02 += b0 * zz
+        w10 += b1 * zx
+        w11 += b1 * zy
+        w12 += b1 * zz
+        w20 += b2 * zx
+        w21 += b2 * zy
+        w22 += b2 * zz
+    ic = 1.0 / c
+    s00 += ic
+    s11 += ic
+    s22 += ic
+    y00, y10, y20 = solve_sym3(s00, s01, s02, s11, s12, s22, w00, w10, w20)
+    y01, y11, y21 = solve_sym3(s00, s01, s02, s11, s12, s22, w01, w11, w21)
+    y02, y12, y22 = solve_sym3(s00, s01, s02, s11, s12, s22, w02, w12, w22)
+    # the free members' step dx_j = -(z_j - Y^T b_j / m_j), and dF = sum_free dx_j b_j^T (times dt^2 k)
+    e00 = e01 = e02 = e10 = e11 = e12 = e20 = e21 = e22 = 0.0
+    for e in range(start, end):
+        j = np.uint64(g_mem[e])
+        if fixed[j]:
+            continue
+        inv_m = 1.0 / mass[j]
+        q0 = g_pack[e, 1]
+        q1 = g_pack[e, 2]
+        q2 = g_pack[e, 3]
+        b0 = p00 * q0 + p01 * q1 + p02 * q2
+        b1 = p01 * q0 + p11 * q1 + p12 * q2
+        b2 = p02 * q0 + p12 * q1 + p22 * q2
+        dx = (y00 * b0 + y10 * b1 + y20 * b2) * inv_m - g_raw[e, 0]
+        dy = (y01 * b0 + y11 * b1 + y21 * b2) * inv_m - g_raw[e, 1]
+        dz = (y02 * b0 + y12 * b1 + y22 * b2) * inv_m - g_raw[e, 2]
+        g_raw[e, 0] = dx
+        g_raw[e, 1] = dy
+        g_raw[e, 2] = dz
+        if held:
+            xp[j, 0] += dx
+            xp[j, 1] += dy
+            xp[j, 2] += dz
+            g_u[e, 0] += dx
+            g_u[e, 1] += dy
+            g_u[e, 2] += dz
+            e00 += dx * b0
+            e01 += dx * b1
+            e02 += dx * b2
+            e10 += dy * b0
+            e11 += dy * b1
+            e12 += dy * b2
+            e20 += dz * b0
+            e21 += dz * b1
+            e22 += dz * b2
+    if not held:
+        _apply_deformation(i, start, end, g_mem, g_pack, frame, xs, xp, g_u, g_raw)
+        return qr
+    # each fixed member's residual once the free members moved, r_j = m_j u_j + dt^2 grad_j E:
+    # z_j (before) + dt^2 k dF b_j / m_j; its force goes to the core and its u takes it up
+    for e in range(start, end):
+        j = np.uint64(g_mem[e])
+        if not fixed[j]:
+            continue
+        m = mass[j]
+        q0 = g_pack[e, 1]
+        q1 = g_pack[e, 2]
+        q2 = g_pack[e, 3]
+        b0 = p00 * q0 + p01 * q1 + p02 * q2
+        b1 = p01 * q0 + p11 * q1 + p12 * q2
+        b2 = p02 * q0 + p12 * q1 + p22 * q2
+        rx = g_raw[e, 0] + h * (e00 * b0 + e01 * b1 + e02 * b2) / m
+        ry = g_raw[e, 1] + h * (e10 * b0 + e11 * b1 + e12 * b2) / m
+        rz = g_raw[e, 2] + h * (e20 * b0 + e21 * b1 + e22 * b2) / m
+        deliver_to_core(j, -m * rx, -m * ry, -m * rz, core, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
+                        imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+        g_u[e, 0] -= rx
+        g_u[e, 1] -= ry
+        g_u[e, 2] -= rz
+    return qr
+
+
+def continuum_energy(x: np.ndarray, mq: np.ndarray, ainv: np.ndarray, k: float) -> tuple[float, np.ndarray, np.ndarray]:
+    """One continuum group's energy, plain numpy (for tests and for reading: continuum_group is the
+    kernel): ``x`` (n, 3) its members' positions, ``mq`` (n, 3) their m_j q_j, ``ainv`` (3, 3)
+    A_qq^+, ``k`` = 2 G V. Returns (E, dE/dx (n, 3), R): E = (k / 2) ||F - R||_F^2, F = sum_j x_j
+    b_j^T, b_j = A_qq^+ m_j q_j, R = polar(F) (det +1); dE/dx_j = k (F - R) b_j (R held: the
+    derivative through R vanishes, R minimising ||F - R|| over rotations)."""
+    b = mq @ ainv
+    f = x.T @ b
+    u, _, vt = np.linalg.svd(f)
+    d = np.ones(3)
+    d[2] = np.sign(np.linalg.det(u @ vt)) or 1.0
+    r = (u * d) @ vt
+    diff = f - r
+    return 0.5 * k * float((diff * diff).sum()), k * b @ diff.T, r

@@ -58,12 +58,25 @@ class TissueModel:
     """(B,) bool: besides its patch's bound on what the patch transmits, each contact's friction is
     bounded by its own cone, mu_s lambda_n (friction.friction_patches; TissueConfig.contact_cone);
     None: all False (the patch bound alone, the default law)."""
+    group_continuum: np.ndarray | None = None
+    """(N, 7) per group, the continuum group energy E = G V ||F - R||_F^2 (TissueConfig.group_energy
+    "continuum"; builder.continuum_groups, compliant.continuum_group): [A_qq^+ (6: xx, xy, xz, yy,
+    yz, zz) [1/(kg m^2)], 2 G V [N m]], A_qq = sum_j m_j q_j q_j^T the group's rest second moment
+    and V the volume it stands for; a row of zeros is a shape-matching group. None: all zeros (every
+    group shape matching, the default material)."""
 
     def __post_init__(self) -> None:
         if self.body_max_deviation is None:
             object.__setattr__(self, "body_max_deviation", np.full(self.body_core_shape.shape[0], np.inf))
         if self.body_contact_cone is None:
             object.__setattr__(self, "body_contact_cone", np.zeros(self.body_core_shape.shape[0], dtype=np.bool_))
+        if self.group_continuum is None:
+            object.__setattr__(self, "group_continuum", np.zeros((self.group_offsets.shape[0] - 1, 7)))
+
+    @property
+    def continuum(self) -> bool:
+        """Any group under the continuum group energy (group_continuum)."""
+        return bool((self.group_continuum[:, 6] > 0.0).any())
 
     @property
     def particle_count(self) -> int:
@@ -123,6 +136,7 @@ def concatenate(models: list[TissueModel]) -> TissueModel:
         group_kappa=cat("group_kappa"),
         body_max_deviation=cat("body_max_deviation"),
         body_contact_cone=cat("body_contact_cone"),
+        group_continuum=cat("group_continuum"),
     )
 
 

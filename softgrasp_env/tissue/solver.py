@@ -49,7 +49,7 @@ from .anchors import (
     project_anchors,
     snap_attached,
 )
-from .compliant import compliant_sweep
+from .compliant import compliant_sweep, continuum_sweep
 from .contacts import (
     clear_multipliers,
     collect_contacts,
@@ -133,7 +133,8 @@ _B_SCRATCH = (("c_inner", "contacts", 0), ("patch_slide", "patches", 0), ("patch
 # as it does for the rest moments and group data it derives from it)
 _F_MODEL = (("rest_x", "n", 3), ("rest_q", "n", 4), ("rest_moment", "n", 9), ("inertia", "n", 3), ("radii", "n", 3),
             ("mass", "n", 0), ("inv_mass", "n", 0), ("g_pack", "members", 8),
-            ("body_friction", "bodies", 2), ("group_kappa", "n", 0), ("body_max_deviation", "bodies", 0))  # fmt: skip
+            ("body_friction", "bodies", 2), ("group_kappa", "n", 0), ("body_max_deviation", "bodies", 0),
+            ("g_cont", "n", 7))  # fmt: skip
 _I_MODEL = (("p_body", "n", 0), ("g_off", "groups", 0), ("g_mem", "members", 0), ("body_off", "body_offsets", 0),
             ("body_core_shape", "bodies", 0))  # fmt: skip
 _B_MODEL = (("attached", "n", 0), ("body_contact_cone", "bodies", 0))
@@ -146,14 +147,14 @@ _PACK = _F_PACK + _I_PACK + _B_PACK
  _C_FRICTION_GOAL, _C_ANCHOR, _C_POINT, _PAIR_LAMBDA, _PAIR_LAMBDA_T, _PAIR_NORMAL, _SHAPE_POSE, _PATCH,
  _G_U, _G_RAW,
  _REST_X, _REST_Q, _REST_MOMENT, _INERTIA, _RADII, _MASS, _INV_MASS, _G_PACK, _BODY_FRICTION,
- _GROUP_KAPPA, _BODY_MAX_DEVIATION,
+ _GROUP_KAPPA, _BODY_MAX_DEVIATION, _G_CONT,
  _C_PARTICLE, _C_SHAPE, _C_PATCH, _PAIR_I, _PAIR_J,
  _P_BODY, _G_OFF, _G_MEM, _BODY_OFF, _BODY_CORE_SHAPE,
  _C_INNER, _PATCH_SLIDE, _PATCH_CHANGE, _C_SLIP, _FIXED,
  _ATTACHED, _BODY_CONTACT_CONE) = range(len(_PACK))  # fmt: skip
 assert [name for name, _, _ in _PACK][_ATTACHED] == "attached" and _PACK[_P_BODY][0] == "p_body"
 assert _PACK[_G_RAW][0] == "g_raw" and _PACK[_GROUP_KAPPA][0] == "group_kappa"
-assert _PACK[_BODY_MAX_DEVIATION][0] == "body_max_deviation"
+assert _PACK[_BODY_MAX_DEVIATION][0] == "body_max_deviation" and _PACK[_G_CONT][0] == "g_cont"
 assert _PACK[_PAIR_J][0] == "pair_j" and _PACK[_FIXED][0] == "fixed" and _PACK[_G_FRAME][0] == "g_frame"
 assert _PACK[_BODY_CONTACT_CONE][0] == "body_contact_cone"
 
@@ -181,13 +182,20 @@ def _view1(buf, layout, k):
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
            rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
-           rig_axis, rig_move, imp_lin, imp_ang, coupling_imp):  # fmt: skip
+           rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont):  # fmt: skip
     """One shape-matching sweep over every body's groups, and after the last one each group's
-    spin of the step turned back."""
-    compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame,
-                    attached, fixed, rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass,
-                    body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
-                    imp_lin, imp_ang, coupling_imp)  # fmt: skip
+    spin of the step turned back. ``continuum``: some groups have the continuum group energy
+    (compliant.continuum_sweep)."""
+    if continuum:
+        continuum_sweep(iterations, rot_iters, body_off, group_kappa, g_cont, dt, g_off, g_mem, g_pack, g_frame,
+                        attached, fixed, rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass,
+                        body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
+                        rig_move, imp_lin, imp_ang, coupling_imp)  # fmt: skip
+    else:
+        compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame,
+                        attached, fixed, rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass,
+                        body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
+                        imp_lin, imp_ang, coupling_imp)  # fmt: skip
     if it == iterations - 1:
         # internal forces exert no torque: each group's spin of the step, turned back
         balance_torques(g_off, g_mem, g_frame, attached, fixed, inertia, x, xp, qp, q_pred, spin_kick)
@@ -204,7 +212,7 @@ def _step(
     # the model's arrays and every scratch array of the step, packed (see TissueSolver._pack and _view)
     f_pack, i_pack, b_pack, layout,
     # parameters
-    dt, iterations, rot_iters, gx, gy, gz, damping, coupling, margin, counts,
+    dt, iterations, rot_iters, gx, gy, gz, damping, coupling, margin, continuum, counts,
 ):  # fmt: skip
     """One tissue step. Returns 0, or 1 if a contact buffer was too small (``counts`` then holds
     the sizes needed and the state is untouched, so the caller can grow the buffers and retry)."""
@@ -216,6 +224,7 @@ def _step(
     g_pack = _view(f_pack, layout, _G_PACK)
     body_friction, group_kappa = _view(f_pack, layout, _BODY_FRICTION), _view1(f_pack, layout, _GROUP_KAPPA)
     body_max_deviation = _view1(f_pack, layout, _BODY_MAX_DEVIATION)
+    g_cont = _view(f_pack, layout, _G_CONT)
     p_body, g_off, g_mem = _view1(i_pack, layout, _P_BODY), _view1(i_pack, layout, _G_OFF), _view1(i_pack, layout, _G_MEM)
     body_off, body_core_shape = _view1(i_pack, layout, _BODY_OFF), _view1(i_pack, layout, _BODY_CORE_SHAPE)
     attached = _view1(b_pack, layout, _ATTACHED)
@@ -273,7 +282,7 @@ def _step(
                           imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
         _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
                rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass,
-               rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp)  # fmt: skip
+               rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont)  # fmt: skip
         project_shape_contacts(nc, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass,
                                shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
                                rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose)  # fmt: skip
@@ -337,7 +346,7 @@ class TissueSolver:
             "body_friction": model.body_friction, "p_body": model.particle_body, "g_off": model.group_offsets,
             "g_mem": model.group_members, "body_off": model.body_particle_offsets,
             "body_core_shape": model.body_core_shape, "attached": model.particle_attached,
-            "group_kappa": model.group_kappa,
+            "group_kappa": model.group_kappa, "g_cont": model.group_continuum,
             "body_max_deviation": model.body_max_deviation, "body_contact_cone": model.body_contact_cone,
         }  # fmt: skip
         self._sizes = {"n": n, "contacts": 4 * n + 16, "pairs": 4 * n + 16, "shapes": 0, "patches": 0,
@@ -411,7 +420,7 @@ class TissueSolver:
             self._rig_x, self._rig_q, self._imp_lin, self._imp_ang, self._coupling_imp,
             *self._packed,
             sim.dt, sim.iterations, sim.rotation_iterations, 0.0, 0.0, -sim.gravity, self.damping, coupling,
-            sim.contact_margin, self._counts,
+            sim.contact_margin, self.model.continuum, self._counts,
         )  # fmt: skip
         self._args_for = sim
 
