@@ -374,7 +374,7 @@ class CarryConfig:
     not."""
 
     on: bool = True
-    start: float = CARRY_START
+    start_time: float = CARRY_START
     """When the carry begins after reset [s]."""
     duration: float = CARRY_DURATION
     """[s]"""
@@ -387,7 +387,7 @@ class CarryConfig:
 
     def __post_init__(self) -> None:
         check_bool("carry", self.on, hint=" (or None: the start's default)")
-        check_range("carry_start", self.start, 0.0, 600.0)
+        check_range("carry_start", self.start_time, 0.0, 600.0)
         check_range("carry_duration", self.duration, 0.0, 600.0, lo_open=True)
         for name, value, hi, lo_open in (("carry_frequency", self.frequency, 10.0, True),
                                          ("carry_acceleration", self.acceleration, 50.0, False)):  # fmt: skip
@@ -625,7 +625,8 @@ _FLAT: dict[str, tuple[str, str]] = {
     **{f"{a}_range": ("ranges", a) for a in ("cylinder_position", "lateral_offset", "yaw", "jaw_wedge", "friction",
                                              "cylinder_radius", "cylinder_mass")},
     "carry": ("carry_test", "on"),
-    **{f"carry_{a}": ("carry_test", a) for a in ("start", "duration", "frequency", "acceleration", "slide_limit")},
+    "carry_start": ("carry_test", "start_time"),
+    **{f"carry_{a}": ("carry_test", a) for a in ("duration", "frequency", "acceleration", "slide_limit")},
     **{a: ("grip_force", a) for a in ("squeeze_weight", "squeeze_factor")},
     **{a: ("observation", a) for a in ("observe_object", "tactile")},
     "render_width": ("camera", "width"), "render_height": ("camera", "height"), "render_camera": ("camera", "mode"),
@@ -725,7 +726,7 @@ class EnvPlan:
                                  **({"approach": lift.approach} if lift.start == "reach" else {}))  # fmt: skip
         if not carry.on:
             return start
-        test = CarryTest(start, dt=self.scene.sim.dt, workspace=self.workspace, start=carry.start,
+        test = CarryTest(start, dt=self.scene.sim.dt, workspace=self.workspace, start_time=carry.start_time,
                          duration=carry.duration, frequency=carry.frequency, acceleration=carry.acceleration,
                          slide_limit=carry.slide_limit, arm_speed=control.arm_speed,
                          arm_acceleration=control.arm_acceleration)  # fmt: skip

@@ -91,7 +91,7 @@ def steps_to_succeed(env: gym.Env) -> int | None:
     if not isinstance(task, CarryTest) or plan is None:
         return None
     per_step = plan.substeps
-    n = max(1, math.floor((task.start + task.duration) / (task.dt * per_step)) - 1)
+    n = max(1, math.floor((task.start_time + task.duration) / (task.dt * per_step)) - 1)
     while not task.over(n * per_step):  # the task's own rule decides, rounding included
         n += 1
     return n

@@ -140,7 +140,7 @@ class TactileGripPolicy(_GripPolicy):
         self.tolerance = check_range("tolerance", tolerance, 0.0, 1.0, lo_open=True, owner="TactileGripPolicy")
         self.mu_min = check_range("mu_min", mu_min, 0.0, 10.0, lo_open=True, owner="TactileGripPolicy")
         self.margin = check_range("margin", margin, 1.0, 10.0, owner="TactileGripPolicy")
-        self.deadline = float(deadline) if deadline is not None else float(plan.args.carry_test.start) - 0.05
+        self.deadline = float(deadline) if deadline is not None else float(plan.args.carry_test.start_time) - 0.05
         super().__init__(env, **kwargs)
 
     def reset(self) -> None:

@@ -88,14 +88,14 @@ def _value(option: str, value: float, lo: float, hi: float) -> float:
 
 
 class CarryTest(TaskWrapper):
-    """``task`` with the carry test after it (see the module docstring), from ``start`` for
-    ``duration`` [s]. ``frequency`` [Hz] and ``acceleration`` [m/s^2, peak] are a value or a
+    """``task`` with the carry test after it (see the module docstring), from ``start_time`` for
+    ``duration`` [s] after reset. ``frequency`` [Hz] and ``acceleration`` [m/s^2, peak] are a value or a
     (low, high) band drawn per episode, the direction any horizontal one, drawn; success needs the
     cylinder held at every step of the carry and its in-hand slide at most ``slide_limit`` [m].
     ``arm_speed`` [m/s] and ``arm_acceleration`` [m/s^2] are the arm's limits a reset option's sway
     is checked against (EnvArguments checks the bands against them when the env is made)."""
 
-    def __init__(self, task: Task, *, dt: float, workspace: Workspace, start: float = CARRY_START,
+    def __init__(self, task: Task, *, dt: float, workspace: Workspace, start_time: float = CARRY_START,
                  duration: float = CARRY_DURATION,
                  frequency: float | tuple[float, float] = CARRY_FREQUENCY_BAND,
                  acceleration: float | tuple[float, float] = CARRY_ACCELERATION_RANGE,
@@ -106,7 +106,7 @@ class CarryTest(TaskWrapper):
         self.reset_options = task.reset_options + CARRY_OPTIONS
         self.dt = float(dt)
         self.workspace = workspace
-        self.start, self.duration = float(start), float(duration)
+        self.start_time, self.duration = float(start_time), float(duration)
         self.frequency_band = frequency
         self.acceleration_band = acceleration
         self.slide_limit = float(slide_limit)
@@ -125,10 +125,10 @@ class CarryTest(TaskWrapper):
         # The physics steps whose end lies in the carry's window, exactly as phase() says (t grows
         # with the step, so the window is a range): found near the estimate, then checked step by
         # step, so that steer() needs no float arithmetic outside the window.
-        first = max(0, math.floor((self.start - _EPS) / self.dt) - 2)
-        while first <= math.floor((self.start - _EPS) / self.dt) + 3 and self.phase(first) is None:
+        first = max(0, math.floor((self.start_time - _EPS) / self.dt) - 2)
+        while first <= math.floor((self.start_time - _EPS) / self.dt) + 3 and self.phase(first) is None:
             first += 1
-        last = math.floor((self.start + self.duration + _EPS) / self.dt) + 2
+        last = math.floor((self.start_time + self.duration + _EPS) / self.dt) + 2
         while last >= first and self.phase(last) is None:
             last -= 1
         self._first, self._last = first, last
@@ -170,11 +170,11 @@ class CarryTest(TaskWrapper):
     def phase(self, steps: int) -> float | None:
         """Seconds into the carry at the end of physics step ``steps`` (counted from reset), or
         None outside it."""
-        t = steps * self.dt - self.start
+        t = steps * self.dt - self.start_time
         return t if -_EPS < t <= self.duration + _EPS else None
 
     def over(self, steps: int) -> bool:
-        return steps * self.dt >= self.start + self.duration - _EPS
+        return steps * self.dt >= self.start_time + self.duration - _EPS
 
     def carrying(self, steps: int) -> bool:
         return self.phase(steps) is not None and not self.over(steps)

@@ -157,7 +157,7 @@ def _verdicts(held, slides, slide_limit=CARRY_SLIDE_LIMIT):
     """CarryTest's success at each of 10 steps (dt 1 s, carry from 3 s for 5 s) for the given
     held flags and in-hand positions."""
     cfg = SceneConfig(fingers="rigid")
-    carry = CarryTest(_Script(held), dt=1.0, workspace=Workspace.of(cfg), start=3.0, duration=5.0,
+    carry = CarryTest(_Script(held), dt=1.0, workspace=Workspace.of(cfg), start_time=3.0, duration=5.0,
                       acceleration=1.0, frequency=0.1, slide_limit=slide_limit)  # fmt: skip
     carry.draw(np.random.default_rng(0), {}, cfg)
     carry.begin(None, np.random.default_rng(0))
@@ -179,7 +179,7 @@ def test_the_carry_test_defaults_to_the_envs_sway():
     assert carry.frequency_band == defaults["carry_frequency"] == (1.2, 3.0)
     assert carry.acceleration_band == defaults["carry_acceleration"] == (0.5, 1.0)
     assert carry.slide_limit == defaults["carry_slide_limit"] == CARRY_SLIDE_LIMIT
-    assert (carry.start, carry.duration) == (defaults["carry_start"], defaults["carry_duration"])
+    assert (carry.start_time, carry.duration) == (defaults["carry_start"], defaults["carry_duration"])
 
 
 def test_v3_success_needs_the_cylinder_held_through_the_whole_carry_without_sliding():
