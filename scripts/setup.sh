@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# One-command setup: a venv in .venv with softgrasp_env (editable), every extra but Ray and the
+# One-command setup: a venv in .venv with softgrasp_env (editable), every extra but Ray and docs, and the
 # test tools. torch is pinned to the CPU build first, so no CUDA build is downloaded (the [train]
 # extra's torch range admits 2.13.0, so pip keeps it).
 #   ./scripts/setup.sh            the main venv (.venv): everything but Ray
@@ -21,7 +21,7 @@ make_venv() {  # make_venv DIR EXTRAS
     "$1/bin/python" -m pip install -q "torch==2.13.0"
     "$1/bin/python" -m pip install -q -e ".[$2]"
 }
-make_venv .venv "train,plots,video,offline,test"
+make_venv .venv "train,plots,video,offline,reference,test"
 # numba compiles the solver's kernels on first use (about half a minute) and caches them on disk:
 # do it now, so that the first demo, test or training run starts at once.
 .venv/bin/python -m softgrasp_env.compile
