@@ -11,7 +11,7 @@ Rows (softgrasp_env/accuracy.py measures each):
 - hold: scripted grasp then 60 s of holding: tilt and slip in the hand, per finger kind
 - hold bound: heaviest cylinder held at 3 N per finger (bisection, 4 s lift) vs 2 mu_s F / g
 
-Takes about 3 minutes on this machine (--quick: no 60 s soak, coarser bisection).
+Takes about 3 minutes on 2 cores of an AMD EPYC (--quick: no 60 s soak, coarser bisection).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import numpy as np
 
 from softgrasp_env import accuracy, presets
 from softgrasp_env.accuracy import GraspPlan, coulomb_hold_bound, find_hold_bound, run_grasp
-from softgrasp_env.config import COMPLIANT_DAMPING, STEP_DAMPING, SimConfig, TissueConfig, kinetic_friction
+from softgrasp_env.config import COMPLIANT_DAMPING, SimConfig, TissueConfig, kinetic_friction
 from softgrasp_env.scene import GraspScene, SceneConfig
 from softgrasp_env.tissue.builder import build_free_block
 from softgrasp_env.tissue.rigid import empty_colliders
@@ -49,15 +49,15 @@ def pct(value: float, reference: float) -> str:
 def friction_rows() -> None:
     sim = SimConfig()
     t = TissueConfig()
-    damping = sim.damping if sim.damping is not None else (COMPLIANT_DAMPING if t.material == "compliant" else STEP_DAMPING)
-    print(f"pad on a ramp (defaults: {sim.iterations} iterations, dt 1/{round(1 / sim.dt)} s, {t.material} material, "
+    damping = sim.damping if sim.damping is not None else COMPLIANT_DAMPING
+    print(f"pad on a ramp (defaults: {sim.iterations} iterations, dt 1/{round(1 / sim.dt)} s, {t.group_energy} energy, "
           f"shear modulus {t.modulus:g} Pa, damping {damping:g} /s)")
     for mu_s in (0.3, 0.6, 0.9):
         tissue = TissueConfig(friction_static=mu_s, friction_kinetic=mu_s * 7.0 / 9.0)
         tan = accuracy.ramp_breakaway(tissue, sim)
         theta = math.atan(mu_s + 0.15)
         a = accuracy.slide_acceleration(theta, tissue, sim)
-        a_ref = sim.gravity * (math.sin(theta) - tissue.friction_kinetic * math.cos(theta))
+        a_ref = sim.gravity * (math.sin(theta) - kinetic_friction(tissue) * math.cos(theta))
         print(f"  mu_s {mu_s}: breaks loose at tan {tan:.4f} ({pct(tan, mu_s)}); "
               f"slides at {a:.4f} m/s^2 vs {a_ref:.4f} ({pct(a, a_ref)})")  # fmt: skip
     tissue = TissueConfig()
