@@ -116,10 +116,12 @@ def world_substeps(model: TissueModel, core_mass: np.ndarray, dt: float) -> int:
 def compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, frame,
                     attached, fixed, rest_q, rest_moment, xs, xp, qp, group_q, moment, g_u, g_raw, mass,
                     body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
-                    imp_lin, imp_ang, coupling_imp):  # fmt: skip
-    """One Gauss-Seidel sweep over the groups of every body (project_group). A group's
-    centre turns toward quat(R) q_bar by s / (1 + s) a step (the same implicit spring on its
-    orientation, Mueller & Chentanez 2011 sec. 4.3's goal), spread over the iterations."""
+                    imp_lin, imp_ang, coupling_imp, continuum, g_cont):  # fmt: skip
+    """One Gauss-Seidel sweep over the groups of every body: project_group, or continuum_group for
+    a group with the continuum energy (``continuum`` and g_cont[i, 6] > 0; kappa then the group's
+    largest stiffness per unit mass). A group's centre turns toward quat(R) q_bar by s / (1 + s) a
+    step (the same implicit spring on its orientation, Mueller & Chentanez 2011 sec. 4.3's goal),
+    spread over the iterations."""
     for b in range(body_off.shape[0] - 1):
         cs = body_core_shape[b]
         core = shape_rigid[cs] if cs >= 0 else -1
@@ -129,9 +131,14 @@ def compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_m
                 m_att += mass[k]
         for i in range(body_off[b], body_off[b + 1]):
             s = group_kappa[i] * dt * dt
-            qr = project_group(i, s, core, body_off[b], body_off[b + 1], m_att, rot_iters, g_off, g_mem, g_pack, frame,
-                               xs, xp, group_q, moment, fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass,
-                               rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+            if continuum and g_cont[i, 6] > 0.0:
+                qr = continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs, xp, group_q, fixed,
+                                     g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin,
+                                     imp_ang, coupling_imp, dt)  # fmt: skip
+            else:
+                qr = project_group(i, s, core, body_off[b], body_off[b + 1], m_att, rot_iters, g_off, g_mem, g_pack,
+                                   frame, xs, xp, group_q, moment, fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass,
+                                   rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
             if not attached[i]:
                 _turn_centre(i, qr, 1.0 - (1.0 / (1.0 + s)) ** (1.0 / iterations), rest_q, qp, rest_moment, moment)
 
@@ -373,35 +380,6 @@ def _apply_deformation(i, start, end, g_mem, g_pack, frame, xs, xp, g_u, g_raw):
 # =================================================================================================
 # the continuum group energy (TissueConfig.group_energy "continuum")
 # =================================================================================================
-
-
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
-def continuum_sweep(iterations, rot_iters, body_off, group_kappa, g_cont, dt, g_off, g_mem, g_pack, frame, attached,
-                    fixed, rest_q, rest_moment, xs, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape,
-                    shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang,
-                    coupling_imp):  # fmt: skip
-    """compliant_sweep for a model with continuum groups (g_cont[i, 6] > 0: continuum_group; the
-    rest, shape matching: project_group). The centre of a group turns toward quat(R) q_bar as in
-    compliant_sweep, s = kappa dt^2 with kappa the group's largest stiffness per unit mass."""
-    for b in range(body_off.shape[0] - 1):
-        cs = body_core_shape[b]
-        core = shape_rigid[cs] if cs >= 0 else -1
-        m_att = 0.0
-        for k in range(body_off[b], body_off[b + 1]):
-            if fixed[k]:
-                m_att += mass[k]
-        for i in range(body_off[b], body_off[b + 1]):
-            s = group_kappa[i] * dt * dt
-            if g_cont[i, 6] > 0.0:
-                qr = continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs, xp, group_q, fixed,
-                                     g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin,
-                                     imp_ang, coupling_imp, dt)  # fmt: skip
-            else:
-                qr = project_group(i, s, core, body_off[b], body_off[b + 1], m_att, rot_iters, g_off, g_mem, g_pack,
-                                   frame, xs, xp, group_q, moment, fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass,
-                                   rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
-            if not attached[i]:
-                _turn_centre(i, qr, 1.0 - (1.0 / (1.0 + s)) ** (1.0 / iterations), rest_q, qp, rest_moment, moment)
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})

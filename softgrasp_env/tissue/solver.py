@@ -49,7 +49,7 @@ from .anchors import (
     project_anchors,
     snap_attached,
 )
-from .compliant import compliant_sweep, continuum_sweep
+from .compliant import compliant_sweep
 from .contacts import (
     clear_multipliers,
     collect_contacts,
@@ -185,17 +185,11 @@ def _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g
            rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont):  # fmt: skip
     """One shape-matching sweep over every body's groups, and after the last one each group's
     spin of the step turned back. ``continuum``: some groups have the continuum group energy
-    (compliant.continuum_sweep)."""
-    if continuum:
-        continuum_sweep(iterations, rot_iters, body_off, group_kappa, g_cont, dt, g_off, g_mem, g_pack, g_frame,
-                        attached, fixed, rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass,
-                        body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
-                        rig_move, imp_lin, imp_ang, coupling_imp)  # fmt: skip
-    else:
-        compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame,
-                        attached, fixed, rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass,
-                        body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
-                        imp_lin, imp_ang, coupling_imp)  # fmt: skip
+    (compliant.continuum_group)."""
+    compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
+                    rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid,
+                    rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp,
+                    continuum, g_cont)  # fmt: skip
     if it == iterations - 1:
         # internal forces exert no torque: each group's spin of the step, turned back
         balance_torques(g_off, g_mem, g_frame, attached, fixed, inertia, x, xp, qp, q_pred, spin_kick)
