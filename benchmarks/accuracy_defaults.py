@@ -51,7 +51,7 @@ def friction_rows() -> None:
     t = TissueConfig()
     damping = sim.damping if sim.damping is not None else COMPLIANT_DAMPING
     print(f"pad on a ramp (defaults: {sim.iterations} iterations, dt 1/{round(1 / sim.dt)} s, {t.group_energy} energy, "
-          f"shear modulus {t.modulus:g} Pa, damping {damping:g} /s)")
+          f"shear modulus {t.shear_modulus:g} Pa, damping {damping:g} /s)")
     for mu_s in (0.3, 0.6, 0.9):
         tissue = TissueConfig(friction_static=mu_s, friction_kinetic=mu_s * 7.0 / 9.0)
         tan = accuracy.ramp_breakaway(tissue, sim)

@@ -76,10 +76,10 @@ def main(argv: list[str] | None = None) -> int:
               f"{slope * 1e3:>10.3f} mm/N{lin:>18.3f}")  # fmt: skip
     cfg = SceneConfig()
     face = 4.0 * cfg.finger_half_extents[1] * cfg.finger_half_extents[2]
-    layer = cfg.tissue.extrude / (2.0 * cfg.tissue.modulus * face)
+    layer = cfg.tissue.extrude / (2.0 * cfg.tissue.shear_modulus * face)
     print(f"traction/load: the largest gap up to {NEAR_SLIP:.0%} of the way to slip; compliance: the pads' mean shear "
           f"per N of load at small loads (two elastic layers of the pad's depth {cfg.tissue.extrude * 1e3:g} mm over "
-          f"the whole face, G {cfg.tissue.modulus:g} Pa: h / (2 G A) = {layer * 1e3:.3f} mm/N); at slip / linear: "
+          f"the whole face, G {cfg.tissue.shear_modulus:g} Pa: h / (2 G A) = {layer * 1e3:.3f} mm/N); at slip / linear: "
           f"the shear at {NEAR_SLIP:.0%} of the way to slip over the small-load line's (Cattaneo-Mindlin's circular "
           "contact: 1.5 at slip)")  # fmt: skip
     try:

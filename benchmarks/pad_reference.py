@@ -97,7 +97,7 @@ def default_pad() -> Pad:
 
     scene, tissue = SceneConfig(), TissueConfig()
     _, hy, hz = scene.finger_half_extents
-    return Pad(tissue.extrude, 2.0 * hy, 2.0 * hz, scene.cylinder_radius, tissue.modulus)
+    return Pad(tissue.extrude, 2.0 * hy, 2.0 * hz, scene.cylinder_radius, tissue.shear_modulus)
 
 
 def confined_compression(p: float, h: float, shear_modulus: float, nu: float) -> float:

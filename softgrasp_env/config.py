@@ -13,7 +13,7 @@ import warnings
 from dataclasses import dataclass, fields, replace
 from typing import Literal
 
-from .validation import accept_old_names, check_bool, check_int, check_range, retired_choice
+from .validation import accept_old_names, check_bool, check_int, check_range, deprecated, retired_choice
 
 CouplingMode = Literal["thesis", "consistent"]
 DEFAULT_SHEAR_MODULUS = 4_000.0
@@ -56,15 +56,14 @@ class TissueConfig:
     """Mass density of the tissue [kg/m^3] (``tissue_density`` before 0.3), 100 to 1e4; particle
     mass = density * (its share of the layer volume). Heavier tissue outweighs its shape matching
     under the arm's shoves, and tissue lighter than foam tears too."""
-    shear_modulus: float | None = None
-    """The tissue's shear modulus G [Pa], 1e3 to 1e6; None: the default,
-    DEFAULT_SHEAR_MODULUS. Each implicit group's shape matching is an elastic energy
+    shear_modulus: float = DEFAULT_SHEAR_MODULUS
+    """The tissue's shear modulus G [Pa], 1e3 to 1e6. Each implicit group's shape matching is an elastic energy
     G V e^2 / l^2 (V a member's volume, l the group's radius of gyration), so a group's stiffness
     per unit mass is kappa = G / (rho l^2): its shear wave across the group (builder.group_kappa)."""
-    max_deviation: float | None = None
+    max_deviation: float = DEFAULT_MAX_DEVIATION
     """The tissue's strain limit [m], 1 mm to 3 cm: the farthest a particle may be pulled
     from the spot its core carries it to (a deformation constraint, Provot 1995, projected after
-    friction: tissue/anchors.py, limit_deviation); None: DEFAULT_MAX_DEVIATION. A particle snagged
+    friction: tissue/anchors.py, limit_deviation). A particle snagged
     on the cylinder's top face is pulled through the cylinder by its group and held there by its
     own friction; without the limit the tissue tears."""
     radius_scale: float = 0.6
@@ -81,10 +80,10 @@ class TissueConfig:
     compared under the same friction. A number below mu_s gives the two-coefficient law (Macklin et
     al. 2014)."""
     group_energy: GroupEnergy = "shape_matching"
-    """Each implicit group's elastic energy. "shape_matching", the default: E = sum_j kappa m_j
-    |x_j - g_j|^2 / 2, kappa = G / (rho l^2) (Mueller & Chentanez 2011; builder.group_kappa), which
+    """Each implicit group's elastic energy. "shape_matching", the default:
+    ``E = sum_j kappa m_j |x_j - g_j|^2 / 2``, ``kappa = G / (rho l^2)`` (Mueller & Chentanez 2011; builder.group_kappa), which
     weighs a group's strain by its second moment and so changes with the groups' shape: the same G
-    is a different pad at every particle_density. "continuum" (opt-in): E = G V ||F - R||_F^2, F the
+    is a different pad at every particle_density. "continuum" (opt-in): ``E = G V ||F - R||_F^2``, F the
     group's least-squares deformation gradient A_pq A_qq^-1, R its rotation and V the volume it
     stands for (linear elasticity with nu = 0 for small strain; tissue/compliant.py,
     continuum_group), independent of the group's shape. The package's documentation (Results:
@@ -110,10 +109,8 @@ class TissueConfig:
         check_bool("contact_cone", self.contact_cone, owner=o)
         if self.group_energy not in GROUP_ENERGIES:
             raise ValueError(f"TissueConfig.group_energy must be one of {GROUP_ENERGIES}, got {self.group_energy!r}")
-        if self.shear_modulus is not None:
-            check_range("shear_modulus", self.shear_modulus, 1e3, 1e6, owner=o)
-        if self.max_deviation is not None:
-            check_range("max_deviation", self.max_deviation, 1e-3, 0.03, owner=o)
+        check_range("shear_modulus", self.shear_modulus, 1e3, 1e6, owner=o)
+        check_range("max_deviation", self.max_deviation, 1e-3, 0.03, owner=o)
         check_range("radius_scale", self.radius_scale, 0.0, 2.0, lo_open=True, owner=o)
         check_range("normal_radius", self.normal_radius, 0.0, 0.1, lo_open=True, owner=o)
         check_range("friction_static", self.friction_static, 0.0, 10.0, owner=o)
@@ -125,13 +122,15 @@ class TissueConfig:
 
     @property
     def modulus(self) -> float:
-        """G [Pa] as the solver uses it: ``shear_modulus``, or the default."""
-        return DEFAULT_SHEAR_MODULUS if self.shear_modulus is None else self.shear_modulus
+        """Deprecated name of ``shear_modulus`` (before 0.7 that field could be None)."""
+        deprecated("TissueConfig.modulus", "TissueConfig.shear_modulus")
+        return self.shear_modulus
 
     @property
     def deviation_limit(self) -> float:
-        """The strain limit as the solver uses it [m]: ``max_deviation``, or the default."""
-        return DEFAULT_MAX_DEVIATION if self.max_deviation is None else self.max_deviation
+        """Deprecated name of ``max_deviation`` (before 0.7 that field could be None)."""
+        deprecated("TissueConfig.deviation_limit", "TissueConfig.max_deviation")
+        return self.max_deviation
 
     @property
     def spacing(self) -> float:
@@ -198,7 +197,12 @@ class SimConfig:
 
 def _retired_material(kwargs: dict) -> dict:
     """``material="compliant"`` (the only material since 0.7) is dropped with a DeprecationWarning;
-    ``material="per_step"`` and the per-step ``stiffness`` are a ValueError naming 0.6.0."""
+    ``material="per_step"`` and the per-step ``stiffness`` are a ValueError naming 0.6.0.
+    ``shear_modulus=None`` / ``max_deviation=None`` (the default, before 0.7) give the default, warned."""
+    for name in ("shear_modulus", "max_deviation"):
+        if name in kwargs and kwargs[name] is None:
+            deprecated(f"TissueConfig({name}=None)", f"leaving {name} out (its default is a number now)")
+            del kwargs[name]
     retired_choice(kwargs, "material", kept="compliant", gone=("per_step",), release="0.6.0", owner="TissueConfig")
     if "stiffness" in kwargs:
         raise ValueError(f"TissueConfig.stiffness={kwargs['stiffness']!r} (the per-step material's fraction) was "

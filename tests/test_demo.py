@@ -30,7 +30,7 @@ def test_the_material_flags_reach_the_scene(built):
     with pytest.raises(_Built):
         demo.main(["--shear-modulus", "8000", "--damping", "50", "--max-deviation", "0.01"])
     (cfg,) = built
-    assert cfg.tissue.modulus == 8000.0 and cfg.tissue.deviation_limit == 0.01 and cfg.sim.damping == 50.0
+    assert cfg.tissue.shear_modulus == 8000.0 and cfg.tissue.max_deviation == 0.01 and cfg.sim.damping == 50.0
 
 
 def test_the_retired_material_flags_are_gone(built, capsys):

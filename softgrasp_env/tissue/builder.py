@@ -330,10 +330,10 @@ def _single_body_model(
 ) -> TissueModel:
     offsets, members, rest_offset = build_groups(rest_x, mass, partner, tissue.group_size)
     n = rest_x.shape[0]
-    kappa = group_kappa(offsets, members, rest_offset, mass, tissue.modulus, tissue.mass_density)
+    kappa = group_kappa(offsets, members, rest_offset, mass, tissue.shear_modulus, tissue.mass_density)
     cont = None
     if tissue.group_energy == "continuum":
-        cont, kappa = continuum_groups(offsets, members, rest_offset, mass, tissue.modulus, tissue.mass_density)
+        cont, kappa = continuum_groups(offsets, members, rest_offset, mass, tissue.shear_modulus, tissue.mass_density)
     return TissueModel(
         particle_rest_x=np.ascontiguousarray(rest_x, dtype=np.float64),
         particle_rest_q=np.ascontiguousarray(rest_q, dtype=np.float64),
@@ -350,7 +350,7 @@ def _single_body_model(
         body_core_shape=np.array([-1], dtype=np.int32),
         body_friction=np.array([[tissue.friction_static, kinetic_friction(tissue)]]),
         group_kappa=kappa,
-        body_max_deviation=np.array([tissue.deviation_limit]),
+        body_max_deviation=np.array([tissue.max_deviation]),
         body_contact_cone=np.array([tissue.contact_cone]),
         group_continuum=cont,
     )

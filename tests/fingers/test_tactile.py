@@ -176,7 +176,7 @@ def test_shear_grows_with_the_load_up_to_slip(fingers, coupling, squeeze):
     early = rec.load <= rec.load[0] + 0.2 * span
     compliance = np.polyfit(rec.load[early], rec.shear[early], 1)[0]
     face = 4.0 * cfg.finger_half_extents[1] * cfg.finger_half_extents[2]
-    layer = cfg.tissue.extrude / (2.0 * cfg.tissue.modulus * face)
+    layer = cfg.tissue.extrude / (2.0 * cfg.tissue.shear_modulus * face)
     assert 1.25 < compliance / layer < 1.45
     linear = (rec.shear[before][-1] - rec.shear[0]) / (compliance * (rec.load[before][-1] - rec.load[0]))
     assert linear == pytest.approx(1.0, abs=0.04)

@@ -91,14 +91,22 @@ def test_tissue_config_accepts_boundaries(kwargs):
         assert getattr(cfg, k) == v
 
 
-def test_the_materials_numbers_as_the_solver_reads_them():
-    """None means the material's default."""
+def test_the_materials_numbers_are_its_fields():
+    """shear_modulus and max_deviation are numbers, their defaults the package's; the names that
+    read them through None before 0.7 (modulus, deviation_limit, =None) warn and agree."""
     from softgrasp_env.config import DEFAULT_MAX_DEVIATION, DEFAULT_SHEAR_MODULUS
 
-    compliant = TissueConfig()
-    assert (compliant.modulus, compliant.deviation_limit) == (DEFAULT_SHEAR_MODULUS, DEFAULT_MAX_DEVIATION)
-    assert TissueConfig(shear_modulus=8e3, max_deviation=0.01).modulus == 8e3
-    assert TissueConfig(max_deviation=0.01).deviation_limit == 0.01
+    tissue = TissueConfig()
+    assert (tissue.shear_modulus, tissue.max_deviation) == (DEFAULT_SHEAR_MODULUS, DEFAULT_MAX_DEVIATION)
+    assert TissueConfig(shear_modulus=8e3, max_deviation=0.01).shear_modulus == 8e3
+    with pytest.warns(DeprecationWarning, match="shear_modulus"):
+        assert TissueConfig(shear_modulus=8e3).modulus == 8e3
+    with pytest.warns(DeprecationWarning, match="max_deviation"):
+        assert TissueConfig(max_deviation=0.01).deviation_limit == 0.01
+    with pytest.warns(DeprecationWarning, match="shear_modulus=None"):
+        assert TissueConfig(shear_modulus=None) == tissue
+    with pytest.raises(ValueError, match="TissueConfig.shear_modulus"):
+        TissueConfig(shear_modulus=10.0)
 
 
 def test_the_retired_material_keywords():

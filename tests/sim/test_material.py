@@ -107,6 +107,6 @@ def test_a_pad_snagged_on_the_cylinders_top_slides_off_instead_of_tearing():
             deviation.append(env.unwrapped.scene.world.tissue_deviation())
     finally:
         env.close()
-    limit = TissueConfig().deviation_limit
+    limit = TissueConfig().max_deviation
     assert max(deviation) == pytest.approx(limit, abs=5e-4), max(deviation)  # the snag, held at the limit
     assert deviation[-1] < 0.5 * limit  # and let go

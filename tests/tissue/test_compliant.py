@@ -98,8 +98,8 @@ def test_group_kappa_is_the_shear_wave_across_the_group():
         e = slice(off[i], off[i + 1])
         m = model.particle_mass[members[e]]
         l2 = (m * (model.group_rest_offset[e] ** 2).sum(axis=1)).sum() / m.sum()
-        assert np.sqrt(k[i] * l2) == pytest.approx(np.sqrt(tissue.modulus / tissue.mass_density), rel=1e-12)
-    twice = group_kappa(off, members, model.group_rest_offset, model.particle_mass, 2 * tissue.modulus,
+        assert np.sqrt(k[i] * l2) == pytest.approx(np.sqrt(tissue.shear_modulus / tissue.mass_density), rel=1e-12)
+    twice = group_kappa(off, members, model.group_rest_offset, model.particle_mass, 2 * tissue.shear_modulus,
                         tissue.mass_density)  # fmt: skip
     assert twice == pytest.approx(2 * k, rel=1e-12)
 
@@ -111,7 +111,7 @@ def test_the_pads_stiffness_against_its_core_is_the_layers():
     half = (0.008, 0.02, 0.03)
     model = build_combined_body(CoreShape("box", half_extents=half), tissue, faces=("+x", "-z"))
     area = 4 * half[1] * half[2] + 4 * half[0] * half[1]
-    layer = tissue.modulus * area / tissue.extrude
+    layer = tissue.shear_modulus * area / tissue.extrude
     assert core_stiffness(model)[0] == pytest.approx(layer, rel=0.15)
 
 
