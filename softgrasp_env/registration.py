@@ -13,13 +13,12 @@ MAX_EPISODE_STEPS = 100
 GRIP_TASK = {"finger_action": "force", "finger_force": 6.0, "cylinder_mass": 0.17, "cylinder_mass_range": 0.75,
              "friction_range": 0.45, "squeeze_weight": 0.5, "squeeze_factor": 2.0, "tactile": (4, 4),
              "observe_object": False}
-"""The grip-force task's settings (softgrasp_env/tasks/grip.py): the squeeze as the action,
-mass 0.04-0.30 kg and mu_s 0.50-1.31 drawn per episode (the least force that holds spans 0.16-3.0
-N, 18-fold), the squeeze charged in the reward and bounded at twice the least in the success, a
-4 x 4 taxel grid on each pad, and the cylinder's pose and motion left out of the observation: with
-them, SAC learned to hold 43 of 50 within the bound without the taxels, reading the slip off the
-cylinder's exact in-hand motion, which no gripper's own sensors give. 6 N at full action: the
-tissue holds at 8 N without tearing (8 mm deviation at most, no intrusion)."""
+"""The grip-force task's settings (softgrasp_env/tasks/grip.py): the squeeze as the action (0 to 6
+N per finger), mass 0.04-0.30 kg and mu_s 0.50-1.31 drawn per episode (the least force that holds
+spans 0.16-3.0 N, 18-fold), the squeeze charged in the reward and bounded at twice the least in the
+success, a 4 x 4 taxel grid on each pad, and the cylinder's pose and motion left out of the
+observation (a gripper's own sensors do not give them; the documentation's Tactile pads page says
+what a learner does with them)."""
 _ENV, _GOAL = "softgrasp_env.env:SoftGraspEnv", "softgrasp_env.env:SoftGraspGoalEnv"
 
 
