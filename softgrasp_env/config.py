@@ -25,6 +25,8 @@ COMPLIANT_DAMPING = 300.0
 COUPLING_MODES: tuple[str, ...] = ("thesis", "consistent")
 GroupEnergy = Literal["shape_matching", "continuum"]
 GROUP_ENERGIES: tuple[str, ...] = ("shape_matching", "continuum")
+FrictionLaw = Literal["patch", "contact"]
+FRICTION_LAWS: tuple[str, ...] = ("patch", "contact")
 
 
 @dataclass(frozen=True)
@@ -100,8 +102,22 @@ class TissueConfig:
     version. The package's documentation (Results: tactile pads, "The contact cones") gives the
     measurements."""
 
+    friction_law: FrictionLaw = "patch"
+    """Where Coulomb's law is decided for tissue contacts against rigid shapes (tissue/friction.py).
+    "patch", the default: per (tissue body, shape) patch, a soft-finger contact (Howe & Cutkosky
+    1996) whose net force and twist stick within mu_s N; the rest of its contacts' friction is
+    self-equilibrated and unbounded while the patch sticks. "contact": every contact sticks or
+    slides in its own cone, with its own stick/slide state and anchor; a patch's torsion and
+    partial slip then follow from its contacts. ``contact_cone`` refines the patch law and is an
+    error with "contact"."""
+
     def __post_init__(self) -> None:
         o = "TissueConfig"
+        if self.friction_law not in FRICTION_LAWS:
+            raise ValueError(f"TissueConfig.friction_law must be one of {FRICTION_LAWS}, got {self.friction_law!r}")
+        if self.friction_law == "contact" and self.contact_cone:
+            raise ValueError("TissueConfig.contact_cone bounds the contacts inside a friction patch; with "
+                             "friction_law='contact' every contact already has its own cone: leave contact_cone False")
         check_range("particle_density", self.particle_density, 100.0, 1e7, owner=o)
         check_range("extrude", self.extrude, 0.0, 0.1, lo_open=True, owner=o)
         check_int("group_size", self.group_size, 4, 16, owner=o)
@@ -244,4 +260,4 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = ["COUPLING_MODES", "CouplingMode", "SimConfig", "TissueConfig", "field_names", "kinetic_friction", "replace"]
+__all__ = ["COUPLING_MODES", "FRICTION_LAWS", "CouplingMode", "FrictionLaw", "SimConfig", "TissueConfig", "field_names", "kinetic_friction", "replace"]
