@@ -2,7 +2,8 @@
 per m^2 of face (others with ``--densities``), at the default dt and iterations, against the
 independent finite-element reference of the same pad (benchmarks/pad_reference.py).
 
-    PYTHONPATH=. python benchmarks/spatial_convergence.py [--quick] [--env] [--material continuum] [--out benchmarks/out]
+    PYTHONPATH=. python benchmarks/spatial_convergence.py [--quick] [--env] [--material continuum] [--layers 1,2,4]
+        [--out benchmarks/out]
 
 The rig (``PadRig``) is as close to the reference as the tissue allows: one finger core (the
 scene's 16 x 40 x 60 mm box) held still, tissue on its inner face only (the face the cylinder
@@ -31,6 +32,14 @@ at each Poisson ratio, the error against each, the observed order between succes
 ``--out``/spatial_convergence.csv, figure spatial_convergence.png. With ``--env``, a second row per
 density: the env's scripted grasp (SoftGraspEasy-v3, 3 N per finger, grasp_checks.scripted_episode).
 One process, one thread; about 6 minutes (``--quick``: 4,000 and 16,000 per m^2, one load).
+
+``--layers`` (comma list, default 1): the rig's pad is built with each TissueConfig.layers in turn
+(element layers through the thickness), one row per (density, layers); the observed orders are
+taken along the densities of each layer count. Each row also gives the inner layers' clearance
+from the cylinder: the least, over the holds of the normal search, of an inner particle's distance
+from the cylinder less its ellipsoid's support radius along the cylinder's normal (negative: an
+inner particle touches the cylinder as the surface does). The CSV has a ``layers`` column; its and
+the figure's names get ``_layers`` when any count but 1 is run.
 """
 
 from __future__ import annotations
@@ -46,11 +55,12 @@ import numpy as np
 
 from softgrasp_env.config import GROUP_ENERGIES, SimConfig, TissueConfig
 from softgrasp_env.scene import SceneConfig
-from softgrasp_env.tissue.builder import CoreShape, build_combined_body
+from softgrasp_env.tissue.builder import CoreShape, build_combined_body, surface_particles
 from softgrasp_env.tissue.collision import SHAPE_CODES
 from softgrasp_env.tissue.compliant import core_stiffness, world_substeps
 from softgrasp_env.tissue.model import with_core_shapes
 from softgrasp_env.tissue.rigid import Colliders
+from softgrasp_env.tissue.rotation import quat_to_matrix
 from softgrasp_env.tissue.solver import TissueSolver
 from softgrasp_env.tissue.state import state_at_rest
 
@@ -105,6 +115,10 @@ class PadRig:
         self.state = state_at_rest(self.model, self.col.rigid_x[:1], self.col.rigid_q[:1])
         self.force = np.zeros(3)
         self.steps = 0
+        # the inner layers (TissueConfig.layers > 1): free particles that are not the surface
+        self.inner = np.flatnonzero(~self.model.particle_attached & ~surface_particles(self.model))
+        self.inner_clearance = math.inf
+        """The least inner_gap() over the holds so far [m] (inf: no inner layer)."""
 
     @property
     def particle_count(self) -> int:
@@ -152,7 +166,25 @@ class PadRig:
         """Hold still; the mean load over the last fifth [N]."""
         n = max(5, round(seconds / self.sim.dt))
         loads = [self.step().copy() for _ in range(n)]
+        self.inner_clearance = min(self.inner_clearance, self.inner_gap())
         return np.mean(loads[-max(1, n // 5):], axis=0)
+
+    def inner_gap(self) -> float:
+        """The inner layers' least clearance from the cylinder now [m]: an inner particle's distance
+        from the cylinder's side less its ellipsoid's support radius along the side's normal
+        (collision.support_radius); inf without inner layers."""
+        if self.inner.size == 0:
+            return math.inf
+        x = self.state.particle_x[self.inner]
+        q = self.state.particle_q[self.inner]
+        r = self.model.particle_radii[self.inner]
+        d = x[:, :2] - self.col.rigid_x[1, :2]  # the cylinder stands along z
+        rho = np.linalg.norm(d, axis=1)
+        n = np.zeros_like(x)
+        n[:, :2] = d / rho[:, None]
+        local = np.stack([quat_to_matrix(qi).T @ ni for qi, ni in zip(q, n, strict=True)])
+        support = np.sqrt(((r * local) ** 2).sum(axis=1))
+        return float((rho - self.radius - support).min())
 
     def press_to(self, force: float, *, guess: float) -> tuple[float, float]:
         """Compression at which the held normal load is ``force`` [N] (secant on the holds, from
@@ -189,21 +221,23 @@ class PadRig:
         return float(np.mean(ls)), float(np.mean(shares))
 
 
-def measure_tissue(density: float, loads=LOADS, *, tangential: bool = True, material: str = "shape_matching") -> dict:
+def measure_tissue(density: float, loads=LOADS, *, tangential: bool = True, material: str = "shape_matching",
+                   layers: int = 1) -> dict:  # fmt: skip
     """Everything the rig measures at one density, with each group's energy ``material``
-    (TissueConfig.group_energy)."""
+    (TissueConfig.group_energy) and ``layers`` element layers through the thickness."""
     tic = time.perf_counter()
-    tissue = TissueConfig(group_energy=material)
+    tissue = TissueConfig(group_energy=material, layers=layers)
     rig = PadRig(density, friction=0.0, tissue=tissue)
     radius, share = rig.group_radius()
-    out = {"density": density, "particles": rig.particle_count, "substeps": rig.substeps, "l": radius,
-           "normal_share": share, "core_stiffness": float(core_stiffness(rig.model)[0])}  # fmt: skip
+    out = {"density": density, "layers": layers, "particles": rig.particle_count, "substeps": rig.substeps,
+           "l": radius, "normal_share": share, "core_stiffness": float(core_stiffness(rig.model)[0])}  # fmt: skip
     guess = 2e-3
     for load in loads:
         c, f = rig.press_to(load, guess=guess)
         out[f"compression_{load:g}N"] = c
         out[f"held_{load:g}N"] = f
         guess = c * (1.6 if load < 3 else 1.4)
+    out["inner_clearance"] = rig.inner_clearance
     if tangential:
         rig = PadRig(density, tissue=tissue)  # default friction: the contact sticks
         c, f = rig.press_to(3.0, guess=out.get("compression_3N", 2e-3))
@@ -242,8 +276,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--material", choices=GROUP_ENERGIES, default="shape_matching",
                         help="each group's energy (TissueConfig.group_energy); the CSV and figure get a suffix for "
                              "any but the default")  # fmt: skip
+    parser.add_argument("--layers", default="1",
+                        help="comma-separated TissueConfig.layers (element layers through the thickness), e.g. 1,2,4")  # fmt: skip
     parser.add_argument("--out", type=Path, default=OUT)
     ns = parser.parse_args(argv)
+    try:
+        layer_counts = [int(v) for v in ns.layers.split(",")]
+    except ValueError:
+        parser.error(f"--layers must be comma-separated integers, got {ns.layers!r}")
     if ns.env and ns.material != "shape_matching":
         parser.error("--env runs the env's own material only (gym.make has no group_energy keyword yet)")
     from benchmarks.pad_reference import NUS, default_pad, reference
@@ -262,21 +302,27 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  nu {nu:<4}: " + ", ".join(f"{load:g} N -> {refs[(nu, load)]['delta'] * 1e3:.3f} mm "
                                           f"(a {refs[(nu, load)]['a'] * 1e3:.2f} mm)" for load in loads)
               + f"; tangential {refs[(nu, 3.0)]['compliance'] * 1e3:.3f} mm/N at 3 N")  # fmt: skip
+    if ns.env and layer_counts != [1]:
+        parser.error("--env runs the env's own pads only (one layer)")
     rows = []
-    for d in densities:
-        r = measure_tissue(d, loads, material=ns.material)
-        if ns.env:
-            t = time.perf_counter()
-            r["env_compression_3N"] = measure_env(d)
-            r["env_seconds"] = time.perf_counter() - t
-        rows.append(r)
-        print(f"{d:>9,.0f}/m^2: {r['particles']} particles, {r['substeps']} world steps/step, l "
-              f"{r['l'] * 1e3:.2f} mm, K {r['core_stiffness']:.0f} N/m; "
-              + ", ".join(f"{load:g} N {r[f'compression_{load:g}N'] * 1e3:.3f} mm" for load in loads)
-              + f"; tangential {r['compliance'] * 1e3:.3f} mm/N ({r['seconds']:.1f} s)"
-              + (f"; env {r['env_compression_3N'] * 1e3:.3f} mm ({r['env_seconds']:.1f} s)" if ns.env else ""),
-              flush=True)  # fmt: skip
-    report(rows, refs, loads, ns.out, ns.env, "" if ns.material == "shape_matching" else f"_{ns.material}")
+    for layers in layer_counts:
+        for d in densities:
+            r = measure_tissue(d, loads, material=ns.material, layers=layers)
+            if ns.env:
+                t = time.perf_counter()
+                r["env_compression_3N"] = measure_env(d)
+                r["env_seconds"] = time.perf_counter() - t
+            rows.append(r)
+            gap = r["inner_clearance"]
+            print(f"{d:>9,.0f}/m^2, {layers} layer{'s' if layers > 1 else ''}: {r['particles']} particles, "
+                  f"{r['substeps']} world steps/step, l {r['l'] * 1e3:.2f} mm, K {r['core_stiffness']:.0f} N/m; "
+                  + ", ".join(f"{load:g} N {r[f'compression_{load:g}N'] * 1e3:.3f} mm" for load in loads)
+                  + f"; tangential {r['compliance'] * 1e3:.3f} mm/N ({r['seconds']:.1f} s)"
+                  + (f"; inner layers' clearance {gap * 1e3:.2f} mm" if math.isfinite(gap) else "")
+                  + (f"; env {r['env_compression_3N'] * 1e3:.3f} mm ({r['env_seconds']:.1f} s)" if ns.env else ""),
+                  flush=True)  # fmt: skip
+    suffix = ("" if ns.material == "shape_matching" else f"_{ns.material}") + ("" if layer_counts == [1] else "_layers")
+    report(rows, refs, loads, ns.out, ns.env, suffix)
     print(f"\ntotal {time.perf_counter() - tic:.1f} s")
     return 0
 
@@ -286,51 +332,62 @@ def report(rows: list[dict], refs: dict, loads, out: Path, env: bool, suffix: st
 
     out.mkdir(parents=True, exist_ok=True)
     table = []
+    counts = sorted({r.get("layers", 1) for r in rows})
+    by_layers = {n: [r for r in rows if r.get("layers", 1) == n] for n in counts}
     for load in loads:
         key = f"compression_{load:g}N"
-        vals = [r[key] for r in rows]
         print(f"\ncompression under {load:g} N [mm] (reference nu 0 / 0.3 / 0.45: "
               + " / ".join(f"{refs[(nu, load)]['delta'] * 1e3:.3f}" for nu in NUS) + ")")  # fmt: skip
-        print(f"{'density':>9}{'particles':>10}{'l mm':>7}{'tissue':>8}" + "".join(f"{'err nu ' + str(nu):>13}" for nu in NUS))
-        for r, v in zip(rows, vals, strict=True):
-            errs = [v / refs[(nu, load)]["delta"] - 1 for nu in NUS]
-            print(f"{r['density']:>9.0f}{r['particles']:>10}{r['l'] * 1e3:>7.2f}{v * 1e3:>8.3f}"
-                  + "".join(f"{e:>+13.1%}" for e in errs))  # fmt: skip
-            for nu, e in zip(NUS, errs, strict=True):
-                table.append(("compression", load, r["density"], r["particles"], r["l"], v, nu,
-                              refs[(nu, load)]["delta"], e))  # fmt: skip
-        for nu in NUS:
-            print(f"  observed order against nu {nu}: "
-                  + ", ".join(f"{o:+.2f}" for o in orders(vals, refs[(nu, load)]["delta"])))  # fmt: skip
-    vals = [r["compliance"] for r in rows]
+        print(f"{'density':>9}{'layers':>7}{'particles':>10}{'l mm':>7}{'tissue':>8}"
+              + "".join(f"{'err nu ' + str(nu):>13}" for nu in NUS))  # fmt: skip
+        for n, group in by_layers.items():
+            vals = [r[key] for r in group]
+            for r, v in zip(group, vals, strict=True):
+                errs = [v / refs[(nu, load)]["delta"] - 1 for nu in NUS]
+                print(f"{r['density']:>9.0f}{n:>7}{r['particles']:>10}{r['l'] * 1e3:>7.2f}{v * 1e3:>8.3f}"
+                      + "".join(f"{e:>+13.1%}" for e in errs))  # fmt: skip
+                for nu, e in zip(NUS, errs, strict=True):
+                    table.append(("compression", load, r["density"], n, r["particles"], r["l"], v, nu,
+                                  refs[(nu, load)]["delta"], e))  # fmt: skip
+            for nu in NUS:
+                print(f"  {n} layer(s), observed order against nu {nu}: "
+                      + ", ".join(f"{o:+.2f}" for o in orders(vals, refs[(nu, load)]["delta"])))  # fmt: skip
     print("\ntangential compliance at 3 N, one pad [mm/N] (reference nu 0 / 0.3 / 0.45: "
           + " / ".join(f"{refs[(nu, 3.0)]['compliance'] * 1e3:.3f}" for nu in NUS) + ")")  # fmt: skip
-    for r, v in zip(rows, vals, strict=True):
-        errs = [v / refs[(nu, 3.0)]["compliance"] - 1 for nu in NUS]
-        print(f"{r['density']:>9.0f}{r['particles']:>10}{v * 1e3:>8.3f}" + "".join(f"{e:>+13.1%}" for e in errs)
-              + f"   (held at {r['shear_normal']:.2f} N, axial {r['shear_load']:.3f} N)")  # fmt: skip
-        for nu, e in zip(NUS, errs, strict=True):
-            table.append(("tangential_compliance", 3.0, r["density"], r["particles"], r["l"], v, nu,
-                          refs[(nu, 3.0)]["compliance"], e))  # fmt: skip
-    for nu in NUS:
-        print(f"  observed order against nu {nu}: " + ", ".join(f"{o:+.2f}" for o in orders(vals, refs[(nu, 3.0)]["compliance"])))
-    print("\nstiffness against the core (compliant.core_stiffness) [N/m]: "
-          + ", ".join(f"{r['density']:.0f}: {r['core_stiffness']:.0f}" for r in rows))  # fmt: skip
-    print("share of the groups' second moment along the face normal: "
-          + ", ".join(f"{r['density']:.0f}: {r['normal_share']:.3f}" for r in rows))  # fmt: skip
+    for n, group in by_layers.items():
+        vals = [r["compliance"] for r in group]
+        for r, v in zip(group, vals, strict=True):
+            errs = [v / refs[(nu, 3.0)]["compliance"] - 1 for nu in NUS]
+            print(f"{r['density']:>9.0f}{n:>7}{r['particles']:>10}{v * 1e3:>8.3f}" + "".join(f"{e:>+13.1%}" for e in errs)
+                  + f"   (held at {r['shear_normal']:.2f} N, axial {r['shear_load']:.3f} N)")  # fmt: skip
+            for nu, e in zip(NUS, errs, strict=True):
+                table.append(("tangential_compliance", 3.0, r["density"], n, r["particles"], r["l"], v, nu,
+                              refs[(nu, 3.0)]["compliance"], e))  # fmt: skip
+        for nu in NUS:
+            print(f"  {n} layer(s), observed order against nu {nu}: "
+                  + ", ".join(f"{o:+.2f}" for o in orders(vals, refs[(nu, 3.0)]["compliance"])))  # fmt: skip
+    print("\nper (density, layers): world steps per step, rig seconds, stiffness against the core "
+          "(compliant.core_stiffness) [N/m], share of the groups' second moment along the face normal, "
+          "inner layers' least clearance from the cylinder [mm]")  # fmt: skip
+    for r in rows:
+        gap = r.get("inner_clearance", math.inf)
+        print(f"{r['density']:>9.0f}{r.get('layers', 1):>7}{r['substeps']:>5}{r['seconds']:>8.1f} s"
+              f"{r['core_stiffness']:>8.0f}{r['normal_share']:>7.3f}"
+              + (f"{gap * 1e3:>8.2f}" if math.isfinite(gap) else f"{'-':>8}"))  # fmt: skip
     if env:
         print("env scripted grasp, compression at 3 N [mm]: "
               + ", ".join(f"{r['density']:.0f}: {r['env_compression_3N'] * 1e3:.3f}" for r in rows))  # fmt: skip
         for r in rows:
             for nu in NUS:
-                table.append(("env_compression", 3.0, r["density"], r["particles"], r["l"], r["env_compression_3N"],
-                              nu, refs[(nu, 3.0)]["delta"], r["env_compression_3N"] / refs[(nu, 3.0)]["delta"] - 1))  # fmt: skip
+                table.append(("env_compression", 3.0, r["density"], r.get("layers", 1), r["particles"], r["l"],
+                              r["env_compression_3N"], nu, refs[(nu, 3.0)]["delta"],
+                              r["env_compression_3N"] / refs[(nu, 3.0)]["delta"] - 1))  # fmt: skip
     with open(out / f"spatial_convergence{suffix}.csv", "w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["quantity", "load_N", "density_per_m2", "particles", "group_radius_m", "tissue", "nu",
+        w.writerow(["quantity", "load_N", "density_per_m2", "layers", "particles", "group_radius_m", "tissue", "nu",
                     "reference", "relative_error"])  # fmt: skip
-        w.writerows([(q, f"{ld:g}", f"{d:.0f}", n, f"{gl:.6g}", f"{v:.6g}", f"{nu:g}", f"{rf:.6g}", f"{e:.6g}")
-                     for q, ld, d, n, gl, v, nu, rf, e in table])  # fmt: skip
+        w.writerows([(q, f"{ld:g}", f"{d:.0f}", n, npart, f"{gl:.6g}", f"{v:.6g}", f"{nu:g}", f"{rf:.6g}", f"{e:.6g}")
+                     for q, ld, d, n, npart, gl, v, nu, rf, e in table])  # fmt: skip
     print(f"\nwrote {out / f'spatial_convergence{suffix}.csv'}")
     plot(rows, refs, loads, out, env, suffix)
 
@@ -346,18 +403,27 @@ def plot(rows: list[dict], refs: dict, loads, out: Path, env: bool, suffix: str 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    dens = [r["density"] for r in rows]
+    counts = sorted({r.get("layers", 1) for r in rows})
+    by_layers = {n: [r for r in rows if r.get("layers", 1) == n] for n in counts}
+
+    def label(n: int) -> str:
+        return "tissue (rig)" if counts == [1] else f"tissue, {n} layer{'s' if n > 1 else ''}"
+
     fig, axes = plt.subplots(1, len(loads) + 1, figsize=(3.2 * (len(loads) + 1), 3.2), squeeze=False)
     styles = {0.0: ":", 0.3: "--", 0.45: "-."}
     for ax, load in zip(axes[0], loads, strict=False):
-        ax.plot(dens, [r[f"compression_{load:g}N"] * 1e3 for r in rows], "o-", label="tissue (rig)")
+        for n, group in by_layers.items():
+            ax.plot([r["density"] for r in group], [r[f"compression_{load:g}N"] * 1e3 for r in group], "o-",
+                    label=label(n))  # fmt: skip
         if env and load == 3.0:
-            ax.plot(dens, [r["env_compression_3N"] * 1e3 for r in rows], "s-", ms=4, label="tissue (env grasp)")
+            ax.plot([r["density"] for r in rows], [r["env_compression_3N"] * 1e3 for r in rows], "s-", ms=4,
+                    label="tissue (env grasp)")  # fmt: skip
         for nu in NUS:
             ax.axhline(refs[(nu, load)]["delta"] * 1e3, color="k", ls=styles[nu], lw=1, label=f"FE, nu {nu:g}")
         ax.set_title(f"compression under {load:g} N [mm]", fontsize=9)
     ax = axes[0, -1]
-    ax.plot(dens, [r["compliance"] * 1e3 for r in rows], "o-", label="tissue (rig)")
+    for n, group in by_layers.items():
+        ax.plot([r["density"] for r in group], [r["compliance"] * 1e3 for r in group], "o-", label=label(n))
     for nu in NUS:
         ax.axhline(refs[(nu, 3.0)]["compliance"] * 1e3, color="k", ls=styles[nu], lw=1, label=f"FE, nu {nu:g}")
     ax.set_title("tangential compliance at 3 N [mm/N]", fontsize=9)

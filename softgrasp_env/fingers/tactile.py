@@ -245,11 +245,14 @@ def tissue_loads(nc, c_particle, c_inner, c_lambda, c_normal, c_friction, c_patc
 
 
 @nb.njit(cache=True)
-def tissue_shear(x, rest_x, footprint, attached, offsets, rig_x, rig_q, core_rigid, grid, out):
-    """Each taxel's shear displacement along y and z [m]: over the free particles of the pad's
-    inner face (rest x beyond the core's centre plane, toward the other finger) whose footprints
-    cover it, the footprint-weighted mean of their displacement from the spot their core carries
-    them to, in the core's frame."""
+def tissue_shear(x, rest_x, footprint, surface, offsets, rig_x, rig_q, core_rigid, grid, out):
+    """Each taxel's shear displacement along y and z [m]: over the surface particles (``surface``,
+    (N,) bool: the free outer particles, tissue.builder.surface_particles; with one layer through
+    the thickness every free particle) of the pad's inner face (rest x beyond the core's centre
+    plane, toward the other finger) whose footprints cover it, the footprint-weighted mean of their
+    displacement from the spot their core carries them to, in the core's frame. A pad's inner
+    layers (TissueConfig.layers > 1) are left out: they shear less than the surface the taxel
+    reads."""
     cols = int(grid[1])
     counts = np.zeros((2, out.shape[1], out.shape[2]))
     index = np.empty(int(grid[0]) * cols, dtype=np.int64)
@@ -261,7 +264,7 @@ def tissue_shear(x, rest_x, footprint, attached, offsets, rig_x, rig_q, core_rig
         r01, r11, r21 = rot[b, 1], rot[b, 4], rot[b, 7]  # the y and z rows of R^T
         r02, r12, r22 = rot[b, 2], rot[b, 5], rot[b, 8]
         for i in range(offsets[b], offsets[b + 1]):
-            if attached[i] or sign * rest_x[i, 0] <= 0.0:
+            if not surface[i] or sign * rest_x[i, 0] <= 0.0:
                 continue
             n = _spread(rest_x[i, 1], rest_x[i, 2], footprint[i, 0], footprint[i, 1], grid, index, weight)
             if n == 0:
@@ -284,20 +287,22 @@ def tissue_shear(x, rest_x, footprint, attached, offsets, rig_x, rig_q, core_rig
                     out[b, row, col, 4] /= counts[b, row, col]
 
 
-def face_footprints(rest_x: np.ndarray, attached: np.ndarray, offsets: np.ndarray, half_width: float,
+def face_footprints(rest_x: np.ndarray, surface: np.ndarray, offsets: np.ndarray, half_width: float,
                     half_height: float) -> np.ndarray:  # fmt: skip
     """(N, 2) half extents along y and z of the face cell each particle stands for: the builder
     spreads a face's points over a cell-centred grid (tissue.builder.sample_surface), n_y x n_z
-    cells over the inner face, so each inner-face particle (and its attached partner) stands for a
-    cell of half extents (half_width / n_y, half_height / n_z); 0 for the rest (the tip's, the
-    back's). n_y, n_z are counted from each body's free inner-face particles."""
+    cells over the inner face, so each inner-face particle (and the rest of its column: its
+    attached partner, and the inner layers' particles) stands for a cell of half extents
+    (half_width / n_y, half_height / n_z); 0 for the rest (the tip's, the back's). n_y, n_z are
+    counted from each body's inner-face surface particles (``surface``, (N,) bool:
+    tissue.builder.surface_particles)."""
     out = np.zeros((rest_x.shape[0], 2))
     for b in range(min(len(offsets) - 1, 2)):
         sign = INNER_NORMAL[b]
         idx = np.arange(offsets[b], offsets[b + 1])
         face = idx[(sign * rest_x[idx, 0] > 0.0) & (np.abs(rest_x[idx, 2]) < half_height)
                    & (np.abs(rest_x[idx, 1]) < half_width)]  # fmt: skip
-        free = face[~attached[face]]
+        free = face[surface[face]]
         if free.size == 0:
             continue
         ny = np.unique(np.round(rest_x[free, 1], 9)).size

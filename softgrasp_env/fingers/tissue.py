@@ -16,7 +16,7 @@ import numpy as np
 
 from ..config import TissueConfig
 from ..sim.world import TissueSpec, World
-from ..tissue.builder import CoreShape, build_combined_body, core_shape_from_bullet
+from ..tissue.builder import CoreShape, build_combined_body, core_shape_from_bullet, surface_particles
 from ..tissue.compliant import world_substeps as compliant_world_substeps
 from ..validation import check_choice
 from .base import FingerConfig, FingerKind, FingerSite, Visual
@@ -115,6 +115,8 @@ class TissueFingers(FingerKind):
 
     _footprint: np.ndarray | None = None
     """Each particle's face cell (fingers.tactile.face_footprints), made at the first tactile read."""
+    _surface: np.ndarray | None = None
+    """The pads' surface particles (tissue.builder.surface_particles), with _footprint."""
 
     def contact_force(self) -> np.ndarray:
         """pybullet's core contacts plus the tissue's contacts with the cylinder."""
@@ -129,7 +131,8 @@ class TissueFingers(FingerKind):
         w: World = self.world
         m, sv, col = w.model, w.solver, w.colliders
         if self._footprint is None:
-            self._footprint = face_footprints(m.particle_rest_x, m.particle_attached, m.body_particle_offsets,
+            self._surface = surface_particles(m)
+            self._footprint = face_footprints(m.particle_rest_x, self._surface, m.body_particle_offsets,
                                               grid.half_width, grid.half_height)  # fmt: skip
         params = grid.params()
         core_rigid = col.shape_rigid[m.body_core_shape]
@@ -137,7 +140,7 @@ class TissueFingers(FingerKind):
         tissue_loads(lc.count, lc.particle, lc.inner, lc.normal_lambda, lc.normal, lc.friction, lc.patch, lc.patch_slide,
                      lc.patch_change, m.particle_body, m.particle_rest_x, self._footprint, col.rigid_q, core_rigid,
                      sv.sim.dt, params, out)  # fmt: skip
-        tissue_shear(w.state.particle_x, m.particle_rest_x, self._footprint, m.particle_attached,
+        tissue_shear(w.state.particle_x, m.particle_rest_x, self._footprint, self._surface,
                      m.body_particle_offsets, col.rigid_x, col.rigid_q, core_rigid, params, out)  # fmt: skip
         return out
 

@@ -208,11 +208,17 @@ def quat_z_to(n: np.ndarray) -> np.ndarray:
 
 
 def build_groups(
-    rest_x: np.ndarray, mass: np.ndarray, partner: np.ndarray, group_size: int
+    rest_x: np.ndarray, mass: np.ndarray, partner: np.ndarray, group_size: int, *, layer: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Implicit groups (thesis 5.2.1): particle i, its partner, and its nearest others by rest
+    """Implicit groups (thesis 5.2.1): particle i, its partner(s), and its nearest others by rest
     distance until the group holds ``group_size`` particles (fewer only if the body is smaller);
     ties go to the lower index.
+
+    ``partner``: (N,) one partner per particle, or (N, P) a list per particle, -1 for none (the
+    particles directly below and above it through the thickness: build_combined_body with
+    TissueConfig.layers > 1). ``layer``: (N,) int, if given the nearest others are taken from i's
+    own layer only, so that a group spans one layer spacing across the thickness however fine the
+    spacing along the surface (None: from every particle, the two-layer pad's rule).
 
     The nearest neighbours come from a uniform grid (_nearest_in_grid): time and memory grow with
     the particle count, not its square (an all-pairs distance table needed 574 GiB at 160,000
@@ -226,8 +232,16 @@ def build_groups(
     members = np.empty((n, size), dtype=np.int32)
     members[:, 0] = np.arange(n, dtype=np.int32)
     partner = np.asarray(partner, dtype=np.int32)
+    if partner.ndim == 1:
+        partner = partner[:, None]
+    if partner.shape[0] != n or partner.ndim != 2:
+        raise ValueError(f"partner must be (N,) or (N, P) with N = {n}, got shape {partner.shape}")
+    partner = np.ascontiguousarray(partner)
+    layer = np.zeros(n, dtype=np.int32) if layer is None else np.ascontiguousarray(layer, dtype=np.int32)
+    if layer.shape != (n,):
+        raise ValueError(f"layer must be (N,) with N = {n}, got shape {layer.shape}")
     cell, order, starts, dims, lo = _cell_grid(rest_x, size)
-    _nearest_in_grid(rest_x, partner, cell, order, starts, dims, lo, members)
+    _nearest_in_grid(rest_x, partner, layer, cell, order, starts, dims, lo, members)
     offsets = np.arange(n + 1, dtype=np.int32) * size
     m = mass[members]
     com = (m[:, :, None] * rest_x[members]).sum(axis=1) / m.sum(axis=1)[:, None]
@@ -256,21 +270,30 @@ def _cell_grid(x: np.ndarray, per_cell: int) -> tuple[float, np.ndarray, np.ndar
 
 
 @nb.njit(cache=True)
-def _nearest_in_grid(x, partner, cell, order, starts, dims, lo, members):
-    """members[i, 1:] = the partner of i (if any), then the nearest other points by distance, ties
-    to the lower index. Rings of cells around i's cell are searched outward until the nearest
-    candidates found are closer than any point the next ring could add (ring s holds every point
-    within s cell sizes)."""
+def _is_partner(partner, i, j):
+    for t in range(partner.shape[1]):
+        if partner[i, t] == j:
+            return True
+    return False
+
+
+@nb.njit(cache=True)
+def _nearest_in_grid(x, partner, layer, cell, order, starts, dims, lo, members):
+    """members[i, 1:] = the partners of i (partner[i, :], -1 skipped, in order), then the nearest
+    other points of i's own layer (``layer``) by distance, ties to the lower index. Rings of cells
+    around i's cell are searched outward until the nearest candidates found are closer than any
+    point the next ring could add (ring s holds every point within s cell sizes)."""
     n = x.shape[0]
     size = members.shape[1]
     cand_d = np.empty(n)
     cand_j = np.empty(n, dtype=np.int64)
     for i in range(n):
         k = 1
-        p = partner[i]
-        if p >= 0 and k < size:
-            members[i, k] = p
-            k += 1
+        for t in range(partner.shape[1]):
+            p = partner[i, t]
+            if p >= 0 and k < size:
+                members[i, k] = p
+                k += 1
         need = size - k
         if need <= 0:
             continue
@@ -289,7 +312,7 @@ def _nearest_in_grid(x, partner, cell, order, starts, dims, lo, members):
                         c = (gx * dims[1] + gy) * dims[2] + gz
                         for t in range(starts[c], starts[c + 1]):
                             j = order[t]
-                            if j == i or j == p:
+                            if j == i or layer[j] != layer[i] or _is_partner(partner, i, j):
                                 continue
                             d = (x[j, 0] - x[i, 0]) ** 2 + (x[j, 1] - x[i, 1]) ** 2 + (x[j, 2] - x[i, 2]) ** 2
                             cand_d[count] = d
@@ -327,8 +350,14 @@ def _single_body_model(
     partner: np.ndarray,
     attached: np.ndarray,
     tissue: TissueConfig,
+    *,
+    group_partner: np.ndarray | None = None,
+    layer: np.ndarray | None = None,
 ) -> TissueModel:
-    offsets, members, rest_offset = build_groups(rest_x, mass, partner, tissue.group_size)
+    """The model of one body; ``partner`` is the model's particle_partner, ``group_partner`` and
+    ``layer`` (default: ``partner``, none) what build_groups puts in each group."""
+    offsets, members, rest_offset = build_groups(rest_x, mass, partner if group_partner is None else group_partner,
+                                                 tissue.group_size, layer=layer)  # fmt: skip
     n = rest_x.shape[0]
     kappa = group_kappa(offsets, members, rest_offset, mass, tissue.shear_modulus, tissue.mass_density)
     cont = None
@@ -472,17 +501,27 @@ def build_combined_body(
     collision-shape frame); the shape's axes must be those of that frame. ``faces`` (box cores:
     names from BOX_FACES) covers only those faces: tissue where contact can happen, the rest of
     the core bare (it still meets the world through pybullet's own contacts).
+
+    With ``tissue.layers`` = L > 1 each column has L + 1 particles, at depths k extrude / L along
+    the same direction, stored layer by layer (k = 0, the attached ones, first; k = L, the outer
+    contact surface, last); see _layered for their masses, radii and groups. particle_partner
+    pairs each attached particle with its column's outer one (the surface and its core spot, as
+    with one layer) and is -1 for the inner layers.
     """
     if extrude_direction not in ("normal", "radial"):
         raise ValueError(f"extrude_direction must be 'normal' or 'radial', got {extrude_direction!r}")
     offset = np.zeros(3) if shape_offset is None else np.asarray(shape_offset, dtype=np.float64)
-    check_fits(2 * int(math.ceil(shape.area * tissue.particle_density)), tissue.group_size, what="combined body")
+    layers = tissue.layers
+    check_fits((layers + 1) * int(math.ceil(shape.area * tissue.particle_density)), tissue.group_size,
+               what="combined body")  # fmt: skip
     pts, nrm, area = sample_surface(shape, tissue.spacing, faces=faces)
     pts = pts + offset
     if extrude_direction == "radial":
         d = pts / np.maximum(np.linalg.norm(pts, axis=1, keepdims=True), 1e-12)
     else:
         d = nrm
+    if layers > 1:
+        return _layered(pts, d, area, tissue)
     k = pts.shape[0]
     outer = pts + tissue.extrude * d
     rest_x = np.concatenate([pts, outer])
@@ -496,6 +535,75 @@ def build_combined_body(
     partner = np.concatenate([np.arange(k, 2 * k), np.arange(k)])
     attached = np.concatenate([np.ones(k, bool), np.zeros(k, bool)])
     return _single_body_model(rest_x, rest_q, radii, mass, partner, attached, tissue)
+
+
+INNER_NORMAL_RADIUS = 0.25
+"""An inner layer's ellipsoid radius along the surface normal, as a fraction of the layer spacing
+extrude / layers [-] (capped at TissueConfig.normal_radius): see _layered."""
+
+
+def _layered(pts: np.ndarray, d: np.ndarray, area: np.ndarray, tissue: TissueConfig) -> TissueModel:
+    """build_combined_body with L = tissue.layers > 1 particle layers through the thickness.
+
+    - **Positions**: column c's particle of layer k at pts[c] + (k extrude / L) d[c], k = 0 .. L,
+      stored at index k K + c (K columns).
+    - **Masses**: the column's prism, area x extrude x mass_density, cut into L slices of
+      extrude / L; each slice's mass is split half and half between the layers that bound it (the
+      trapezoid rule through the thickness), so the end layers carry half a slice, the inner ones a
+      whole slice, and the column's masses sum to its prism's.
+    - **Radii**: the attached and outer layers' as with one layer. Contacts are collected for every
+      particle that comes within its support radius of a rigid shape (contacts.collect_contacts),
+      so an inner particle with the surface's normal radius (3 mm, as much as the layer spacing or
+      more) would meet the cylinder as a second surface, 8 / L mm under the first: the
+      confound of the hand-built layered pads (docs/results/spatial-convergence.md). An inner
+      particle's radius along the normal is INNER_NORMAL_RADIUS of the layer spacing (0.5 mm at
+      L = 4), so it lies inside the slice it stands for and is reached only where the cylinder
+      has pushed through the layers above it. Along the surface it keeps the surface's radius
+      (radius_scale x spacing), which closes the gaps between columns should the surface be
+      pierced.
+    - **Groups**: particle i, the particles directly below and above it in its column (its
+      partners for build_groups), then the nearest others of its own layer until the group holds
+      group_size. A group so spans one layer spacing across the thickness (two for an inner
+      layer) and about one particle spacing along the surface, at every density: with neighbours
+      taken from every layer the groups of a fine pad would be columns again, and the continuum
+      energy's F an average across the thickness (the two-layer pad's limit).
+    """
+    layers = tissue.layers
+    k = pts.shape[0]
+    h = tissue.extrude / layers
+    depth = np.arange(layers + 1) * h
+    rest_x = (pts[None, :, :] + depth[:, None, None] * d[None, :, :]).reshape(-1, 3)
+    # Trapezoid rule across the thickness: each slice (area x h) half to each layer bounding it.
+    m_slice = tissue.mass_density * area * h
+    weight = np.ones(layers + 1)
+    weight[0] = weight[-1] = 0.5
+    mass = (weight[:, None] * m_slice[None, :]).ravel()
+    tangential = tissue.radius_scale * np.sqrt(area)
+    normal = np.full(layers + 1, min(tissue.normal_radius, INNER_NORMAL_RADIUS * h))
+    normal[0] = normal[-1] = tissue.normal_radius
+    radii = np.stack([np.tile(tangential, layers + 1), np.tile(tangential, layers + 1), np.repeat(normal, k)], axis=1)
+    rest_q = np.tile(quat_z_to(d), (layers + 1, 1))
+    col = np.arange(k)
+    layer = np.repeat(np.arange(layers + 1), k)
+    partner = np.full((layers + 1) * k, -1)
+    partner[col] = layers * k + col  # attached <-> outer: the surface particle and its core spot
+    partner[layers * k + col] = col
+    # build_groups' partners: the particle above (outward first, as the attached one's outer
+    # partner with one layer), then the one below; -1 where the column ends.
+    idx = np.arange((layers + 1) * k)
+    above = np.where(layer < layers, idx + k, -1)
+    below = np.where(layer > 0, idx - k, -1)
+    group_partner = np.stack([above, below], axis=1)
+    attached = layer == 0
+    return _single_body_model(rest_x, rest_q, radii, mass, partner, attached, tissue, group_partner=group_partner,
+                              layer=layer)  # fmt: skip
+
+
+def surface_particles(model: TissueModel) -> np.ndarray:
+    """(N,) bool: the free particles that are the pad's contact surface, each paired with its core
+    spot (particle_partner >= 0 and not attached): the outer particles of build_combined_body at
+    any TissueConfig.layers; none of a free block."""
+    return ~model.particle_attached & (model.particle_partner >= 0)
 
 
 def build_free_block(

@@ -245,7 +245,7 @@ def test_default_factories_give_fresh_equal_configs():
 
 def test_field_names():
     names = field_names(TissueConfig)
-    assert names[:3] == ("particle_density", "extrude", "group_size")
+    assert names[:4] == ("particle_density", "extrude", "layers", "group_size")
     assert set(names) == {f.name for f in dataclasses.fields(TissueConfig)}
     assert "tissue" in field_names(SceneConfig) and "sim" in field_names(SceneConfig)
     assert "coupling" in field_names(SimConfig)
