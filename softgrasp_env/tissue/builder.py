@@ -381,6 +381,7 @@ def _single_body_model(
         group_kappa=kappa,
         body_max_deviation=np.array([tissue.max_deviation]),
         body_contact_cone=np.array([tissue.contact_cone]),
+        body_contact_law=np.array([tissue.friction_law == "contact"]),
         group_continuum=cont,
     )
 
@@ -555,7 +556,7 @@ def _layered(pts: np.ndarray, d: np.ndarray, area: np.ndarray, tissue: TissueCon
       particle that comes within its support radius of a rigid shape (contacts.collect_contacts),
       so an inner particle with the surface's normal radius (3 mm, as much as the layer spacing or
       more) would meet the cylinder as a second surface, 8 / L mm under the first: the
-      confound of the hand-built layered pads (docs/results/spatial-convergence.md). An inner
+      confound of the hand-built layered pads (the documentation's spatial-convergence page). An inner
       particle's radius along the normal is INNER_NORMAL_RADIUS of the layer spacing (0.5 mm at
       L = 4), so it lies inside the slice it stands for and is reached only where the cylinder
       has pushed through the layers above it. Along the surface it keeps the surface's radius
