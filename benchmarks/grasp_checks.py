@@ -30,7 +30,11 @@ ALIGNED = {"yaw": 0.0, "jaw_wedge": 0.0, "lateral_offset": 0.0, "cylinder_xy": (
 KINDS = {"soft": dict(fingers="tissue"), "soft-consistent": dict(fingers="tissue", coupling="consistent"),
          "rigid": dict(fingers="rigid"), "rigid_torsion": dict(fingers="rigid_torsion"),
          "soft-mu_k=0.7": dict(fingers="tissue", friction_kinetic=0.7),
-         "soft-consistent-mu_k=0.7": dict(fingers="tissue", coupling="consistent", friction_kinetic=0.7)}  # fmt: skip
+         "soft-consistent-mu_k=0.7": dict(fingers="tissue", coupling="consistent", friction_kinetic=0.7),
+         "soft-contact": dict(fingers="tissue", friction_law="contact"),
+         "soft-contact-mu_k=0.7": dict(fingers="tissue", friction_law="contact", friction_kinetic=0.7),
+         "soft-contact-16k": dict(fingers="tissue", friction_law="contact", particle_density=16_000.0),
+         "soft-16k": dict(fingers="tissue", particle_density=16_000.0)}  # fmt: skip
 """The finger kinds compared (the tissue at its default mu_k = mu_s, pybullet's one coefficient),
 and the tissue with a two-coefficient law (mu_k 0.7 < mu_s 0.9)."""
 NO_SLIP = CARRY_SLIDE_LIMIT
@@ -58,6 +62,7 @@ class Recorder:
         self.lift: list[float] = []
         self.gap: list[float] = []
         self.cyl_vz: list[float] = []
+        self.press: list[float] = []
         scene = self.env.scene
         inner = scene.step
 
@@ -85,6 +90,9 @@ class Recorder:
         right = float((col.rigid_x[RIGHT] - np.asarray(cp)) @ ax) - fx - r
         self.gap.append(0.5 * (left + right))
         self.cyl_vz.append(float(c.getBaseVelocity(scene.cylinder)[0][2]))
+        solver = scene.world.solver
+        if solver is not None:  # the tissue contacts' normal forces on the cylinder, magnitudes summed
+            self.press.append(float(solver.contact_normal_force(scene.fingers.site.cylinder_shape).sum()))
 
     def cylinder_peak_acceleration(self, dt: float, *, window: int = 5, lift_off: float = 0.0005) -> float:
         """The cylinder's largest upward acceleration once off the ground [m/s^2], over ``window``
@@ -129,6 +137,7 @@ def scripted_episode(kind: dict, version: str, *, dt: float = 1.0 / 240.0, optio
         return {"held": bool(info["is_success"]), "lift": float(info["lift_height"]), "in_hand": rec.in_hand_motion(),
                 "compression": pad - rec.gap[-1], "pad": pad, "peak_accel": rec.peak_acceleration(dt),
                 "cyl_accel": rec.cylinder_peak_acceleration(dt),
+                "press": float(np.mean(rec.press[-len(rec.press) // 5:])) if rec.press else math.nan,
                 "diverged": bool(info["diverged"]), "deviation": deviation}  # fmt: skip
     finally:
         env.close()
@@ -199,6 +208,13 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"{version}: heaviest cylinder held, env episode, {name}: {m:.3f} kg; Coulomb 2 mu F / (g + a): "
                       f"{palm:.3f} kg with the palm's a = {r['peak_accel']:.2f} m/s^2 ({m / palm - 1:+.1%}), "
                       f"{cyl:.3f} kg with the cylinder's a = {r['cyl_accel']:.2f} ({m / cyl - 1:+.1%})", flush=True)  # fmt: skip
+                if not math.isnan(r["press"]):
+                    # Coulomb per contact bounds the friction by mu times the sum of the contacts'
+                    # normal forces, which on a pad wrapped round the cylinder exceeds the squeeze
+                    press = mu * r["press"] / (g + r["peak_accel"])
+                    print(f"{version}: ... the tissue contacts press the cylinder with {r['press']:.3f} N in all "
+                          f"(2F = {2 * force:.3f} N): mu sum N / (g + a) = {press:.3f} kg ({m / press - 1:+.1%})",
+                          flush=True)  # fmt: skip
         if "friction" in rows:
             for name, kind in kinds.items():
                 def slips(s, kind=kind, version=version):

@@ -127,6 +127,10 @@ KEYWORDS: tuple[Keyword, ...] = (
         "Coulomb's cone on every tissue contact as well as on each pad's patch (True) or on the patch alone "
         "(False: a pad squeezed on the way down can hold the cylinder after the squeeze is gone; "
         "TissueConfig.contact_cone says why the cones are not the default yet); None: the preset's, False"),
+    _kw("friction_law", "physics", "str", None,
+        "Where the tissue's Coulomb law is decided: 'patch' (each pad's patch as a whole, a soft-finger contact) "
+        "or 'contact' (every contact in its own cone, with its own stick/slide state); None: the preset's, "
+        "'patch'"),
     _kw("shear_modulus", "physics", "float", None,
         "The compliant tissue's shear modulus [Pa] (None: the preset's, 4,000: the pad compresses ~4.4 mm under 3"
         " N)"),
@@ -264,8 +268,8 @@ class PhysicsConfig:
     def of(cls, *, fingers: str | FingerConfig = "tissue", tissue_faces: str | None = None,
            fem_resolution: str | None = None, preset: str = "default", particle_density: float | None = None,
            friction_static: float | None = None, friction_kinetic: float | None = None,
-           tissue_contact_cone: bool | None = None, shear_modulus: float | None = None,
-           tissue: TissueConfig | None = None, sim: SimConfig | None = None) -> PhysicsConfig:  # fmt: skip
+           tissue_contact_cone: bool | None = None, friction_law: str | None = None,
+           shear_modulus: float | None = None, tissue: TissueConfig | None = None, sim: SimConfig | None = None) -> PhysicsConfig:  # fmt: skip
         """The configs the keywords mean: the kind's config with its own keywords folded in, the
         preset's tissue and solver (or the whole ones given) with the tissue keywords over them."""
         fingers = finger_config(fingers)
@@ -288,7 +292,8 @@ class PhysicsConfig:
                              f"{tissue.friction_kinetic!r} disagree: give one of them")  # fmt: skip
         overrides = {k: v for k, v in (("particle_density", particle_density), ("friction_static", friction_static),
                                        ("friction_kinetic", friction_kinetic), ("contact_cone", tissue_contact_cone),
-                                       ("shear_modulus", shear_modulus)) if v is not None}  # fmt: skip
+                                       ("friction_law", friction_law), ("shear_modulus", shear_modulus))
+                     if v is not None}  # fmt: skip
         tissue = replace(tissue, **overrides)  # validated by TissueConfig
         sim = sim if sim is not None else base.sim
         check_type("sim", sim, SimConfig)
@@ -584,7 +589,8 @@ class EnvArguments:
         v = {**{k.name: k.default for k in KEYWORDS}, **kwargs}
         physics = PhysicsConfig.of(**{k: v[k] for k in ("fingers", "tissue_faces", "fem_resolution", "preset",
                                                          "particle_density", "friction_static", "friction_kinetic",
-                                                         "tissue_contact_cone", "shear_modulus", "tissue", "sim")})  # fmt: skip
+                                                         "tissue_contact_cone", "friction_law", "shear_modulus",
+                                                         "tissue", "sim")})  # fmt: skip
         lift = LiftConfig(v["start"], v["reward_type"], v["success_height"], v["reach_weight"], v["max_tilt"],
                           _tuple(v["approach_range"]))  # fmt: skip
         defaults = STARTS[lift.start].defaults  # None: the start's

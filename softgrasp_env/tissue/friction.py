@@ -23,6 +23,11 @@ cylinder is held (iff 2 mu_s N >= m g) lives here, so three points are made exac
   was gone; with it a squeezed pad's compression moves with the iteration count (config.py,
   TissueConfig.contact_cone), which is why it is not the default yet.
 
+- **Coulomb per contact** (TissueConfig.friction_law "contact"): every contact is a patch of its
+  own, so the same decision bounds each contact by its own cone with its own stick/slide state and
+  anchor; nothing self-equilibrated is left unbounded, and partial slip follows from the contacts'
+  normal loads.
+
 friction_pairs (tissue against tissue of another body) keeps the per-step, per-contact rule.
 
 Per step: load_anchors -> friction_patches in every iteration -> (velocity update) ->
@@ -56,22 +61,30 @@ def _coulomb(lam_t, lam_t_done, lam_n, mu_s, mu_k):
 # pass (see contacts.py).
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def load_anchors(nc, c_particle, c_shape, c_inner, x0, p_body, shape_rigid, shape_local_x, shape_local_q, rig_x0,
-                  rig_q0, anchor_shape, anchor_x, anchor_slide, ns, c_anchor, c_patch, patch_slide, patch_change):  # fmt: skip
-    """Give every contact its anchor and its patch (tissue body, shape). A contact that stuck last
-    step keeps its anchor; a new one anchors where the particle's centre was at the start of this
-    step, in the shape's frame (the same displacement as 'slip since the step began'). A patch
-    starts the step sliding if it ended the last one sliding."""
+                  rig_q0, anchor_shape, anchor_x, anchor_slide, ns, c_anchor, c_patch, patch_slide, patch_change,
+                  patch_body, body_contact_law):  # fmt: skip
+    """Give every contact its anchor and its patch. Under the patch law a patch is (tissue body,
+    shape), row body * ns + shape; under the contact law (``body_contact_law``, TissueConfig.
+    friction_law "contact") every contact is a patch of its own, row B * ns + c, so that Coulomb's
+    law is decided per contact by the same code. ``patch_body`` gets each patch's body. A contact
+    that stuck last step keeps its anchor; a new one anchors where the particle's centre was at the
+    start of this step, in the shape's frame (the same displacement as 'slip since the step
+    began'). A patch starts the step sliding if it ended the last one sliding (its contact did,
+    under the contact law)."""
     for p in range(patch_slide.shape[0]):
         patch_slide[p] = False
         patch_change[p] = False
+    base = body_contact_law.shape[0] * ns
     for c in range(nc):
         if c_inner[c]:
             c_patch[c] = -1
             continue
         i = c_particle[c]
         s = c_shape[c]
-        p = p_body[i] * ns + s
+        b = p_body[i]
+        p = base + c if body_contact_law[b] else b * ns + s
         c_patch[c] = p
+        patch_body[p] = b
         found = False
         for k in range(anchor_shape.shape[1]):
             if anchor_shape[i, k] == s:
@@ -109,6 +122,7 @@ def friction_patches(
     nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_normal, c_rn, c_anchor, c_point, xp, inv_mass,
     body_friction, ns, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
     rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose, patch, patch_slide, patch_change, last, body_cone, c_slip,
+    patch_body,
 ):  # fmt: skip
     """One Gauss-Seidel pass of Coulomb friction over all tissue-shape contacts.
 
@@ -134,8 +148,17 @@ def friction_patches(
 
     ``patch`` rows: 0 N, 1-3 sum lambda_n p, 4-6 sum lambda_n n, 7 e N, 8 J = sum lambda_n r^2,
     9-11 F, 12 M, 13 scale of the transmitted part, 14 1 if the self-equilibrated part is kept, 15-17
-    what the contacts' cones shed, per unit normal load."""
+    what the contacts' cones shed, per unit normal load.
+
+    Under the contact law (TissueConfig.friction_law "contact") each contact is its own patch
+    (load_anchors): N is its normal impulse, F the tangential part of its friction, and there is no
+    twist (a point contact transmits none about its normal; a pad's torsion is then the sum of its
+    contacts' moments). The same decision is then Coulomb's law per contact, |f_t| <= mu_s lambda_n
+    while it sticks and mu_k lambda_n while it slides, with each contact's own stick/slide state
+    and anchor: no contact can borrow another's normal load, and partial slip follows from the
+    contacts' loads."""
     npatch = patch.shape[0]
+    single = body_friction.shape[0] * ns  # rows from here on are single contacts (the contact law)
     for p in range(npatch):
         for a in range(18):
             patch[p, a] = 0.0
@@ -189,6 +212,13 @@ def friction_patches(
         c_friction_goal[c, 0] = fx
         c_friction_goal[c, 1] = fy
         c_friction_goal[c, 2] = fz
+        if p >= single:
+            # a single contact: no lever (its centre of pressure is its point; computed, the lever
+            # would be rounding noise divided by itself)
+            patch[p, 9] += fx
+            patch[p, 10] += fy
+            patch[p, 11] += fz
+            continue
         rx, ry, rz, mx, my, mz = _patch_lever(c, p, c_point, patch)
         r2 = rx * rx + ry * ry + rz * rz
         patch[p, 7] += lam * math.sqrt(r2)
@@ -220,7 +250,7 @@ def friction_patches(
         load = math.sqrt(load)  # the patch's transmitted friction, as a force on the limit surface
         if load <= 0.0:
             continue
-        b = p // ns
+        b = patch_body[p]
         if not patch_slide[p]:
             # Sticking: static friction up to mu_s N. The normal impulses are still growing over
             # the iterations, so whether the patch breaks loose is decided on what the last
@@ -234,6 +264,15 @@ def friction_patches(
             patch_slide[p] = True
         patch[p, 14] = 0.0
         kin = body_friction[b, 1] * nn
+        if p >= single:
+            # A single contact (the contact law) slides at position level alone, capped at its
+            # cone (Macklin et al. 2014 eq. 24): min(load, mu_k lambda_n). Split half on
+            # velocities as a patch is, a contact held at its cone by the pad's elastic pull -
+            # a position-level force - lost part of it every step it slid or stopped, and a
+            # sliding strip carried ~0.85 mu P (benchmarks/partial_slip.py).
+            patch_change[p] = load < kin
+            patch[p, 13] = 1.0 if load < kin else kin / load
+            continue
         if load < kin:
             # Stops within this step: with constant deceleration it covers (load / kin) / 2 of the
             # free slip, so load (1 - load / (2 kin)) is taken out here, the rest of the motion by
@@ -251,8 +290,8 @@ def friction_patches(
     # function), and every id replays bit for bit (tests/test_trajectories.py).
     if cone_any:
         _apply_with_cones(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_point, xp, inv_mass,
-                          body_friction, ns, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
-                          imp_lin, imp_ang, dt, patch, body_cone, last, c_slip)  # fmt: skip
+                          body_friction, patch_body, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
+                          rig_move, imp_lin, imp_ang, dt, patch, body_cone, last, c_slip)  # fmt: skip
     else:
         _apply_patch_law(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_point, xp, inv_mass,
                          shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt,
@@ -327,9 +366,9 @@ def _apply_patch_law(
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _apply_with_cones(
-    nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_point, xp, inv_mass, body_friction, ns,
-    shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, patch, body_cone,
-    last, c_slip,
+    nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_point, xp, inv_mass, body_friction,
+    patch_body, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, patch,
+    body_cone, last, c_slip,
 ):  # fmt: skip
     """Pass 3 of friction_patches with Coulomb's cone on every contact as well (TissueConfig.
     contact_cone): as _apply_patch_law, then each contact's self-equilibrated part bounded by its
@@ -344,7 +383,7 @@ def _apply_with_cones(
             continue
         sc = patch[p, 13]
         keep = patch[p, 14]
-        b = p // ns
+        b = patch_body[p]
         cone = body_cone[b] and keep == 1.0
         if sc == 1.0 and keep == 1.0 and not cone:
             continue  # the goal as it is
@@ -405,7 +444,7 @@ def _apply_with_cones(
         i = np.uint64(c_particle[c])
         r = shape_rigid[c_shape[c]]
         tx, ty, tz = c_friction_goal[c, 0], c_friction_goal[c, 1], c_friction_goal[c, 2]
-        if body_cone[p // ns]:
+        if body_cone[patch_body[p]]:
             tx += lam * patch[p, 15]
             ty += lam * patch[p, 16]
             tz += lam * patch[p, 17]
@@ -417,15 +456,24 @@ def _apply_with_cones(
 def friction_velocity_pass(
     nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_normal, c_rn, x, v, inv_mass, shape_rigid, rig_x0, rig_q0,
     rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, patch_slide, patch_change,
+    c_friction_vel, body_friction, patch_body, ns,
 ):  # fmt: skip
     """The velocity half of kinetic friction (see friction_patches; Mueller et al. 2020 sec. 3.6
     apply dynamic friction on velocities, here it is split with the position level). A patch still
     sliding gives each contact the same impulse again, |f_c| / dt against the slip, never more
     than stops it; a patch that stops within the step has its contacts' remaining tangential
-    relative velocity cancelled."""
+    relative velocity cancelled. Under the contact law (single-contact patches) kinetic friction
+    is all at position level (friction_patches), so this pass leaves those contacts alone.
+    ``c_friction_vel`` gets each contact's velocity half as a positional impulse (impulse x dt), so
+    that a contact's whole friction of the step is ``c_friction + c_friction_vel``."""
+    single = body_friction.shape[0] * ns
     for c in range(nc):
+        c_friction_vel[c, 0] = 0.0
+        c_friction_vel[c, 1] = 0.0
+        c_friction_vel[c, 2] = 0.0
         p = c_patch[c]
-        if p < 0 or c_lambda[c] <= 0.0 or not patch_slide[p]:
+        # p >= single: the contact law's kinetic friction is all at position level (friction_patches)
+        if p < 0 or c_lambda[c] <= 0.0 or not patch_slide[p] or p >= single:
             continue
         i = c_particle[c]
         r = shape_rigid[c_shape[c]]
@@ -469,6 +517,9 @@ def friction_velocity_pass(
         if r >= 0 and rig_move[r]:
             w += generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, lx, ly, lz, dx, dy, dz)
         j = min(need / w, cap)
+        c_friction_vel[c, 0] = j * dx * dt
+        c_friction_vel[c, 1] = j * dy * dt
+        c_friction_vel[c, 2] = j * dz * dt
         wp = inv_mass[i]
         v[i, 0] += wp * j * dx
         v[i, 1] += wp * j * dy

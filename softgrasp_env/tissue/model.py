@@ -58,6 +58,10 @@ class TissueModel:
     """(B,) bool: besides its patch's bound on what the patch transmits, each contact's friction is
     bounded by its own cone, mu_s lambda_n (friction.friction_patches; TissueConfig.contact_cone);
     None: all False (the patch bound alone, the default law)."""
+    body_contact_law: np.ndarray | None = None
+    """(B,) bool: Coulomb's law per contact, every contact its own friction patch with its own
+    stick/slide state (TissueConfig.friction_law "contact"; friction.load_anchors); None: all False
+    (the patch law)."""
     group_continuum: np.ndarray | None = None
     """(N, 7) per group, the continuum group energy E = G V ||F - R||_F^2 (TissueConfig.group_energy
     "continuum"; builder.continuum_groups, compliant.continuum_group): [A_qq^+ (6: xx, xy, xz, yy,
@@ -70,6 +74,8 @@ class TissueModel:
             object.__setattr__(self, "body_max_deviation", np.full(self.body_core_shape.shape[0], np.inf))
         if self.body_contact_cone is None:
             object.__setattr__(self, "body_contact_cone", np.zeros(self.body_core_shape.shape[0], dtype=np.bool_))
+        if self.body_contact_law is None:
+            object.__setattr__(self, "body_contact_law", np.zeros(self.body_core_shape.shape[0], dtype=np.bool_))
         if self.group_continuum is None:
             object.__setattr__(self, "group_continuum", np.zeros((self.group_offsets.shape[0] - 1, 7)))
 
@@ -136,6 +142,7 @@ def concatenate(models: list[TissueModel]) -> TissueModel:
         group_kappa=cat("group_kappa"),
         body_max_deviation=cat("body_max_deviation"),
         body_contact_cone=cat("body_contact_cone"),
+        body_contact_law=cat("body_contact_law"),
         group_continuum=cat("group_continuum"),
     )
 

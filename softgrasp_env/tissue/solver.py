@@ -108,6 +108,9 @@ class LastContacts(NamedTuple):
     """(P,) bool: the sliding patch stops within the step."""
     shape: np.ndarray
     """(C,) the rigid shape of each contact (the scene's shape index: colliders' order)."""
+    friction_velocity: np.ndarray
+    """(C, 3) the velocity half of kinetic friction on the particle, as a positional impulse [kg m]
+    (impulse x dt): ``friction + friction_velocity`` is the contact's whole friction of the step."""
 
 
 # =================================================================================================
@@ -122,10 +125,10 @@ _F_SCRATCH = (
     ("c_friction_goal", "contacts", 3), ("c_anchor", "contacts", 3), ("c_point", "contacts", 3),
     ("pair_lambda", "pairs", 0), ("pair_lambda_t", "pairs", 0), ("pair_normal", "pairs", 3),
     ("shape_pose", "shapes", 8), ("patch", "patches", 18),
-    ("g_u", "members", 3), ("g_raw", "members", 3),
+    ("g_u", "members", 3), ("g_raw", "members", 3), ("c_friction_vel", "contacts", 3),
 )  # fmt: skip
 _I_SCRATCH = (("c_particle", "contacts", 0), ("c_shape", "contacts", 0), ("c_patch", "contacts", 0),
-              ("pair_i", "pairs", 0), ("pair_j", "pairs", 0))  # fmt: skip  (int32)
+              ("pair_i", "pairs", 0), ("pair_j", "pairs", 0), ("patch_body", "patches", 0))  # fmt: skip  (int32)
 _B_SCRATCH = (("c_inner", "contacts", 0), ("patch_slide", "patches", 0), ("patch_change", "patches", 0),
               ("c_slip", "contacts", 0),
               ("fixed", "n", 0))  # fmt: skip  (bool)
@@ -137,7 +140,7 @@ _F_MODEL = (("rest_x", "n", 3), ("rest_q", "n", 4), ("rest_moment", "n", 9), ("i
             ("g_cont", "n", 7))  # fmt: skip
 _I_MODEL = (("p_body", "n", 0), ("g_off", "groups", 0), ("g_mem", "members", 0), ("body_off", "body_offsets", 0),
             ("body_core_shape", "bodies", 0))  # fmt: skip
-_B_MODEL = (("attached", "n", 0), ("body_contact_cone", "bodies", 0))
+_B_MODEL = (("attached", "n", 0), ("body_contact_cone", "bodies", 0), ("body_contact_law", "bodies", 0))
 _F_PACK = _F_SCRATCH + _F_MODEL
 _I_PACK = _I_SCRATCH + _I_MODEL
 _B_PACK = _B_SCRATCH + _B_MODEL
@@ -145,18 +148,19 @@ _PACK = _F_PACK + _I_PACK + _B_PACK
 # their rows in `layout` (numba reads module-level ints as compile-time constants)
 (_XP, _QP, _Q_PRED, _VD, _WD, _MOMENT, _SPIN_KICK, _G_FRAME, _C_LAMBDA, _C_NORMAL, _C_RN, _C_FRICTION,
  _C_FRICTION_GOAL, _C_ANCHOR, _C_POINT, _PAIR_LAMBDA, _PAIR_LAMBDA_T, _PAIR_NORMAL, _SHAPE_POSE, _PATCH,
- _G_U, _G_RAW,
+ _G_U, _G_RAW, _C_FRICTION_VEL,
  _REST_X, _REST_Q, _REST_MOMENT, _INERTIA, _RADII, _MASS, _INV_MASS, _G_PACK, _BODY_FRICTION,
  _GROUP_KAPPA, _BODY_MAX_DEVIATION, _G_CONT,
- _C_PARTICLE, _C_SHAPE, _C_PATCH, _PAIR_I, _PAIR_J,
+ _C_PARTICLE, _C_SHAPE, _C_PATCH, _PAIR_I, _PAIR_J, _PATCH_BODY,
  _P_BODY, _G_OFF, _G_MEM, _BODY_OFF, _BODY_CORE_SHAPE,
  _C_INNER, _PATCH_SLIDE, _PATCH_CHANGE, _C_SLIP, _FIXED,
- _ATTACHED, _BODY_CONTACT_CONE) = range(len(_PACK))  # fmt: skip
+ _ATTACHED, _BODY_CONTACT_CONE, _BODY_CONTACT_LAW) = range(len(_PACK))  # fmt: skip
 assert [name for name, _, _ in _PACK][_ATTACHED] == "attached" and _PACK[_P_BODY][0] == "p_body"
 assert _PACK[_G_RAW][0] == "g_raw" and _PACK[_GROUP_KAPPA][0] == "group_kappa"
 assert _PACK[_BODY_MAX_DEVIATION][0] == "body_max_deviation" and _PACK[_G_CONT][0] == "g_cont"
 assert _PACK[_PAIR_J][0] == "pair_j" and _PACK[_FIXED][0] == "fixed" and _PACK[_G_FRAME][0] == "g_frame"
-assert _PACK[_BODY_CONTACT_CONE][0] == "body_contact_cone"
+assert _PACK[_BODY_CONTACT_CONE][0] == "body_contact_cone" and _PACK[_BODY_CONTACT_LAW][0] == "body_contact_law"
+assert _PACK[_PATCH_BODY][0] == "patch_body" and _PACK[_C_FRICTION_VEL][0] == "c_friction_vel"
 
 
 @nb.njit(cache=True, inline="always")
@@ -223,6 +227,8 @@ def _step(
     body_off, body_core_shape = _view1(i_pack, layout, _BODY_OFF), _view1(i_pack, layout, _BODY_CORE_SHAPE)
     attached = _view1(b_pack, layout, _ATTACHED)
     body_contact_cone = _view1(b_pack, layout, _BODY_CONTACT_CONE)
+    body_contact_law = _view1(b_pack, layout, _BODY_CONTACT_LAW)
+    patch_body = _view1(i_pack, layout, _PATCH_BODY)
     xp, qp, q_pred = _view(f_pack, layout, _XP), _view(f_pack, layout, _QP), _view(f_pack, layout, _Q_PRED)
     vd, wd, moment = _view(f_pack, layout, _VD), _view(f_pack, layout, _WD), _view(f_pack, layout, _MOMENT)
     spin_kick, g_frame = _view(f_pack, layout, _SPIN_KICK), _view(f_pack, layout, _G_FRAME)
@@ -234,6 +240,7 @@ def _step(
     pair_normal, shape_pose = _view(f_pack, layout, _PAIR_NORMAL), _view(f_pack, layout, _SHAPE_POSE)
     patch = _view(f_pack, layout, _PATCH)
     g_u, g_raw = _view(f_pack, layout, _G_U), _view(f_pack, layout, _G_RAW)
+    c_friction_vel = _view(f_pack, layout, _C_FRICTION_VEL)
     c_particle, c_shape, c_patch = _view1(i_pack, layout, _C_PARTICLE), _view1(i_pack, layout, _C_SHAPE), _view1(i_pack, layout, _C_PATCH)
     pair_i, pair_j = _view1(i_pack, layout, _PAIR_I), _view1(i_pack, layout, _PAIR_J)
     c_inner, patch_slide = _view1(b_pack, layout, _C_INNER), _view1(b_pack, layout, _PATCH_SLIDE)
@@ -261,7 +268,8 @@ def _step(
     clear_multipliers(npairs, pair_lambda, pair_lambda_t)
     ns = shape_kind.shape[0]
     load_anchors(nc, c_particle, c_shape, c_inner, x, p_body, shape_rigid, shape_local_x, shape_local_q, rig_x0, rig_q0,
-                 anchor_shape, anchor_x, anchor_slide, ns, c_anchor, c_patch, patch_slide, patch_change)  # fmt: skip
+                 anchor_shape, anchor_x, anchor_slide, ns, c_anchor, c_patch, patch_slide, patch_change, patch_body,
+                 body_contact_law)  # fmt: skip
     # The material (compliant.py): the members attached to a core are held by it through the solve
     # (anchors.mark_fixed), and each group's displacement field starts at zero.
     mark_fixed(attached, p_body, body_core_shape, fixed)
@@ -288,7 +296,8 @@ def _step(
         friction_patches(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_normal, c_rn,
                          c_anchor, c_point, xp, inv_mass, body_friction, ns, shape_rigid, shape_local_x, shape_local_q,
                          rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose,
-                         patch, patch_slide, patch_change, it == iterations - 1, body_contact_cone, c_slip)  # fmt: skip
+                         patch, patch_slide, patch_change, it == iterations - 1, body_contact_cone, c_slip,
+                         patch_body)  # fmt: skip
         friction_pairs(npairs, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, x, xp, inv_mass, p_body,
                        body_friction)  # fmt: skip
         # the strain limit, after friction: what a snagged particle's friction gives way to
@@ -306,7 +315,8 @@ def _step(
     # --- the velocity half of kinetic friction; anchors kept for the next step
     friction_velocity_pass(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_normal, c_rn, x, v, inv_mass,
                            shape_rigid, rig_x0, rig_q0, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
-                           imp_lin, imp_ang, dt, patch_slide, patch_change)  # fmt: skip
+                           imp_lin, imp_ang, dt, patch_slide, patch_change, c_friction_vel, body_friction, patch_body,
+                           ns)  # fmt: skip
     store_anchors(nc, c_particle, c_shape, c_patch, c_lambda, c_anchor, x, shape_rigid, shape_local_x, shape_local_q,
                   rig_x, rig_q, patch_slide, patch_change, anchor_shape, anchor_x, anchor_slide, c_slip)  # fmt: skip
     return 0
@@ -342,6 +352,7 @@ class TissueSolver:
             "body_core_shape": model.body_core_shape, "attached": model.particle_attached,
             "group_kappa": model.group_kappa, "g_cont": model.group_continuum,
             "body_max_deviation": model.body_max_deviation, "body_contact_cone": model.body_contact_cone,
+            "body_contact_law": model.body_contact_law,
         }  # fmt: skip
         self._sizes = {"n": n, "contacts": 4 * n + 16, "pairs": 4 * n + 16, "shapes": 0, "patches": 0,
                        "members": model.group_members.shape[0], "groups": model.group_offsets.shape[0],
@@ -397,10 +408,15 @@ class TissueSolver:
     def _shape_buffer(self, count: int) -> None:
         if self._sizes["shapes"] != count:
             self._sizes["shapes"] = count
-            # one friction patch per (tissue body, shape): see friction.friction_patches
-            self._sizes["patches"] = self.model.body_count * count
+            self._sizes["patches"] = self._patch_rows(count, self._sizes["contacts"])
             self._pack(("shapes", "patches"))
             self._args_for = None
+
+    def _patch_rows(self, shapes: int, contacts: int) -> int:
+        """One friction patch per (tissue body, shape), and under the contact law one per contact
+        slot as well (friction.load_anchors)."""
+        rows = self.model.body_count * shapes
+        return rows + contacts if self.model.body_contact_law.any() else rows
 
     def _fixed_args(self) -> None:
         """The arguments of _step that do not change from step to step (the rigid outputs, the packed
@@ -445,6 +461,9 @@ class TissueSolver:
             if self._counts[0] > self._sizes["contacts"]:
                 self._sizes["contacts"] = int(2 * self._counts[0])
                 grown.append("contacts")
+                if self.model.body_contact_law.any():
+                    self._sizes["patches"] = self._patch_rows(self._sizes["shapes"], self._sizes["contacts"])
+                    grown.append("patches")
             if self._counts[1] > self._sizes["pairs"]:
                 self._sizes["pairs"] = int(2 * self._counts[1])
                 grown.append("pairs")
@@ -459,7 +478,8 @@ class TissueSolver:
         the next step): what a tactile reading bins (fingers/tactile.py)."""
         sc = self._scratch
         return LastContacts(int(self._counts[0]), sc["c_particle"], sc["c_inner"], sc["c_lambda"], sc["c_normal"],
-                            sc["c_friction"], sc["c_patch"], sc["patch_slide"], sc["patch_change"], sc["c_shape"])  # fmt: skip
+                            sc["c_friction"], sc["c_patch"], sc["patch_slide"], sc["patch_change"], sc["c_shape"],
+                            sc["c_friction_vel"])  # fmt: skip
 
     def contact_normal_force(self, shape: int) -> np.ndarray:
         """Normal force each tissue body pressed on shape ``shape`` with during the last step [N],
