@@ -306,18 +306,22 @@ def test_grip_force_runs_every_policy_and_writes_each_episode(tmp_path):
 
 
 def test_the_contact_cones_hold_no_grip_below_coulombs_least_force():
-    """Coulomb per contact (``tissue_contact_cone=True``): the cores must push with m g / (2 mu_s)
-    to hold the cylinder up, however the pads were dragged onto it. The scene squeezes 4 N on the
-    way down, lifts, then lowers the squeeze without stopping. Measured (seed 1013, least 1.337 N):
-    held while the cores pushed 1.352 N (1.01 x the least), then dropped; at the end the contacts'
-    friction at most 1.01 x mu_s their normal force (what a clamped contact sheds goes to the others
-    of its patch, which may take them a little past their cones; the default law: friction up to
-    6.8 times the normal force, 9.8 x mu_s)."""
+    """The patch law with contact cones (``tissue_contact_cone=True``): the cores must push with
+    m g / (2 mu_s) to hold the cylinder up, however the pads were dragged onto it. The scene
+    squeezes 4 N on the way down, lifts, then lowers the squeeze without stopping while the arm
+    holds still. Measured (seed 1013, least 1.337 N): held (sinking slower than 1 cm/s) while the
+    cores pushed 1.663 N (1.24 x the least), sliding out at the next lowering (1.51 N, 70 mm/s;
+    counted as held by the env's flag until it landed, which read 1.01 x); at the end the contacts'
+    friction at most 1.01 x mu_s their normal force at position level (what a clamped contact sheds
+    goes to the others of its patch, which may take them a little past their cones; the default
+    law: friction up to 6.8 times the normal force, 9.8 x mu_s). The velocity half of a sliding
+    patch's friction is not bounded per contact (friction_glue's cone_excess: 43 x); Coulomb per
+    contact (friction_law="contact", tests/tissue/test_contact_friction.py) bounds both."""
     from benchmarks.friction_glue import glue
 
     result = glue(1013, report=lambda line: None, cones=True)
     assert not result["held"] and result["top_ratio"] <= 1.05 * result["mu"], result
-    assert 0.97 <= result["weakest_hold"] / result["least"] <= 1.15, result
+    assert 0.97 <= result["weakest_hold"] / result["least"] <= 1.3, result
 
 
 @pytest.mark.xfail(strict=True, reason="the default tissue friction (the patch law) has no per-contact bound (issue 21's "
