@@ -11,6 +11,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -88,3 +89,25 @@ def test_the_benchmark_quick_run_writes_its_table_and_figure(tmp_path):
     assert {r["density_per_m2"] for r in rows} == {"4000", "16000"}
     assert all(math.isfinite(float(r["tissue"])) and float(r["tissue"]) > 0 for r in rows)
     assert (tmp_path / "spatial_convergence.png").stat().st_size > 5_000
+
+
+def test_the_3d_tangential_reference_has_the_pads_free_ends_and_tends_to_the_anti_plane_pad():
+    """The finger's face is 60 mm long with free ends, so along the cylinder's axis it is more
+    compliant than the anti-plane pad of infinite length: measured 1.184 mm/N against 1.128 (4 mm
+    elements; 1.194 at 2 mm, 1.198 at 1.33 mm). Made longer, the compliance per face length falls
+    toward the anti-plane value as the ends' share does, 1 / length: 1.1842, 1.1506, 1.1346, 1.1267
+    mm/N at 1, 2, 4, 8 face lengths, each step about half the last."""
+    _skfem()
+    from benchmarks.pad_reference import LayerModel, default_pad, tangential_compliance_3d
+
+    pad = default_pad()
+    model = LayerModel(pad, 0.0)
+    a = model.indentation(3.0)[1]["a"]
+    anti_plane = model.tangential_compliance(a)
+    c = [tangential_compliance_3d(pad, a, 0.0, element=4e-3, length=k * pad.height) for k in (1, 2, 4, 8)]
+    assert c[0] > 1.04 * anti_plane, (c, anti_plane)
+    steps = np.diff(c)
+    assert np.all(steps < 0) and np.all(np.abs(steps[1:] / steps[:-1]) == pytest.approx(0.5, abs=0.06)), c
+    assert abs(c[-1] / anti_plane - 1) < 0.01, (c, anti_plane)
+    with pytest.raises(ValueError, match="half-width"):
+        tangential_compliance_3d(pad, pad.width, 0.0)
