@@ -16,7 +16,9 @@ same kind of softening, logarithmic). The line "at slip / linear" says how the p
 for a pad that sticks everywhere until the patch as a whole lets go. The tissue's friction decides
 per patch (tissue/friction.py: a pad breaks loose at mu_s as a whole, the patch-level Coulomb that
 makes the hold bound exact), so it has no slipping annulus by construction: its shear before slip
-is the elastic layer's alone. Writes docs/results/incipient_slip.png with matplotlib.
+is the elastic layer's alone; ``tissue-contact`` is the tissue with Coulomb's law at every contact
+(friction_law "contact"), whose strip slips in from its edges. Writes docs/results/incipient_slip.png
+with matplotlib.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from softgrasp_env.accuracy import shear_under_load
+from softgrasp_env.config import TissueConfig
 from softgrasp_env.scene import GraspScene, SceneConfig
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -48,10 +51,19 @@ def linearity(load: np.ndarray, shear: np.ndarray, slip_load: float) -> tuple[fl
     return slope, at_slip / (slope * (load[before][-1] - t0)) if slope > 0 else float("nan")
 
 
+def scene_config(kind: str) -> SceneConfig:
+    """The scene of a finger kind, or of ``tissue-contact``: the tissue with Coulomb's law at every
+    contact (TissueConfig.friction_law "contact")."""
+    if kind == "tissue-contact":
+        return SceneConfig(fingers="tissue", tissue=TissueConfig(friction_law="contact"))
+    return SceneConfig(fingers=kind)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--rate", type=float, default=2.0, help="growth of the cylinder's weight [N/s]")
-    parser.add_argument("--fingers", default="tissue,rigid,rigid_torsion")
+    parser.add_argument("--fingers", default="tissue,tissue-contact,rigid,rigid_torsion",
+                        help="finger kinds; tissue-contact: the tissue with friction_law='contact'")
     parser.add_argument("--plot", type=Path, default=ROOT / "docs" / "results" / "incipient_slip.png")
     ns = parser.parse_args(argv)
     if not ns.rate > 0:
@@ -61,7 +73,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{'fingers':<15}{'slip load [N]':>14}{'vs Coulomb':>12}{'traction/load':>15}{'compliance':>14}"
           f"{'at slip / linear':>18}")  # fmt: skip
     for kind in ns.fingers.split(","):
-        scene = GraspScene(SceneConfig(fingers=kind))
+        scene = GraspScene(scene_config(kind))
         try:
             rec = shear_under_load(scene, rate=ns.rate)
             mu, force = scene.config.tissue.friction_static, scene.config.finger_force
@@ -71,7 +83,7 @@ def main(argv: list[str] | None = None) -> int:
         bound = 2.0 * mu * force
         before = rec.load <= rec.load[0] + NEAR_SLIP * (rec.slip_load - rec.load[0])
         ratio = float(np.max(np.abs(rec.traction[before] / rec.load[before] - 1.0)))
-        slope, lin = linearity(rec.load, rec.shear, rec.slip_load) if kind == "tissue" else (0.0, float("nan"))
+        slope, lin = linearity(rec.load, rec.shear, rec.slip_load) if kind.startswith("tissue") else (0.0, float("nan"))
         print(f"{kind:<15}{rec.slip_load:>14.3f}{rec.slip_load / bound - 1:>+12.1%}{ratio:>14.2%} "
               f"{slope * 1e3:>10.3f} mm/N{lin:>18.3f}")  # fmt: skip
     cfg = SceneConfig()
@@ -101,7 +113,10 @@ def main(argv: list[str] | None = None) -> int:
     delta1 = 1.5 * slope * span
     u = (t - rec.load[0]) / span
     fig, ax = plt.subplots(figsize=(6, 4))
-    ax.plot(rec.load, (rec.shear - rec.shear[0]) * 1e3, ".", label="tissue pads (taxels)")
+    ax.plot(rec.load, (rec.shear - rec.shear[0]) * 1e3, ".", label="tissue pads (taxels), the patch law")
+    if "tissue-contact" in records:
+        other = records["tissue-contact"]
+        ax.plot(other.load, (other.shear - other.shear[0]) * 1e3, ".", label="tissue pads, Coulomb per contact")
     ax.plot(t, delta1 * (1 - (1 - u) ** (2 / 3)) * 1e3, "--", label="Cattaneo-Mindlin shape (same compliance)")
     ax.axvline(rec.slip_load, color="grey", lw=0.8)
     ax.set_xlabel("tangential load on the pads [N]")

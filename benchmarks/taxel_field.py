@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from softgrasp_env.accuracy import shear_under_load
+from softgrasp_env.config import FRICTION_LAWS, TissueConfig
 from softgrasp_env.scene import GraspScene, SceneConfig
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -35,8 +36,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rows", type=int, default=12)
     parser.add_argument("--cols", type=int, default=8)
     parser.add_argument("--plot", type=Path, default=ROOT / "docs" / "results" / "taxel_field.png")
+    parser.add_argument("--friction-law", choices=FRICTION_LAWS, default="patch",
+                        help="the tissue's friction law (TissueConfig.friction_law)")
     ns = parser.parse_args(argv)
-    scene = GraspScene(SceneConfig())
+    scene = GraspScene(SceneConfig(tissue=TissueConfig(friction_law=ns.friction_law)))
     try:
         rec = shear_under_load(scene, rows=ns.rows, cols=ns.cols)
         grid = scene.fingers.taxel_grid(ns.rows, ns.cols)
@@ -70,7 +73,8 @@ def main(argv: list[str] | None = None) -> int:
         axes[1, col].set_ylabel("up, z [cm]", fontsize=8)
     fig.colorbar(im0, ax=axes[0, :], label="pressure [kPa]")
     fig.colorbar(im1, ax=axes[1, :], label="downward shear [mm]")
-    fig.suptitle("The left pad's taxels: the default cylinder made heavier until it slips", fontsize=10)
+    law = {"patch": "", "contact": ", Coulomb per contact"}[ns.friction_law]
+    fig.suptitle(f"The left pad's taxels: the default cylinder made heavier until it slips{law}", fontsize=10)
     ns.plot.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(ns.plot, dpi=100)
     print(f"wrote {ns.plot}")

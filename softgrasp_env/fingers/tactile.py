@@ -198,12 +198,14 @@ def _core_rotations(rig_q, core_rigid):
 
 @nb.njit(cache=True)
 def tissue_loads(nc, c_particle, c_inner, c_lambda, c_normal, c_friction, c_patch, patch_slide, patch_change, p_body,
-                 rest_x, footprint, rig_q, core_rigid, dt, grid, out):  # fmt: skip
+                 rest_x, footprint, rig_q, core_rigid, dt, grid, out, single):  # fmt: skip
     """The tissue's contacts of its last step on each body's (finger's) taxels: the force the
     shape put on the particle, (lambda n + f) / dt^2 (Mueller et al. 2020 eq. 6: the multipliers
     are positional impulses), f the friction's positional impulse (friction.friction_patches). A
     sliding patch takes as much friction again in its velocity pass (kinetic friction is half on
-    positions, half on velocities), so its contacts' friction counts twice. A contact's load is
+    positions, half on velocities), so its contacts' friction counts twice; a single contact's
+    patch (rows from ``single`` on: friction_law "contact") applies its kinetic friction at
+    position level alone, so it counts once. A contact's load is
     spread over the taxels under its particle's footprint at rest (``rest_x`` and ``footprint``,
     the half extents of the face cell the particle stands for: a taxel is fixed to the core),
     turned into the core's frame by its orientation ``rig_q[core_rigid[body]]``. A particle's
@@ -227,7 +229,7 @@ def tissue_loads(nc, c_particle, c_inner, c_lambda, c_normal, c_friction, c_patc
             continue
         k = 1.0
         pt = c_patch[c]
-        if pt >= 0 and patch_slide[pt] and not patch_change[pt]:
+        if 0 <= pt < single and patch_slide[pt] and not patch_change[pt]:
             k = 2.0
         fx = (lam * c_normal[c, 0] + k * c_friction[c, 0]) * inv
         fy = (lam * c_normal[c, 1] + k * c_friction[c, 1]) * inv

@@ -139,7 +139,7 @@ class TissueFingers(FingerKind):
         lc = sv.last_contacts()
         tissue_loads(lc.count, lc.particle, lc.inner, lc.normal_lambda, lc.normal, lc.friction, lc.patch, lc.patch_slide,
                      lc.patch_change, m.particle_body, m.particle_rest_x, self._footprint, col.rigid_q, core_rigid,
-                     sv.sim.dt, params, out)  # fmt: skip
+                     sv.sim.dt, params, out, lc.single)  # fmt: skip
         tissue_shear(w.state.particle_x, m.particle_rest_x, self._footprint, self._surface,
                      m.body_particle_offsets, col.rigid_x, col.rigid_q, core_rigid, params, out)  # fmt: skip
         return out

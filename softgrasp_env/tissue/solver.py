@@ -111,6 +111,10 @@ class LastContacts(NamedTuple):
     friction_velocity: np.ndarray
     """(C, 3) the velocity half of kinetic friction on the particle, as a positional impulse [kg m]
     (impulse x dt): ``friction + friction_velocity`` is the contact's whole friction of the step."""
+    single: int
+    """Patch rows from this one on are single contacts (TissueConfig.friction_law "contact"), whose
+    kinetic friction is all in ``friction``; the rows before it are (tissue body, shape) patches,
+    whose sliding contacts take about as much again in the velocity pass."""
 
 
 # =================================================================================================
@@ -479,7 +483,7 @@ class TissueSolver:
         sc = self._scratch
         return LastContacts(int(self._counts[0]), sc["c_particle"], sc["c_inner"], sc["c_lambda"], sc["c_normal"],
                             sc["c_friction"], sc["c_patch"], sc["patch_slide"], sc["patch_change"], sc["c_shape"],
-                            sc["c_friction_vel"])  # fmt: skip
+                            sc["c_friction_vel"], self.model.body_count * self._sizes["shapes"])  # fmt: skip
 
     def contact_normal_force(self, shape: int) -> np.ndarray:
         """Normal force each tissue body pressed on shape ``shape`` with during the last step [N],

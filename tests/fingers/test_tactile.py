@@ -195,3 +195,33 @@ def test_the_fem_pads_have_no_tactile_reading_and_say_so():
             kind.tactile(kind.taxel_grid(2, 2))
     finally:
         env.close()
+
+
+def test_under_coulomb_per_contact_the_taxels_read_the_load_and_the_shear_softens_before_slip():
+    """The same ramp with friction_law="contact" (3 N per finger, the defaults otherwise): every
+    contact sticks or slides in its own cone, so the strip's edges slide first and the shear grows
+    faster than its small-load line as the slip nears, toward Cattaneo-Mindlin's 1.5 x (measured
+    1.146 x at 95 % of the way, the patch law 1.009 x); it lets go at 1.013 x 2 mu_s F (the
+    contacts' normal forces on the wrapped pads sum to a little more than the squeeze). The
+    taxels' traction is the load all the way (gap at most 0.9 %): a single contact's kinetic
+    friction is all at position level, so the reading counts it once (counted twice, as a
+    sliding patch's is, the gap was 71 %)."""
+    from softgrasp_env.accuracy import shear_under_load
+    from softgrasp_env.config import TissueConfig
+    from softgrasp_env.scene import GraspScene, SceneConfig
+
+    scene = GraspScene(SceneConfig(fingers="tissue", tissue=TissueConfig(friction_law="contact")))
+    try:
+        bound = 2.0 * scene.config.tissue.friction_static * scene.config.finger_force
+        rec = shear_under_load(scene, max_load=1.3 * bound)
+    finally:
+        scene.close()
+    assert rec.slip_load == pytest.approx(1.013 * bound, rel=0.03)
+    span = rec.slip_load - rec.load[0]
+    before = rec.load <= rec.load[0] + 0.95 * span
+    assert np.allclose(rec.traction[before], rec.load[before], rtol=0.02)
+    assert np.all(np.diff(rec.shear[before]) > 0.0)
+    early = rec.load <= rec.load[0] + 0.2 * span
+    compliance = np.polyfit(rec.load[early], rec.shear[early], 1)[0]
+    linear = (rec.shear[before][-1] - rec.shear[0]) / (compliance * (rec.load[before][-1] - rec.load[0]))
+    assert 1.10 < linear < 1.5, linear
