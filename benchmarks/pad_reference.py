@@ -322,6 +322,14 @@ class LayerModel:
         return 1.0 / (q * self.pad.height)
 
 
+def pressure_width(y: np.ndarray, pressure: np.ndarray) -> float:
+    """The pressure-weighted RMS half-width of a contact strip, sqrt(int p y^2 dy / int p dy) [m]
+    (trapezoid rule over the surface nodes): a / 2 for a Hertzian (elliptic) profile of half-width
+    a, a / sqrt 5 for a parabolic one. The tissue's contacts give the same moment of their normal
+    loads (spatial_convergence.PadRig.contact_width)."""
+    return float(math.sqrt(np.trapezoid(pressure * y * y, y) / np.trapezoid(pressure, y)))
+
+
 TANGENTIAL_ELEMENT = 2e-3
 """Element size of the 3-D tangential model [m] (h / 4 with 27-node hexahedra: within 0.5 % of
 1.33 mm, see the module docstring)."""
@@ -375,7 +383,8 @@ def reference(pad: Pad | None = None, *, nus=NUS, loads=LOADS, level: int = LEVE
     """One row per (nu, load): indentation [m], half-width [m], peak pressure [Pa], one pad's
     tangential compliance along the cylinder's axis [m/N] ("compliance": the 3-D pad,
     tangential_compliance_3d, at the loads in ``tangential_loads``, NaN at the others;
-    "compliance_2d": the anti-plane pad of infinite length), and the pressure profile (y, p).
+    "compliance_2d": the anti-plane pad of infinite length), the pressure profile (y, p) and its
+    pressure-weighted RMS half-width ("width", pressure_width).
     ``tangential_element``: the 3-D model's element size [m] (4 mm: 1.3 % stiffer than the finest)."""
     pad = pad or default_pad()
     rows = []
@@ -387,6 +396,7 @@ def reference(pad: Pad | None = None, *, nus=NUS, loads=LOADS, level: int = LEVE
                     else math.nan)  # fmt: skip
             rows.append({"nu": nu, "load": load, "delta": delta, "a": c["a"], "p_max": float(c["pressure"].max()),
                          "compliance": full, "compliance_2d": model.tangential_compliance(c["a"]),
+                         "width": pressure_width(model.y, c["pressure"]),
                          "y": model.y.copy(), "pressure": c["pressure"].copy(),
                          "penetration": c["penetration"]})  # fmt: skip
     return rows

@@ -186,6 +186,22 @@ class PadRig:
         support = np.sqrt(((r * local) ** 2).sum(axis=1))
         return float((rho - self.radius - support).min())
 
+    def contact_width(self) -> float:
+        """The contact strip's pressure-weighted RMS half-width across the strip after the last
+        step [m]: sqrt(sum lambda y^2 / sum lambda) over the tissue's contacts with the cylinder, y
+        a contact's particle's offset across the face from the cylinder's axis. For the reference's
+        pressure profile the same moment of p(y) (a Hertzian strip's is a / 2, a parabolic one's
+        a / sqrt 5); unlike the farthest touching contact it is not quantised to the particle
+        spacing."""
+        lc = self.solver.last_contacts()
+        n = lc.count
+        keep = ~lc.inner[:n] & (lc.normal_lambda[:n] > 0.0) & (lc.shape[:n] == 1)
+        if not keep.any():
+            return math.nan
+        y = self.state.particle_x[lc.particle[:n][keep], 1] - self.col.rigid_x[1, 1]
+        w = lc.normal_lambda[:n][keep]
+        return float(math.sqrt(np.sum(w * y * y) / np.sum(w)))
+
     def press_to(self, force: float, *, guess: float) -> tuple[float, float]:
         """Compression at which the held normal load is ``force`` [N] (secant on the holds, from
         ``guess``): (compression [m], held load [N])."""
@@ -236,6 +252,7 @@ def measure_tissue(density: float, loads=LOADS, *, tangential: bool = True, mate
         c, f = rig.press_to(load, guess=guess)
         out[f"compression_{load:g}N"] = c
         out[f"held_{load:g}N"] = f
+        out[f"width_{load:g}N"] = rig.contact_width()
         guess = c * (1.6 if load < 3 else 1.4)
     out["inner_clearance"] = rig.inner_clearance
     if tangential:
@@ -352,6 +369,21 @@ def report(rows: list[dict], refs: dict, loads, out: Path, env: bool, suffix: st
             for nu in NUS:
                 print(f"  {n} layer(s), observed order against nu {nu}: "
                       + ", ".join(f"{o:+.2f}" for o in orders(vals, refs[(nu, load)]["delta"])))  # fmt: skip
+    for load in loads:
+        key = f"width_{load:g}N"
+        print(f"\ncontact strip's pressure-weighted RMS half-width under {load:g} N [mm] (reference nu 0 / 0.3 / 0.45: "
+              + " / ".join(f"{refs[(nu, load)]['width'] * 1e3:.3f}" for nu in NUS) + ")")  # fmt: skip
+        for n, group in by_layers.items():
+            vals = [r[key] for r in group]
+            for r, v in zip(group, vals, strict=True):
+                errs = [v / refs[(nu, load)]["width"] - 1 for nu in NUS]
+                print(f"{r['density']:>9.0f}{n:>7}{r['particles']:>10}{v * 1e3:>8.3f}" + "".join(f"{e:>+13.1%}" for e in errs))
+                for nu, e in zip(NUS, errs, strict=True):
+                    table.append(("contact_width", load, r["density"], n, r["particles"], r["l"], v, nu,
+                                  refs[(nu, load)]["width"], e))  # fmt: skip
+            for nu in NUS:
+                print(f"  {n} layer(s), observed order against nu {nu}: "
+                      + ", ".join(f"{o:+.2f}" for o in orders(vals, refs[(nu, load)]["width"])))  # fmt: skip
     print("\ntangential compliance at 3 N, one pad [mm/N] (reference nu 0 / 0.3 / 0.45: "
           + " / ".join(f"{refs[(nu, 3.0)]['compliance'] * 1e3:.3f}" for nu in NUS) + ")")  # fmt: skip
     for n, group in by_layers.items():
