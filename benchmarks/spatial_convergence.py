@@ -351,53 +351,33 @@ def report(rows: list[dict], refs: dict, loads, out: Path, env: bool, suffix: st
     table = []
     counts = sorted({r.get("layers", 1) for r in rows})
     by_layers = {n: [r for r in rows if r.get("layers", 1) == n] for n in counts}
-    for load in loads:
-        key = f"compression_{load:g}N"
-        print(f"\ncompression under {load:g} N [mm] (reference nu 0 / 0.3 / 0.45: "
-              + " / ".join(f"{refs[(nu, load)]['delta'] * 1e3:.3f}" for nu in NUS) + ")")  # fmt: skip
+    def block(quantity: str, key: str, ref_key: str, load: float, title: str, note=None) -> None:
+        """One quantity's table: per row the tissue's value, its error against each nu's reference
+        and (``note``) a remark; then the observed orders along the densities of each layer count."""
+        print(f"\n{title} (reference nu 0 / 0.3 / 0.45: "
+              + " / ".join(f"{refs[(nu, load)][ref_key] * 1e3:.3f}" for nu in NUS) + ")")  # fmt: skip
         print(f"{'density':>9}{'layers':>7}{'particles':>10}{'l mm':>7}{'tissue':>8}"
               + "".join(f"{'err nu ' + str(nu):>13}" for nu in NUS))  # fmt: skip
         for n, group in by_layers.items():
             vals = [r[key] for r in group]
             for r, v in zip(group, vals, strict=True):
-                errs = [v / refs[(nu, load)]["delta"] - 1 for nu in NUS]
+                errs = [v / refs[(nu, load)][ref_key] - 1 for nu in NUS]
                 print(f"{r['density']:>9.0f}{n:>7}{r['particles']:>10}{r['l'] * 1e3:>7.2f}{v * 1e3:>8.3f}"
-                      + "".join(f"{e:>+13.1%}" for e in errs))  # fmt: skip
+                      + "".join(f"{e:>+13.1%}" for e in errs) + (note(r) if note else ""))  # fmt: skip
                 for nu, e in zip(NUS, errs, strict=True):
-                    table.append(("compression", load, r["density"], n, r["particles"], r["l"], v, nu,
-                                  refs[(nu, load)]["delta"], e))  # fmt: skip
+                    table.append((quantity, load, r["density"], n, r["particles"], r["l"], v, nu,
+                                  refs[(nu, load)][ref_key], e))  # fmt: skip
             for nu in NUS:
                 print(f"  {n} layer(s), observed order against nu {nu}: "
-                      + ", ".join(f"{o:+.2f}" for o in orders(vals, refs[(nu, load)]["delta"])))  # fmt: skip
+                      + ", ".join(f"{o:+.2f}" for o in orders(vals, refs[(nu, load)][ref_key])))  # fmt: skip
+
     for load in loads:
-        key = f"width_{load:g}N"
-        print(f"\ncontact strip's pressure-weighted RMS half-width under {load:g} N [mm] (reference nu 0 / 0.3 / 0.45: "
-              + " / ".join(f"{refs[(nu, load)]['width'] * 1e3:.3f}" for nu in NUS) + ")")  # fmt: skip
-        for n, group in by_layers.items():
-            vals = [r[key] for r in group]
-            for r, v in zip(group, vals, strict=True):
-                errs = [v / refs[(nu, load)]["width"] - 1 for nu in NUS]
-                print(f"{r['density']:>9.0f}{n:>7}{r['particles']:>10}{v * 1e3:>8.3f}" + "".join(f"{e:>+13.1%}" for e in errs))
-                for nu, e in zip(NUS, errs, strict=True):
-                    table.append(("contact_width", load, r["density"], n, r["particles"], r["l"], v, nu,
-                                  refs[(nu, load)]["width"], e))  # fmt: skip
-            for nu in NUS:
-                print(f"  {n} layer(s), observed order against nu {nu}: "
-                      + ", ".join(f"{o:+.2f}" for o in orders(vals, refs[(nu, load)]["width"])))  # fmt: skip
-    print("\ntangential compliance at 3 N, one pad [mm/N] (reference nu 0 / 0.3 / 0.45: "
-          + " / ".join(f"{refs[(nu, 3.0)]['compliance'] * 1e3:.3f}" for nu in NUS) + ")")  # fmt: skip
-    for n, group in by_layers.items():
-        vals = [r["compliance"] for r in group]
-        for r, v in zip(group, vals, strict=True):
-            errs = [v / refs[(nu, 3.0)]["compliance"] - 1 for nu in NUS]
-            print(f"{r['density']:>9.0f}{n:>7}{r['particles']:>10}{v * 1e3:>8.3f}" + "".join(f"{e:>+13.1%}" for e in errs)
-                  + f"   (held at {r['shear_normal']:.2f} N, axial {r['shear_load']:.3f} N)")  # fmt: skip
-            for nu, e in zip(NUS, errs, strict=True):
-                table.append(("tangential_compliance", 3.0, r["density"], n, r["particles"], r["l"], v, nu,
-                              refs[(nu, 3.0)]["compliance"], e))  # fmt: skip
-        for nu in NUS:
-            print(f"  {n} layer(s), observed order against nu {nu}: "
-                  + ", ".join(f"{o:+.2f}" for o in orders(vals, refs[(nu, 3.0)]["compliance"])))  # fmt: skip
+        block("compression", f"compression_{load:g}N", "delta", load, f"compression under {load:g} N [mm]")
+    for load in loads:
+        block("contact_width", f"width_{load:g}N", "width", load,
+              f"contact strip's pressure-weighted RMS half-width under {load:g} N [mm]")  # fmt: skip
+    block("tangential_compliance", "compliance", "compliance", 3.0, "tangential compliance at 3 N, one pad [mm/N]",
+          note=lambda r: f"   (held at {r['shear_normal']:.2f} N, axial {r['shear_load']:.3f} N)")  # fmt: skip
     print("\nper (density, layers): world steps per step, rig seconds, stiffness against the core "
           "(compliant.core_stiffness) [N/m], share of the groups' second moment along the face normal, "
           "inner layers' least clearance from the cylinder [mm]")  # fmt: skip

@@ -85,7 +85,7 @@ def test_the_benchmark_quick_run_writes_its_table_and_figure(tmp_path):
                           env={"PYTHONPATH": str(ROOT), "PATH": ""})  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-2000:]
     rows = list(csv.DictReader(open(tmp_path / "spatial_convergence.csv")))
-    assert {r["quantity"] for r in rows} == {"compression", "tangential_compliance"}
+    assert {r["quantity"] for r in rows} == {"compression", "contact_width", "tangential_compliance"}
     assert {r["density_per_m2"] for r in rows} == {"4000", "16000"}
     assert all(math.isfinite(float(r["tissue"])) and float(r["tissue"]) > 0 for r in rows)
     assert (tmp_path / "spatial_convergence.png").stat().st_size > 5_000
