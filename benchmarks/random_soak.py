@@ -66,8 +66,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--steps", type=int, default=100_000, help="per stream")
     parser.add_argument("--streams", default="uniform,noisy-scripted")
     parser.add_argument("--coupling", default=None, help="the tissue's coupling (default: the preset's)")
+    parser.add_argument("--friction-law", default=None, choices=["patch", "contact"],
+                        help="the tissue's friction law (default: the preset's, patch)")
     ns = parser.parse_args(argv)
-    kwargs = {}
+    kwargs = {} if ns.friction_law is None else {"friction_law": ns.friction_law}
     if ns.coupling:
         from dataclasses import replace
 

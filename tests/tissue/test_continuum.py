@@ -235,3 +235,41 @@ def test_compression_against_the_reference(density):
     c, f = rig.press_to(3.0, guess=2.7e-3)
     assert abs(f - 3.0) < 0.02
     assert abs(c / REFERENCE_3N - 1.0) < COMPRESSION_TOL
+
+
+REFERENCE_WIDTH_3N = 5.560e-3
+"""The contact strip's pressure-weighted RMS half-width under 3 N in the reference, nu = 0 [m]
+(benchmarks/pad_reference.pressure_width)."""
+
+
+@pytest.mark.slow
+def test_compression_and_the_strips_width_agree_between_two_densities():
+    """The continuum energy's pad at 64,000 and 256,000 particles per m^2 (the spacing halved):
+    compression under 3 N 2.688 / 2.660 mm (1.0 % apart), the strip's RMS half-width 5.575 / 5.403
+    mm (3.1 % apart; the reference's 5.560: +0.3 / -2.8 %)."""
+    from benchmarks.spatial_convergence import PadRig
+
+    rows = []
+    for density in (64_000.0, 256_000.0):
+        rig = PadRig(density, friction=0.0, tissue=CONTINUUM)
+        c, f = rig.press_to(3.0, guess=2.7e-3)
+        rows.append((c, rig.contact_width()))
+    (c1, w1), (c2, w2) = rows
+    assert abs(c2 / c1 - 1.0) < 0.03, rows
+    assert abs(w2 / w1 - 1.0) < 0.06, rows
+    assert all(abs(w / REFERENCE_WIDTH_3N - 1.0) < 0.06 for _, w in rows), rows
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="the continuum pad's tangential compliance does not converge in space yet "
+                   "(1.374 mm/N at 64,000 per m^2, 1.253 at 256,000, 1.367 at 1,024,000; the 3-D reference 1.194): "
+                   "docs/results/spatial-convergence.md, 'What did not'")
+def test_the_tangential_compliance_agrees_between_two_densities():
+    """The same two densities, pressed to 3 N with the default friction and moved along the axis
+    (spatial_convergence.measure_tissue): agreement within 3 %; strict, so that the day it
+    converges it says so."""
+    from benchmarks.spatial_convergence import measure_tissue
+
+    c1 = measure_tissue(64_000.0, (3.0,), material="continuum")["compliance"]
+    c2 = measure_tissue(256_000.0, (3.0,), material="continuum")["compliance"]
+    assert abs(c2 / c1 - 1.0) < 0.03, (c1, c2)
