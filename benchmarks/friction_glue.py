@@ -40,20 +40,29 @@ import gymnasium as gym
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
-from softgrasp_env.config import kinetic_friction
+from softgrasp_env.config import SimConfig, kinetic_friction
 from softgrasp_env.policies import ScriptedGraspPolicy
 from softgrasp_env.scene.scene import LEFT, RIGHT
 from softgrasp_env.tasks.lift import MIN_GRIP_FORCE
 
 
-def contact_cone(world, mu: float) -> tuple[int, int, float, float]:
-    """The tissue's load-bearing contacts of the last world step: how many, how many with friction
-    above mu times their normal multiplier, the median and the largest ratio of the two."""
+def _bearing(world, *, whole: bool = False):
+    """The tissue's load-bearing contacts of the last world step: (normal multipliers, the
+    tangential part of their friction, their rows of LastContacts); ``whole``: both halves of the
+    friction (solver.LastContacts.friction_velocity), else the position half alone."""
     lc = world.solver.last_contacts()
     n = lc.count
     keep = ~lc.inner[:n] & (lc.normal_lambda[:n] > 0.0)
-    lam, f, nrm = lc.normal_lambda[:n][keep], lc.friction[:n][keep], lc.normal[:n][keep]
+    f = lc.friction[:n][keep] + (lc.friction_velocity[:n][keep] if whole else 0.0)
+    nrm = lc.normal[:n][keep]
     tangential = np.linalg.norm(f - np.sum(f * nrm, axis=1, keepdims=True) * nrm, axis=1)
+    return lc.normal_lambda[:n][keep], tangential, lc, keep
+
+
+def contact_cone(world, mu: float) -> tuple[int, int, float, float]:
+    """The tissue's load-bearing contacts of the last world step: how many, how many with friction
+    above mu times their normal multiplier, the median and the largest ratio of the two."""
+    lam, tangential, _, keep = _bearing(world)
     ratio = tangential / lam if len(lam) else np.zeros(1)
     return int(keep.sum()), int(np.sum(ratio > mu * (1 + 1e-3))), float(np.median(ratio)), float(ratio.max())
 
@@ -63,15 +72,10 @@ def cone_excess(world, mu_s: float, mu_k: float) -> float:
     contact's whole tangential friction (both halves, solver.LastContacts.friction_velocity) to
     its cone: mu_k lambda_n where its patch slid, mu_s lambda_n where it stuck. At most 1 under a
     law that is Coulomb's at every contact."""
-    lc = world.solver.last_contacts()
-    n = lc.count
-    keep = ~lc.inner[:n] & (lc.normal_lambda[:n] > 0.0)
-    if not keep.any():
+    lam, tangential, lc, keep = _bearing(world, whole=True)
+    if not len(lam):
         return 0.0
-    lam, nrm = lc.normal_lambda[:n][keep], lc.normal[:n][keep]
-    f = lc.friction[:n][keep] + lc.friction_velocity[:n][keep]
-    tangential = np.linalg.norm(f - np.sum(f * nrm, axis=1, keepdims=True) * nrm, axis=1)
-    slid = lc.patch_slide[lc.patch[:n][keep]]
+    slid = lc.patch_slide[lc.patch[: lc.count][keep]]
     return float(np.max(tangential / (np.where(slid, mu_k, mu_s) * lam)))
 
 
@@ -92,7 +96,7 @@ law with contact cones, and Coulomb per contact."""
 
 
 def glue(seed: int = 1013, report=print, cones: bool = False, law: str | None = None,
-         friction_kinetic: float | None = None) -> dict:
+         friction_kinetic: float | None = None, coupling: str | None = None) -> dict:
     """The scene of the module docstring from ``seed``; ``report`` gets the table's lines. Returns
     the last step's figures: the squeeze commanded, the pads' measured normal force, the
     load-bearing contacts and how many have friction above mu_s times their normal multiplier,
@@ -102,7 +106,8 @@ def glue(seed: int = 1013, report=print, cones: bool = False, law: str | None = 
     along the jaw) the cylinder was held up with after the lift (``weakest_hold``), against
     Coulomb's least force (``least``)."""
     law = law or ("cones" if cones else "patch")
-    env = gym.make("SoftGraspGrip-v3", observe_object=True, friction_kinetic=friction_kinetic, **LAWS[law])
+    sim = None if coupling is None else SimConfig(coupling=coupling)  # the tissue's coupling (SimConfig.coupling)
+    env = gym.make("SoftGraspGrip-v3", observe_object=True, friction_kinetic=friction_kinetic, sim=sim, **LAWS[law])
     obs, _ = env.reset(seed=seed)
     u = env.unwrapped
     world, cfg = u.scene.world, u.scene.config
@@ -118,7 +123,7 @@ def glue(seed: int = 1013, report=print, cones: bool = False, law: str | None = 
     impulses = np.zeros(2)
     dt_world = world.solver.sim.dt  # one world step (the env may take several per physics step)
     cylinder_shape = u.scene.fingers.site.cylinder_shape
-    after = {"tissue": 0.0, "cores": 0.0, "over": 0, "steps": 0}  # after a slip: see the docstring
+    after = {"tissue": 0.0, "cores": 0.0, "over": 0, "steps": 0, "excess": -math.inf}  # after a slip: see the docstring
     slipped = [False]
     pads_step, cores_step = np.zeros(2), np.zeros(2)  # summed over an env step's world steps
     calls = [0]
@@ -162,6 +167,7 @@ def glue(seed: int = 1013, report=print, cones: bool = False, law: str | None = 
             after["tissue"] = max(after["tissue"], float(pads.max()))
             after["cores"] = max(after["cores"], float(cores.max()))
             after["over"] += int(np.any(pads > cores + after_slack))
+            after["excess"] = max(after["excess"], float(np.max(pads - cores)))
             after["steps"] += 1
         if floor is not None:
             peak[0] = max(peak[0], u._last.lift)
@@ -179,11 +185,11 @@ def glue(seed: int = 1013, report=print, cones: bool = False, law: str | None = 
     result = {"commanded": force, "measured": u._last.force.copy(), "contacts": n, "over": over,
               "held": bool(info["held"]), "weakest_hold": weakest, "least": least, "top_ratio": top, "mu": mu,
               "pads_after": after["tissue"], "cores_after": after["cores"], "steps_over_cores": after["over"],
-              "steps_after": after["steps"], "cone_excess": worst[0]}  # fmt: skip
+              "steps_after": after["steps"], "after_excess": after["excess"], "cone_excess": worst[0]}  # fmt: skip
     if slipped[0]:
         report(f"after the slip: the pads pressed the cylinder with at most {after['tissue']:.3f} N, the tissue "
                f"pushed its cores with at most {after['cores']:.3f} N; env steps where a pad pressed more than its "
-               f"core + {after_slack} N: {after['over']} of {after['steps']}")  # fmt: skip
+               f"core + {after_slack} N: {after['over']} of {after['steps']} (by at most {after['excess']:+.3f} N)")  # fmt: skip
     report(f"the largest contact friction over its cone (mu_k where it slid), any world step: {worst[0]:.6f}")
     report(f"held at the end: {result['held']}; the least the cores pushed with while it was held: {weakest:.3f} N, "
            f"{weakest / least:.2f} x Coulomb's least m g / (2 mu_s)")  # fmt: skip
@@ -197,9 +203,11 @@ def main() -> None:
     parser.add_argument("--laws", nargs="+", default=list(LAWS), choices=list(LAWS),
                         help="the default patch law, tissue_contact_cone=True, friction_law='contact'")  # fmt: skip
     parser.add_argument("--friction-kinetic", type=float, default=None, help="mu_k (default: the preset's, = mu_s)")
+    parser.add_argument("--coupling", default=None, choices=["thesis", "consistent"],
+                        help="the tissue's coupling (default: the preset's)")
     args = parser.parse_args()
     for law in args.laws:
-        glue(args.seed, law=law, friction_kinetic=args.friction_kinetic)
+        glue(args.seed, law=law, friction_kinetic=args.friction_kinetic, coupling=args.coupling)
         print()
 
 

@@ -96,7 +96,6 @@ def ramp(density: float, *, material: str = "shape_matching", law: str = "contac
         q, p = np.mean(loads[-WINDOW:], axis=0)
         ratio = q / (mu * p)
         a = float(np.abs(y).max())
-        cz = float(np.abs(y[stuck]).max()) if stuck.any() else 0.0
         share = float(lam[stuck].sum() / lam.sum())
         band = np.minimum((np.abs(y) / a * len(BANDS)).astype(int), len(BANDS) - 1) if a > 0 else np.zeros(y.size, int)
         bands = tuple(float(lam[stuck & (band == b)].sum() / max(lam[band == b].sum(), 1e-300)) for b in range(len(BANDS)))
@@ -105,7 +104,7 @@ def ramp(density: float, *, material: str = "shape_matching", law: str = "contac
         order = np.argsort(np.abs(y))
         cum = np.concatenate(([0.0], np.cumsum(lam[order]) / lam.sum()))
         c_load = float(np.interp(share, cum, np.concatenate(([0.0], np.abs(y)[order])))) / a if a > 0 else 0.0
-        rows.append((ratio, share, c_load, u0 - rig.axial, q, bands, cz / a if a > 0 else 0.0))
+        rows.append((ratio, share, c_load, u0 - rig.axial, q, bands))
         if first_slide is None and not stuck.all():
             first_slide = ratio
         if not stuck.any():

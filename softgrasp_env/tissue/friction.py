@@ -456,7 +456,7 @@ def _apply_with_cones(
 def friction_velocity_pass(
     nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_normal, c_rn, x, v, inv_mass, shape_rigid, rig_x0, rig_q0,
     rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, patch_slide, patch_change,
-    c_friction_vel, body_friction, patch_body, ns,
+    c_friction_vel, body_friction, ns,
 ):  # fmt: skip
     """The velocity half of kinetic friction (see friction_patches; Mueller et al. 2020 sec. 3.6
     apply dynamic friction on velocities, here it is split with the position level). A patch still

@@ -319,8 +319,7 @@ def _step(
     # --- the velocity half of kinetic friction; anchors kept for the next step
     friction_velocity_pass(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_normal, c_rn, x, v, inv_mass,
                            shape_rigid, rig_x0, rig_q0, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
-                           imp_lin, imp_ang, dt, patch_slide, patch_change, c_friction_vel, body_friction, patch_body,
-                           ns)  # fmt: skip
+                           imp_lin, imp_ang, dt, patch_slide, patch_change, c_friction_vel, body_friction, ns)  # fmt: skip
     store_anchors(nc, c_particle, c_shape, c_patch, c_lambda, c_anchor, x, shape_rigid, shape_local_x, shape_local_q,
                   rig_x, rig_q, patch_slide, patch_change, anchor_shape, anchor_x, anchor_slide, c_slip)  # fmt: skip
     return 0

@@ -28,27 +28,32 @@ def test_friction_law_is_validated_and_reaches_the_solver():
         env.close()
 
 
-@pytest.mark.parametrize("friction_kinetic", [None, 0.5], ids=["mu_k=mu_s", "mu_k=0.5"])
-def test_no_contact_leaves_its_cone_and_the_grip_needs_coulombs_least_force(friction_kinetic):
+@pytest.mark.parametrize(("seed", "coupling", "friction_kinetic"),
+                         [(1013, "thesis", None), (1013, "thesis", 0.5), (1013, "consistent", None),
+                          (1000, "thesis", None), (1001, "thesis", None), (1002, "consistent", None),
+                          (1003, "consistent", None)])  # fmt: skip
+def test_no_contact_leaves_its_cone_and_the_grip_needs_coulombs_least_force(seed, coupling, friction_kinetic):
     """The glue scene (benchmarks/friction_glue.py): the pads squeeze 4 N on the way down (dragged
     along the cylinder), lift, then the squeeze is lowered without stopping while the arm holds
     still. Checked at every world step of the grasp, the lift and the slip: no contact's whole
     friction (both halves) exceeds mu_s lambda_n while it sticks or mu_k lambda_n while it slides
-    (measured: 1.0000000 at most). The cylinder drops once the cores push less than
-    m g / (2 mu): measured held down to 1.361 N, 1.02 x the least 1.337 N (mu_k = mu_s); with
-    mu_k = 0.5 < mu_s = 0.69 the sliding contacts' bound rules, held down to 2.078 N, 1.13 x
-    m g / (2 mu_k) (the squeeze falls 10 % every second step). After the slip no pad presses the
-    cylinder with more than its core pushes (0 of 61 env steps; the patch law's 'flicker' of
-    21-31 N was the scripted arm's core ends on the cylinder's top, not the tissue)."""
+    (measured: 1.0000000 at most, every seed and coupling). The cylinder drops once the cores push
+    less than about m g / (2 mu): measured held down to 1.018 (seed 1013), 1.061, 1.077, 1.123,
+    1.046 (seeds 1000-1003) x the least under the thesis coupling, the consistent one within 0.01
+    of those (the squeeze falls 10 % every second step, so a drop lands up to ~1.1 x); with
+    mu_k = 0.5 < mu_s = 0.69 the sliding contacts' bound rules, held down to 1.13 x m g / (2 mu_k).
+    After the slip a pad presses the cylinder with at most 0.2 N more than its core pushes in any
+    env step (seed 1001; its inertia as it stops), where the patch law's 'flicker' read 21-31 N
+    (that was the scripted arm's core ends on the cylinder's top, not the tissue)."""
     from benchmarks.friction_glue import glue
 
-    r = glue(1013, report=lambda line: None, law="contact", friction_kinetic=friction_kinetic)
+    r = glue(seed, report=lambda line: None, law="contact", friction_kinetic=friction_kinetic, coupling=coupling)
     assert r["cone_excess"] <= 1.0 + 1e-6, r
     mu_k = r["mu"] if friction_kinetic is None else friction_kinetic
     least = r["least"] * r["mu"] / mu_k  # m g / (2 mu_k): what sliding contacts can hold
     assert not r["held"], r
     assert 0.97 <= r["weakest_hold"] / least <= 1.15, r
-    assert r["steps_after"] >= 20 and r["steps_over_cores"] == 0, r
+    assert r["steps_after"] >= 20 and r["after_excess"] <= 0.5, r
 
 
 @pytest.mark.parametrize("density", [4_000.0, 16_000.0, 64_000.0])
