@@ -98,6 +98,12 @@ class TissueConfig:
     stands for (linear elasticity with nu = 0 for small strain; tissue/compliant.py,
     continuum_group), independent of the group's shape. The package's documentation (Results:
     convergence in space) measures both against a finite-element reference."""
+    hourglass_stiffness: float = 0.0
+    """The continuum group energy's hourglass control h [-]: each member's miss r from its group's
+    affine fit costs h G V |r / l|^2 (l the group's radius of gyration; builder.continuum_groups),
+    which stops the zig-zag patterns the energy G V ||F - R||^2 cannot see (it sees only a group's
+    affine part) and leaves every affine motion's energy alone. 0 (default): none. At most 1;
+    only with group_energy "continuum"."""
     contact_cone: bool = False
     """Coulomb per contact as well as per patch (tissue/friction.py, _apply_with_cones): each tissue
     contact's friction at most mu_s times its normal force, what that sheds handed to the patch's
@@ -134,6 +140,10 @@ class TissueConfig:
         check_bool("contact_cone", self.contact_cone, owner=o)
         if self.group_energy not in GROUP_ENERGIES:
             raise ValueError(f"TissueConfig.group_energy must be one of {GROUP_ENERGIES}, got {self.group_energy!r}")
+        check_range("hourglass_stiffness", self.hourglass_stiffness, 0.0, 1.0, owner=o)
+        if self.hourglass_stiffness > 0.0 and self.group_energy != "continuum":
+            raise ValueError("TissueConfig.hourglass_stiffness acts on the continuum group energy only; got "
+                             f"{self.hourglass_stiffness!r} with group_energy={self.group_energy!r}")  # fmt: skip
         check_range("shear_modulus", self.shear_modulus, 1e3, 1e6, owner=o)
         check_range("max_deviation", self.max_deviation, 1e-3, 0.03, owner=o)
         check_range("radius_scale", self.radius_scale, 0.0, 2.0, lo_open=True, owner=o)

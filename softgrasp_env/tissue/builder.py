@@ -362,7 +362,8 @@ def _single_body_model(
     kappa = group_kappa(offsets, members, rest_offset, mass, tissue.shear_modulus, tissue.mass_density)
     cont = None
     if tissue.group_energy == "continuum":
-        cont, kappa = continuum_groups(offsets, members, rest_offset, mass, tissue.shear_modulus, tissue.mass_density)
+        cont, kappa = continuum_groups(offsets, members, rest_offset, mass, tissue.shear_modulus, tissue.mass_density,
+                                       tissue.hourglass_stiffness)  # fmt: skip
     return TissueModel(
         particle_rest_x=np.ascontiguousarray(rest_x, dtype=np.float64),
         particle_rest_q=np.ascontiguousarray(rest_q, dtype=np.float64),
@@ -415,9 +416,10 @@ zero (continuum_groups: a planar or collinear group's A_qq^+ is its pseudo-inver
 
 
 def continuum_groups(offsets: np.ndarray, members: np.ndarray, rest_offset: np.ndarray, mass: np.ndarray,
-                     modulus: float, density: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+                     modulus: float, density: float, hourglass: float = 0.0) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """The continuum group energy's rest data (TissueConfig.group_energy "continuum";
-    compliant.continuum_group): ((N, 7) [A_qq^+ (xx, xy, xz, yy, yz, zz), 2 G V], (N,) kappa).
+    compliant.continuum_group): ((N, CONTINUUM_COLUMNS) [A_qq^+ (xx, xy, xz, yy, yz, zz), 2 G V,
+    beta, A_qq (xx, xy, xz, yy, yz, zz)], (N,) kappa).
 
     E_g = G V_g ||F - R||_F^2 with F = A_pq A_qq^-1, A_pq = sum_j m_j (x_j - c) q_j^T and
     A_qq = sum_j m_j q_j q_j^T (q_j the rest offsets; the least-squares deformation gradient of
@@ -428,12 +430,22 @@ def continuum_groups(offsets: np.ndarray, members: np.ndarray, rest_offset: np.n
 
     kappa, the largest stiffness per unit mass of the group's Hessian (the world's substep rule,
     compliant.substeps_for): with R held, d^2 E / dx_j dx_k = 2 G V (b_j . b_k) I, b_j = A_qq^-1 m_j
-    q_j, and M^-1/2 H M^-1/2 has the eigenvalues of 2 G V sum_j b_j b_j^T / m_j (3 x 3)."""
+    q_j, and M^-1/2 H M^-1/2 has the eigenvalues of 2 G V sum_j b_j b_j^T / m_j (3 x 3).
+
+    ``hourglass`` (TissueConfig.hourglass_stiffness, h): the energy above sees only the affine part
+    of a group's motion, so a pattern whose every group fit is affine (a member ahead of its fit,
+    its neighbours behind: a zig-zag across the groups' overlaps) costs nothing and the pad's
+    free surface goes ragged under shear. The term E_h = (beta / 2) sum_j m_j |x_j - c - F q_j|^2
+    penalises each member's miss from the group's affine fit (hourglass control, as for
+    under-integrated finite elements: Flanagan & Belytschko 1981), beta = h G V / tr(A_qq), the
+    strain energy h G V |r / l|^2 of a miss r in a group of radius of gyration l. It is zero for
+    every affine motion, so it leaves a smooth field's energy alone as the groups shrink (the
+    miss of a smooth field falls as l^2). Its Hessian per unit mass is at most beta: kappa + beta."""
     n = offsets.shape[0] - 1
     mem = members.astype(np.int64)
     share = 1.0 / np.bincount(mem, minlength=mass.shape[0]).astype(np.float64)  # 1 / n_j
     vol = mass / density
-    cont = np.zeros((n, 7))
+    cont = np.zeros((n, CONTINUUM_COLUMNS))
     kappa = np.empty(n)
     for i in range(n):
         e = slice(int(offsets[i]), int(offsets[i + 1]))
@@ -447,8 +459,15 @@ def continuum_groups(offsets: np.ndarray, members: np.ndarray, rest_offset: np.n
         k2 = 2.0 * modulus * float((vol[j] * share[j]).sum())
         b = (m[:, None] * q) @ ainv
         kappa[i] = k2 * float(np.linalg.eigvalsh((b[:, :, None] * b[:, None, :] / m[:, None, None]).sum(axis=0)).max())
-        cont[i] = (ainv[0, 0], ainv[0, 1], ainv[0, 2], ainv[1, 1], ainv[1, 2], ainv[2, 2], k2)
+        beta = hourglass * 0.5 * k2 / float(np.trace(aqq))
+        kappa[i] += beta
+        cont[i] = (ainv[0, 0], ainv[0, 1], ainv[0, 2], ainv[1, 1], ainv[1, 2], ainv[2, 2], k2, beta,
+                   aqq[0, 0], aqq[0, 1], aqq[0, 2], aqq[1, 1], aqq[1, 2], aqq[2, 2])  # fmt: skip
     return cont, kappa
+
+
+CONTINUUM_COLUMNS = 14
+"""Columns of TissueModel.group_continuum (continuum_groups)."""
 
 
 BYTES_PER_PARTICLE = 3200

@@ -38,7 +38,7 @@ import math
 import numba as nb
 import numpy as np
 
-from .linalg import solve_sym3
+from .linalg import inv_sym3, solve_sym3
 from .model import TissueModel
 from .rigid import rigid_apply
 from .rotation import extract_rotation_unit_t, qmat
@@ -413,13 +413,20 @@ def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs,
     p00, p01, p02, p11, p12, p22 = g_cont[i, 0], g_cont[i, 1], g_cont[i, 2], g_cont[i, 3], g_cont[i, 4], g_cont[i, 5]
     k = g_cont[i, 6]
     c = k * dt * dt
-    # A_pq = sum_j x_j (m_j q_j)^T (sum_j m_j q_j = 0: no centre needed)
+    hb = g_cont[i, 7] * dt * dt  # the hourglass term's beta dt^2 (0: none)
+    # A_pq = sum_j x_j (m_j q_j)^T (sum_j m_j q_j = 0: no centre needed); the centre for the
+    # hourglass term's affine fit
     a00 = a01 = a02 = a10 = a11 = a12 = a20 = a21 = a22 = 0.0
+    cx = cy = cz = 0.0
     for e in range(start, end):
         j = np.uint64(g_mem[e])
         x0 = xp[j, 0]
         x1 = xp[j, 1]
         x2 = xp[j, 2]
+        w = g_pack[e, 0]
+        cx += w * x0
+        cy += w * x1
+        cz += w * x2
         q0 = g_pack[e, 1]
         q1 = g_pack[e, 2]
         q2 = g_pack[e, 3]
@@ -456,6 +463,10 @@ def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs,
     d20, d21, d22 = h * (f20 - r20), h * (f21 - r21), h * (f22 - r22)
     s00 = s01 = s02 = s11 = s12 = s22 = 0.0  # sum_free b b^T / m
     w00 = w01 = w02 = w10 = w11 = w12 = w20 = w21 = w22 = 0.0  # sum_free b z^T, row a = b's component
+    sb0 = sb1 = sb2 = 0.0  # sum_free b (the hourglass term's translation coupling)
+    mzx = mzy = mzz = 0.0  # sum_free m z
+    m_free = 0.0
+    m_all = 0.0
     held = False
     for e in range(start, end):
         j = np.uint64(g_mem[e])
@@ -471,12 +482,29 @@ def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs,
         zx = g_u[e, 0] + (d00 * b0 + d01 * b1 + d02 * b2) * inv_m
         zy = g_u[e, 1] + (d10 * b0 + d11 * b1 + d12 * b2) * inv_m
         zz = g_u[e, 2] + (d20 * b0 + d21 * b1 + d22 * b2) * inv_m
+        if hb > 0.0:
+            # + beta dt^2 r_j, r_j = x_j - c - F q_j the member's miss from the group's affine fit
+            o0 = g_pack[e, 4]
+            o1 = g_pack[e, 5]
+            o2 = g_pack[e, 6]
+            zx += hb * (xp[j, 0] - cx - (f00 * o0 + f01 * o1 + f02 * o2))
+            zy += hb * (xp[j, 1] - cy - (f10 * o0 + f11 * o1 + f12 * o2))
+            zz += hb * (xp[j, 2] - cz - (f20 * o0 + f21 * o1 + f22 * o2))
+            m_all += m
         g_raw[e, 0] = zx
         g_raw[e, 1] = zy
         g_raw[e, 2] = zz
         if fixed[j]:
             held = True
             continue
+        if hb > 0.0:
+            sb0 += b0
+            sb1 += b1
+            sb2 += b2
+            mzx += m * zx
+            mzy += m * zy
+            mzz += m * zz
+            m_free += m
         s00 += b0 * b0 * inv_m
         s01 += b0 * b1 * inv_m
         s02 += b0 * b2 * inv_m
@@ -492,14 +520,53 @@ def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs,
         w20 += b2 * zx
         w21 += b2 * zy
         w22 += b2 * zz
-    ic = 1.0 / c
-    s00 += ic
-    s11 += ic
-    s22 += ic
+    opm = 1.0
+    t = 0.0
+    if hb > 0.0:
+        # the hourglass term: with D' = (1 + hb) M_f - (hb / M) m_f m_f^T (Sherman-Morrison:
+        # D'^-1 v = v / ((1 + hb) m) + t sum v, t = sigma / (1 + hb)^2) and C3 = c I - hb A_qq
+        # (positive definite for hourglass_stiffness < 2), S = C3^-1 + B^T D'^-1 B, w = B^T D'^-1 rho
+        opm = 1.0 + hb
+        sigma = (hb / m_all) / (1.0 - hb * m_free / (m_all * opm))
+        t = sigma / (opm * opm)
+        io = 1.0 / opm
+        s00 = s00 * io + t * sb0 * sb0
+        s01 = s01 * io + t * sb0 * sb1
+        s02 = s02 * io + t * sb0 * sb2
+        s11 = s11 * io + t * sb1 * sb1
+        s12 = s12 * io + t * sb1 * sb2
+        s22 = s22 * io + t * sb2 * sb2
+        w00 = w00 * io + t * sb0 * mzx
+        w01 = w01 * io + t * sb0 * mzy
+        w02 = w02 * io + t * sb0 * mzz
+        w10 = w10 * io + t * sb1 * mzx
+        w11 = w11 * io + t * sb1 * mzy
+        w12 = w12 * io + t * sb1 * mzz
+        w20 = w20 * io + t * sb2 * mzx
+        w21 = w21 * io + t * sb2 * mzy
+        w22 = w22 * io + t * sb2 * mzz
+        i00, i01, i02, i11, i12, i22 = inv_sym3(c - hb * g_cont[i, 8], -hb * g_cont[i, 9], -hb * g_cont[i, 10],
+                                                c - hb * g_cont[i, 11], -hb * g_cont[i, 12], c - hb * g_cont[i, 13])  # fmt: skip
+        s00 += i00
+        s01 += i01
+        s02 += i02
+        s11 += i11
+        s12 += i12
+        s22 += i22
+    else:
+        ic = 1.0 / c
+        s00 += ic
+        s11 += ic
+        s22 += ic
     y00, y10, y20 = solve_sym3(s00, s01, s02, s11, s12, s22, w00, w10, w20)
     y01, y11, y21 = solve_sym3(s00, s01, s02, s11, s12, s22, w01, w11, w21)
     y02, y12, y22 = solve_sym3(s00, s01, s02, s11, s12, s22, w02, w12, w22)
-    # the free members' step dx_j = -(z_j - Y^T b_j / m_j), and dF = sum_free dx_j b_j^T (times dt^2 k)
+    # the free members' step dx_j = -(z_j - Y^T b_j / m_j), and dF = sum_free dx_j b_j^T (times dt^2 k);
+    # with the hourglass term dx_j = -(z_j - Y^T b_j / m_j) / (1 + hb) - t (sum m z - Y^T sum b)
+    gx = t * (mzx - (y00 * sb0 + y10 * sb1 + y20 * sb2))
+    gy = t * (mzy - (y01 * sb0 + y11 * sb1 + y21 * sb2))
+    gz = t * (mzz - (y02 * sb0 + y12 * sb1 + y22 * sb2))
+    mx = my = mz = 0.0  # sum_free (m_j / M) dx_j: the fit centre's move
     e00 = e01 = e02 = e10 = e11 = e12 = e20 = e21 = e22 = 0.0
     for e in range(start, end):
         j = np.uint64(g_mem[e])
@@ -515,6 +582,14 @@ def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs,
         dx = (y00 * b0 + y10 * b1 + y20 * b2) * inv_m - g_raw[e, 0]
         dy = (y01 * b0 + y11 * b1 + y21 * b2) * inv_m - g_raw[e, 1]
         dz = (y02 * b0 + y12 * b1 + y22 * b2) * inv_m - g_raw[e, 2]
+        if hb > 0.0:
+            dx = dx / opm - gx
+            dy = dy / opm - gy
+            dz = dz / opm - gz
+            w = g_pack[e, 0]
+            mx += w * dx
+            my += w * dy
+            mz += w * dz
         g_raw[e, 0] = dx
         g_raw[e, 1] = dy
         g_raw[e, 2] = dz
@@ -553,6 +628,14 @@ def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs,
         rx = g_raw[e, 0] + h * (e00 * b0 + e01 * b1 + e02 * b2) / m
         ry = g_raw[e, 1] + h * (e10 * b0 + e11 * b1 + e12 * b2) / m
         rz = g_raw[e, 2] + h * (e20 * b0 + e21 * b1 + e22 * b2) / m
+        if hb > 0.0:
+            # its miss from the fit moved by -(the centre's move + dF q_j): F = sum_k x_k b_k^T
+            o0 = g_pack[e, 4]
+            o1 = g_pack[e, 5]
+            o2 = g_pack[e, 6]
+            rx -= hb * (mx + e00 * o0 + e01 * o1 + e02 * o2)
+            ry -= hb * (my + e10 * o0 + e11 * o1 + e12 * o2)
+            rz -= hb * (mz + e20 * o0 + e21 * o1 + e22 * o2)
         deliver_to_core(j, -m * rx, -m * ry, -m * rz, core, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
                         imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
         g_u[e, 0] -= rx
@@ -561,12 +644,16 @@ def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs,
     return qr
 
 
-def continuum_energy(x: np.ndarray, mq: np.ndarray, ainv: np.ndarray, k: float) -> tuple[float, np.ndarray, np.ndarray]:
+def continuum_energy(x: np.ndarray, mq: np.ndarray, ainv: np.ndarray, k: float, *, mass: np.ndarray | None = None,
+                     beta: float = 0.0) -> tuple[float, np.ndarray, np.ndarray]:  # fmt: skip
     """One continuum group's energy, plain numpy (for tests and for reading: continuum_group is the
     kernel): ``x`` (n, 3) its members' positions, ``mq`` (n, 3) their m_j q_j, ``ainv`` (3, 3)
     A_qq^+, ``k`` = 2 G V. Returns (E, dE/dx (n, 3), R): E = (k / 2) ||F - R||_F^2, F = sum_j x_j
     b_j^T, b_j = A_qq^+ m_j q_j, R = polar(F) (det +1); dE/dx_j = k (F - R) b_j (R held: the
-    derivative through R vanishes, R minimising ||F - R|| over rotations)."""
+    derivative through R vanishes, R minimising ||F - R|| over rotations). With ``beta`` > 0 (and
+    the members' ``mass``) the hourglass term (beta / 2) sum_j m_j |r_j|^2 is added, r_j = x_j - c -
+    F q_j the member's miss from the group's affine fit (c the centre of mass, q_j = mq_j / m_j);
+    its gradient is beta m_j r_j (the fit is the mass-weighted projection onto affine motions)."""
     b = mq @ ainv
     f = x.T @ b
     u, _, vt = np.linalg.svd(f)
@@ -574,4 +661,12 @@ def continuum_energy(x: np.ndarray, mq: np.ndarray, ainv: np.ndarray, k: float) 
     d[2] = np.sign(np.linalg.det(u @ vt)) or 1.0
     r = (u * d) @ vt
     diff = f - r
-    return 0.5 * k * float((diff * diff).sum()), k * b @ diff.T, r
+    energy, grad = 0.5 * k * float((diff * diff).sum()), k * b @ diff.T
+    if beta > 0.0:
+        if mass is None:
+            raise ValueError("the hourglass term needs the members' mass")
+        c = (mass[:, None] * x).sum(axis=0) / mass.sum()
+        miss = x - c - (mq / mass[:, None]) @ f.T
+        energy += 0.5 * beta * float((mass[:, None] * miss * miss).sum())
+        grad = grad + beta * mass[:, None] * miss
+    return energy, grad, r

@@ -26,3 +26,20 @@ def solve_sym3(i00, i01, i02, i11, i12, i22, bx, by, bz):
     return (inv * (c00 * bx + c01 * by + c02 * bz), inv * (c01 * bx + c11 * by + c12 * bz),
             inv * (c02 * bx + c12 * by + c22 * bz))  # fmt: skip
 
+
+
+@nb.njit(cache=True, inline="always")
+def inv_sym3(i00, i01, i02, i11, i12, i22):
+    """The inverse of a symmetric positive definite 3x3 (00, 01, 02, 11, 12, 22), by the
+    adjugate; zeros if it is not positive definite."""
+    c00 = i11 * i22 - i12 * i12
+    c01 = i02 * i12 - i01 * i22
+    c02 = i01 * i12 - i02 * i11
+    c11 = i00 * i22 - i02 * i02
+    c12 = i01 * i02 - i00 * i12
+    c22 = i00 * i11 - i01 * i01
+    det = i00 * c00 + i01 * c01 + i02 * c02
+    if det <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    inv = 1.0 / det
+    return inv * c00, inv * c01, inv * c02, inv * c11, inv * c12, inv * c22

@@ -63,11 +63,12 @@ class TissueModel:
     stick/slide state (TissueConfig.friction_law "contact"; friction.load_anchors); None: all False
     (the patch law)."""
     group_continuum: np.ndarray | None = None
-    """(N, 7) per group, the continuum group energy E = G V ||F - R||_F^2 (TissueConfig.group_energy
+    """(N, 14) per group, the continuum group energy E = G V ||F - R||_F^2 (TissueConfig.group_energy
     "continuum"; builder.continuum_groups, compliant.continuum_group): [A_qq^+ (6: xx, xy, xz, yy,
-    yz, zz) [1/(kg m^2)], 2 G V [N m]], A_qq = sum_j m_j q_j q_j^T the group's rest second moment
-    and V the volume it stands for; a row of zeros is a shape-matching group. None: all zeros (every
-    group shape matching, the default material)."""
+    yz, zz) [1/(kg m^2)], 2 G V [N m], beta [1/s^2] (the hourglass term's stiffness per unit mass),
+    A_qq (6) [kg m^2]], A_qq = sum_j m_j q_j q_j^T the group's rest second moment and V the volume it
+    stands for; a row of zeros is a shape-matching group. None: all zeros (every group shape
+    matching, the default material)."""
 
     def __post_init__(self) -> None:
         if self.body_max_deviation is None:
@@ -77,7 +78,7 @@ class TissueModel:
         if self.body_contact_law is None:
             object.__setattr__(self, "body_contact_law", np.zeros(self.body_core_shape.shape[0], dtype=np.bool_))
         if self.group_continuum is None:
-            object.__setattr__(self, "group_continuum", np.zeros((self.group_offsets.shape[0] - 1, 7)))
+            object.__setattr__(self, "group_continuum", np.zeros((self.group_offsets.shape[0] - 1, 14)))
 
     @property
     def continuum(self) -> bool:
