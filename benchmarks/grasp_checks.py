@@ -166,6 +166,50 @@ def bisect(held, lo: float, hi: float, *, rel_tol: float = 0.02) -> float:
     return math.sqrt(lo * hi)
 
 
+def hold_bound(kind: dict, version: str, *, force: float = 3.0, mu: float = 0.9, **kwargs) -> dict | None:
+    """The heaviest cylinder the scripted env episode holds (bisection over 0.05-1.5 kg, held with at
+    most NO_SLIP in the hand) and Coulomb's bound 2 mu F / (g + a) with the palm's and the
+    cylinder's peak acceleration a at that mass; for the tissue also mu sum N / (g + a), with the
+    contacts' normal forces summed (``press``: Coulomb per contact bounds the friction by mu times
+    their sum, which on a pad wrapped round the cylinder exceeds the squeeze). None if no mass in
+    the range is held. ``kwargs`` go to gym.make."""
+    g = 9.81
+
+    def holds(m):
+        r = scripted_episode(kind, version, options={"cylinder_mass": m}, **kwargs)
+        return r["held"] and r["in_hand"] < NO_SLIP
+
+    m = bisect(holds, 0.05, 1.5)
+    if math.isnan(m):
+        return None
+    r = scripted_episode(kind, version, options={"cylinder_mass": m / 1.01}, **kwargs)
+    return {"mass": m, "coulomb": 2 * mu * force / (g + r["peak_accel"]),
+            "coulomb_cylinder": 2 * mu * force / (g + r["cyl_accel"]), "press": r["press"],
+            "coulomb_press": mu * r["press"] / (g + r["peak_accel"]), "peak_accel": r["peak_accel"],
+            "cyl_accel": r["cyl_accel"]}  # fmt: skip
+
+
+def lowest_friction(kind: dict, version: str, *, force: float = 3.0, mu: float = 0.9, mass: float = 0.1,
+                    **kwargs) -> dict | None:  # fmt: skip
+    """The lowest friction scale at which the scripted env episode lifts ``mass`` (bisection over
+    0.05-1 x the default, held with at most NO_SLIP in the hand) and Coulomb's m (g + a) / (2 mu F)
+    with the palm's and the cylinder's peak acceleration at that scale. None if none in the range
+    lifts. ``kwargs`` go to gym.make."""
+    g = 9.81
+
+    def slips(s):
+        r = scripted_episode(kind, version, options={"friction_scale": s}, **kwargs)
+        return not (r["held"] and r["in_hand"] < NO_SLIP)
+
+    f = bisect(slips, 0.05, 1.0)
+    if math.isnan(f):
+        return None
+    r = scripted_episode(kind, version, options={"friction_scale": f * 1.01}, **kwargs)
+    return {"scale": f, "coulomb": mass * (g + r["peak_accel"]) / (2 * force) / mu,
+            "coulomb_cylinder": mass * (g + r["cyl_accel"]) / (2 * force) / mu, "peak_accel": r["peak_accel"],
+            "cyl_accel": r["cyl_accel"]}  # fmt: skip
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--rows", default="dt,arm,mass,friction")
@@ -173,7 +217,7 @@ def main(argv: list[str] | None = None) -> int:
     ns = parser.parse_args(argv)
     rows, versions = ns.rows.split(","), ["v3"]
     kinds = {name: KINDS[name] for name in ns.kinds.split(",")}
-    g, mu, force, mass = 9.81, 0.9, 3.0, 0.1
+    mu, force, mass = 0.9, 3.0, 0.1
     if "dt" in rows:
         print("scripted grasp, aligned gentle start, 3 N per finger, 0.1 kg")
         print(f"{'ids':<4}{'kind':<18}{'dt':>8}{'held':>6}{'lift mm':>9}{'in-hand mm':>11}{'pad mm':>8}"
@@ -193,42 +237,28 @@ def main(argv: list[str] | None = None) -> int:
     for version in versions:
         if "mass" in rows:
             for name, kind in kinds.items():
-                def holds(m, kind=kind, version=version):
-                    r = scripted_episode(kind, version, options={"cylinder_mass": m})
-                    return r["held"] and r["in_hand"] < NO_SLIP
-
-                m = bisect(holds, 0.05, 1.5)
-                if math.isnan(m):
+                r = hold_bound(kind, version, force=force, mu=mu)
+                if r is None:
                     print(f"{version}: heaviest cylinder held, env episode, {name}: none between 0.05 and 1.5 kg "
                           f"(held with at most {NO_SLIP * 1e3:g} mm in the hand)", flush=True)  # fmt: skip
                     continue
-                # the load at the boundary: the palm's and the cylinder's own peak acceleration
-                r = scripted_episode(kind, version, options={"cylinder_mass": m / 1.01})
-                palm, cyl = 2 * mu * force / (g + r["peak_accel"]), 2 * mu * force / (g + r["cyl_accel"])
+                m, palm, cyl = r["mass"], r["coulomb"], r["coulomb_cylinder"]
                 print(f"{version}: heaviest cylinder held, env episode, {name}: {m:.3f} kg; Coulomb 2 mu F / (g + a): "
                       f"{palm:.3f} kg with the palm's a = {r['peak_accel']:.2f} m/s^2 ({m / palm - 1:+.1%}), "
                       f"{cyl:.3f} kg with the cylinder's a = {r['cyl_accel']:.2f} ({m / cyl - 1:+.1%})", flush=True)  # fmt: skip
                 if not math.isnan(r["press"]):
-                    # Coulomb per contact bounds the friction by mu times the sum of the contacts'
-                    # normal forces, which on a pad wrapped round the cylinder exceeds the squeeze
-                    press = mu * r["press"] / (g + r["peak_accel"])
+                    press = r["coulomb_press"]
                     print(f"{version}: ... the tissue contacts press the cylinder with {r['press']:.3f} N in all "
                           f"(2F = {2 * force:.3f} N): mu sum N / (g + a) = {press:.3f} kg ({m / press - 1:+.1%})",
                           flush=True)  # fmt: skip
         if "friction" in rows:
             for name, kind in kinds.items():
-                def slips(s, kind=kind, version=version):
-                    r = scripted_episode(kind, version, options={"friction_scale": s})
-                    return not (r["held"] and r["in_hand"] < NO_SLIP)
-
-                f = bisect(slips, 0.05, 1.0)
-                if math.isnan(f):
+                r = lowest_friction(kind, version, force=force, mu=mu, mass=mass)
+                if r is None:
                     print(f"{version}: lowest friction that lifts 0.1 kg, {name}: none between 0.05 and 1 x the default "
                           f"(held with at most {NO_SLIP * 1e3:g} mm in the hand)", flush=True)  # fmt: skip
                     continue
-                r = scripted_episode(kind, version, options={"friction_scale": f * 1.01})
-                palm = mass * (g + r["peak_accel"]) / (2 * force) / mu
-                cyl = mass * (g + r["cyl_accel"]) / (2 * force) / mu
+                f, palm, cyl = r["scale"], r["coulomb"], r["coulomb_cylinder"]
                 print(f"{version}: lowest friction that lifts 0.1 kg, {name}: {f:.3f} x the default; Coulomb m (g + a) "
                       f"/ 2F: {palm:.3f} x with the palm's a ({f / palm - 1:+.1%}), {cyl:.3f} x with the "
                       f"cylinder's a = {r['cyl_accel']:.2f} m/s^2 ({f / cyl - 1:+.1%})", flush=True)  # fmt: skip

@@ -69,10 +69,12 @@ def contacts(rig: PadRig) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return particles, lc.normal_lambda[:n][keep].copy(), y
 
 
-def ramp(density: float, *, material: str = "shape_matching", law: str = "contact", report=print) -> dict:
+def ramp(density: float, *, material: str = "shape_matching", law: str = "contact", layers: int = 1,
+         hourglass: float = 0.0, report=print) -> dict:  # fmt: skip
     """Press to PRESS, then drive the cylinder down its axis until every contact slides. Returns
-    the rows (Q / mu P, stick share, c / a) and the summary figures."""
-    tissue = TissueConfig(group_energy=material, friction_law=law)
+    the rows (Q / mu P, stick share, c / a) and the summary figures. ``layers``: TissueConfig.layers;
+    ``hourglass``: TissueConfig.hourglass_stiffness."""
+    tissue = TissueConfig(group_energy=material, friction_law=law, layers=layers, hourglass_stiffness=hourglass)
     rig = PadRig(density, tissue=tissue)
     mu = rig.tissue.friction_static
     c, _ = rig.press_to(PRESS, guess=2e-3)
