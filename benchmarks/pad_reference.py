@@ -338,7 +338,8 @@ TANGENTIAL_LOADS = (3.0,)
 
 
 def tangential_compliance_3d(pad: Pad, a: float, nu: float, *, element: float = TANGENTIAL_ELEMENT,
-                             length: float | None = None, quadratic: bool = True) -> float:  # fmt: skip
+                             length: float | None = None, quadratic: bool = True,
+                             indentation: float | None = None) -> float:  # fmt: skip
     """One pad's compliance along the cylinder's axis [m/N], the pad solved in 3-D with its finite
     length: the layer x in [0, h] bonded to the core at x = 0 (u = 0), the strip |y| <= a of its
     surface x = h moved by U along z with the contact stuck (u = (0, 0, U): the rigid cylinder
@@ -347,9 +348,19 @@ def tangential_compliance_3d(pad: Pad, a: float, nu: float, *, element: float = 
     z = 0 (a translation along z is odd under z -> -z). Linear elasticity at ``nu`` (Lame's
     lambda, mu = G), a tensor grid of ``element`` with a node line at |y| = a, 27-node (or
     ``quadratic=False``: 8-node) hexahedra (scikit-fem). ``length`` (default the face's H) other
-    than H gives the compliance per H of a longer pad: the verification of the anti-plane limit."""
+    than H gives the compliance per H of a longer pad: the verification of the anti-plane limit.
+
+    ``indentation`` (nu 0 only): the shear about the pad as the cylinder has compressed it, for the
+    continuum group energy E = G V ||F - R||^2 (tissue/compliant.py) at finite strain. A layer
+    compressed to a stretch s across it (F = diag(s, 1, 1)) and sheared by g = dw/dx along the axis
+    has ||F - R||^2 = (1 - s)^2 + g^2 s / (1 + s) (the polar rotation takes up part of the shear),
+    so its shear modulus across the layer is G 2 s / (1 + s), 0.78 G at the strip's centre under
+    3 N, while shear along the face keeps G. Here s(y) = 1 - d(y) / h through the thickness (a thin
+    layer), d(y) the cylinder's interference indentation - (R - sqrt(R^2 - y^2)), and the xz shear
+    modulus is G 2 s / (1 + s): linear elasticity linearised about the compressed pad. None: the
+    undeformed pad (linear elasticity, small strain)."""
     from scipy.sparse.linalg import spsolve
-    from skfem import Basis, ElementHex1, ElementHex2, ElementVector, MeshHex, asm
+    from skfem import Basis, BilinearForm, ElementHex1, ElementHex2, ElementVector, MeshHex, asm
     from skfem.models.elasticity import lame_parameters, linear_elasticity
 
     def grid(span: float) -> np.ndarray:
@@ -362,7 +373,22 @@ def tangential_compliance_3d(pad: Pad, a: float, nu: float, *, element: float = 
     mesh = MeshHex.init_tensor(grid(h), np.concatenate([grid(a), a + grid(pad.width / 2 - a)[1:]]), grid(length / 2))
     basis = Basis(mesh, ElementVector(ElementHex2() if quadratic else ElementHex1()), intorder=4 if quadratic else 2)
     lam, mu = lame_parameters(2.0 * pad.shear_modulus * (1.0 + nu), nu)
-    k = asm(linear_elasticity(lam, mu), basis).tocsr()
+    k = asm(linear_elasticity(lam, mu), basis)
+    if indentation is not None:
+        if nu != 0.0:
+            raise ValueError(f"the compressed pad's shear is that of the continuum group energy, nu 0; got nu {nu!r}")
+        radius = pad.radius
+
+        @BilinearForm
+        def softened(u, v, w):
+            y = np.abs(w.x[1])
+            d = np.maximum(0.0, indentation - (radius - np.sqrt(np.maximum(radius**2 - y**2, 0.0))))
+            s = 1.0 - d / h
+            # + (G_xz - G) gamma_xz(u) gamma_xz(v), gamma = 2 eps_xz: the shear modulus across the layer
+            return (2.0 * s / (1.0 + s) - 1.0) * mu * (u.grad[0, 2] + u.grad[2, 0]) * (v.grad[0, 2] + v.grad[2, 0])
+
+        k = k + asm(softened, basis)
+    k = k.tocsr()
     core = basis.get_dofs(lambda p: np.isclose(p[0], 0.0)).all()
     strip = basis.get_dofs(lambda p: np.isclose(p[0], h) & (p[1] <= a + 1e-12))
     mid_y = basis.get_dofs(lambda p: np.isclose(p[1], 0.0)).all("u^2")

@@ -264,16 +264,8 @@ def measure_tissue(density: float, loads=LOADS, *, tangential: bool = True, mate
         # offset of a few hundredths of a N while the contact's anchors take hold)
         rig.move_to(c, axial=-0.5 * SHEAR, speed=RAMP_SPEED / 2)
         first = rig.hold()
-        z0 = rig.state.particle_x[:, 2].copy()
         rig.move_to(c, axial=-1.5 * SHEAR, speed=RAMP_SPEED / 2)
         load = rig.hold()
-        lc = rig.solver.last_contacts()
-        keep = ~lc.inner[:lc.count] & (lc.normal_lambda[:lc.count] > 0.0) & (lc.shape[:lc.count] == 1)
-        p = lc.particle[:lc.count][keep]
-        held = (z0[p] - rig.state.particle_x[p, 2]) >= 0.8 * SHEAR  # moved with the cylinder
-        y = rig.state.particle_x[p[held], 1] - rig.col.rigid_x[1, 1]
-        # the strip the contact holds: out to the farthest touching particle that moved with it
-        out["held_half_width"] = float(np.abs(y).max()) if y.size else math.nan
         out["shear_normal"] = float(load[0])
         out["shear_load"] = float(load[2])  # the pad pulls the cylinder back up
         out["compliance"] = SHEAR / float(load[2] - first[2])
