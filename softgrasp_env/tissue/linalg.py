@@ -1,7 +1,7 @@
 """Small dense linear algebra for the tissue kernels (numba, float64, no object mode).
 
 A symmetric 3x3 solve, for the damping of each body's deviation from its rigid motion
-(integrate.py).
+(integrate.py) and the group solves (compliant.py), and the inverse built from it.
 """
 
 from __future__ import annotations
@@ -28,18 +28,11 @@ def solve_sym3(i00, i01, i02, i11, i12, i22, bx, by, bz):
 
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def inv_sym3(i00, i01, i02, i11, i12, i22):
-    """The inverse of a symmetric positive definite 3x3 (00, 01, 02, 11, 12, 22), by the
-    adjugate; zeros if it is not positive definite."""
-    c00 = i11 * i22 - i12 * i12
-    c01 = i02 * i12 - i01 * i22
-    c02 = i01 * i12 - i02 * i11
-    c11 = i00 * i22 - i02 * i02
-    c12 = i01 * i02 - i00 * i12
-    c22 = i00 * i11 - i01 * i01
-    det = i00 * c00 + i01 * c01 + i02 * c02
-    if det <= 0.0:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    inv = 1.0 / det
-    return inv * c00, inv * c01, inv * c02, inv * c11, inv * c12, inv * c22
+    """The inverse of a symmetric positive definite 3x3, as (00, 01, 02, 11, 12, 22): its columns
+    solved by solve_sym3; zeros if it is not positive definite."""
+    a00, a01, a02 = solve_sym3(i00, i01, i02, i11, i12, i22, 1.0, 0.0, 0.0)
+    _, a11, a12 = solve_sym3(i00, i01, i02, i11, i12, i22, 0.0, 1.0, 0.0)
+    _, _, a22 = solve_sym3(i00, i01, i02, i11, i12, i22, 0.0, 0.0, 1.0)
+    return a00, a01, a02, a11, a12, a22
