@@ -361,3 +361,23 @@ def test_four_layers_carry_6N_without_inverting_under_hourglass_control():
     c, f = rig.press_to(6.0, guess=4.4e-3)
     assert abs(f - 6.0) < 0.05
     assert abs(c / REFERENCE_6N - 1.0) < 0.04, c
+
+
+REFERENCE_1N = 1.344e-3
+"""The pad's compression under 1 N in the reference, nu = 0 [m]."""
+
+
+@pytest.mark.slow
+def test_layers_as_thick_as_the_spacing_keep_the_compression_on_the_reference():
+    """The continuum energy with hourglass control 1 and a layer about as thick as the particle
+    spacing (convergence_table --layers auto): one layer at 16,000, two at 64,000, four at
+    256,000 per m^2. Measured against the reference at 1 / 3 / 6 N: -2.2 / -3.5 / -1.5 %,
+    -1.3 / -1.3 / -0.5 %, -1.5 / -2.5 / -1.6 % (one layer alone drifts to -9.7 / -7.1 / -5.0 % at
+    256,000)."""
+    from benchmarks.spatial_convergence import measure_tissue
+
+    refs = {1.0: REFERENCE_1N, 3.0: REFERENCE_3N, 6.0: REFERENCE_6N}
+    for density, layers in ((16_000.0, 1), (64_000.0, 2), (256_000.0, 4)):
+        r = measure_tissue(density, material="continuum", layers=layers, hourglass=1.0, tangential=False)
+        errors = {f: r[f"compression_{f:g}N"] / ref - 1.0 for f, ref in refs.items()}
+        assert all(abs(e) < 0.05 for e in errors.values()), (density, layers, errors)
