@@ -435,10 +435,10 @@ def continuum_groups(offsets: np.ndarray, members: np.ndarray, rest_offset: np.n
     ``hourglass`` (TissueConfig.hourglass_stiffness, h): the energy above sees only the affine part
     of a group's motion, so a pattern whose every group fit is affine (a member ahead of its fit,
     its neighbours behind: a zig-zag across the groups' overlaps) costs nothing and the pad's
-    free surface goes ragged under shear. The term E_h = (beta / 2) sum_j m_j |x_j - c - F q_j|^2
+    free surface goes ragged under shear. The term E_h = (beta / 2) sum_j m_j ||x_j - c - F q_j||^2
     penalises each member's miss from the group's affine fit (hourglass control, as for
     under-integrated finite elements: Flanagan & Belytschko 1981), beta = h G V / tr(A_qq), the
-    strain energy h G V |r / l|^2 of a miss r in a group of radius of gyration l. It is zero for
+    strain energy h G V ||r||^2 / l^2 of a miss r in a group of radius of gyration l. It is zero for
     every affine motion, so it leaves a smooth field's energy alone as the groups shrink (the
     miss of a smooth field falls as l^2). Its Hessian per unit mass is at most beta: kappa + beta."""
     n = offsets.shape[0] - 1

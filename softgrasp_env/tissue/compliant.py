@@ -651,7 +651,7 @@ def continuum_energy(x: np.ndarray, mq: np.ndarray, ainv: np.ndarray, k: float, 
     A_qq^+, ``k`` = 2 G V. Returns (E, dE/dx (n, 3), R): E = (k / 2) ||F - R||_F^2, F = sum_j x_j
     b_j^T, b_j = A_qq^+ m_j q_j, R = polar(F) (det +1); dE/dx_j = k (F - R) b_j (R held: the
     derivative through R vanishes, R minimising ||F - R|| over rotations). With ``beta`` > 0 (and
-    the members' ``mass``) the hourglass term (beta / 2) sum_j m_j |r_j|^2 is added, r_j = x_j - c -
+    the members' ``mass``) the hourglass term (beta / 2) sum_j m_j ||r_j||^2 is added, r_j = x_j - c -
     F q_j the member's miss from the group's affine fit (c the centre of mass, q_j = mq_j / m_j);
     its gradient is beta m_j r_j (the fit is the mass-weighted projection onto affine motions)."""
     b = mq @ ainv
