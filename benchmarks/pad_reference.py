@@ -339,7 +339,7 @@ TANGENTIAL_LOADS = (3.0,)
 
 def tangential_compliance_3d(pad: Pad, a: float, nu: float, *, element: float = TANGENTIAL_ELEMENT,
                              length: float | None = None, quadratic: bool = True,
-                             indentation: float | None = None) -> float:  # fmt: skip
+                             indentation: float | None = None, profile: str = "thin") -> float:  # fmt: skip
     """One pad's compliance along the cylinder's axis [m/N], the pad solved in 3-D with its finite
     length: the layer x in [0, h] bonded to the core at x = 0 (u = 0), the strip |y| <= a of its
     surface x = h moved by U along z with the contact stuck (u = (0, 0, U): the rigid cylinder
@@ -358,7 +358,11 @@ def tangential_compliance_3d(pad: Pad, a: float, nu: float, *, element: float = 
     3 N, while shear along the face keeps G. Here s(y) = 1 - d(y) / h through the thickness (a thin
     layer), d(y) the cylinder's interference indentation - (R - sqrt(R^2 - y^2)), and the xz shear
     modulus is G 2 s / (1 + s): linear elasticity linearised about the compressed pad. None: the
-    undeformed pad (linear elasticity, small strain)."""
+    undeformed pad (linear elasticity, small strain). ``profile`` "plane_strain" takes the
+    in-plane deformation F2 = I + grad u from the plane-strain model pressed to ``indentation``
+    instead (LayerModel, nu 0) at every point, its principal stretches s_i and directions v_i:
+    the shear pair (dw/dx, dw/dy) then has the modulus 2 G sum_i s_i / (1 + s_i) v_i v_i^T (the
+    same expansion in F2's principal frame)."""
     from scipy.sparse.linalg import spsolve
     from skfem import Basis, BilinearForm, ElementHex1, ElementHex2, ElementVector, MeshHex, asm
     from skfem.models.elasticity import lame_parameters, linear_elasticity
@@ -378,15 +382,29 @@ def tangential_compliance_3d(pad: Pad, a: float, nu: float, *, element: float = 
         if nu != 0.0:
             raise ValueError(f"the compressed pad's shear is that of the continuum group energy, nu 0; got nu {nu!r}")
         radius = pad.radius
+        if profile == "thin":
 
-        @BilinearForm
-        def softened(u, v, w):
-            y = np.abs(w.x[1])
-            d = np.maximum(0.0, indentation - (radius - np.sqrt(np.maximum(radius**2 - y**2, 0.0))))
-            s = 1.0 - d / h
-            # + (G_xz - G) gamma_xz(u) gamma_xz(v), gamma = 2 eps_xz: the shear modulus across the layer
-            return (2.0 * s / (1.0 + s) - 1.0) * mu * (u.grad[0, 2] + u.grad[2, 0]) * (v.grad[0, 2] + v.grad[2, 0])
+            @BilinearForm
+            def softened(u, v, w):
+                y = np.abs(w.x[1])
+                d = np.maximum(0.0, indentation - (radius - np.sqrt(np.maximum(radius**2 - y**2, 0.0))))
+                s = 1.0 - d / h
+                # + (G_xz - G) gamma_xz(u) gamma_xz(v), gamma = 2 eps_xz: the shear modulus across the layer
+                return (2.0 * s / (1.0 + s) - 1.0) * mu * (u.grad[0, 2] + u.grad[2, 0]) * (v.grad[0, 2] + v.grad[2, 0])
 
+        elif profile == "plane_strain":
+            modulus = _shear_pair_modulus(pad, indentation)
+
+            @BilinearForm
+            def softened(u, v, w):
+                m = modulus(w.x[0], np.abs(w.x[1]))  # (2, 2, ...): 2 G sum_i s_i / (1 + s_i) v_i v_i^T
+                gu = (u.grad[0, 2] + u.grad[2, 0], u.grad[1, 2] + u.grad[2, 1])
+                gv = (v.grad[0, 2] + v.grad[2, 0], v.grad[1, 2] + v.grad[2, 1])
+                # + gamma(u)^T (G_eff - G I) gamma(v) / ... for the pair (gamma_xz, gamma_yz)
+                return sum((m[i, j] - (mu if i == j else 0.0)) * gu[i] * gv[j] for i in range(2) for j in range(2))
+
+        else:
+            raise ValueError(f"profile must be 'thin' or 'plane_strain', got {profile!r}")
         k = k + asm(softened, basis)
     k = k.tocsr()
     core = basis.get_dofs(lambda p: np.isclose(p[0], 0.0)).all()
@@ -402,6 +420,35 @@ def tangential_compliance_3d(pad: Pad, a: float, nu: float, *, element: float = 
     u[free] = spsolve(k[free][:, free].tocsc(), -(k[free][:, fixed] @ u[fixed]))
     force = 4.0 * float((k @ u)[held].sum())  # the whole pad's axial force at U = 1 m
     return length / (pad.height * force)
+
+
+def _shear_pair_modulus(pad: Pad, indentation: float):
+    """(x, y) -> (2, 2, ...) the continuum energy's shear modulus of the pair (dw/dx, dw/dy) about
+    the plane-strain pad (nu 0) pressed ``indentation`` [m] by the cylinder: 2 G sum_i s_i / (1 +
+    s_i) v_i v_i^T from the SVD of F2 = I + grad u (tangential_compliance_3d's "plane_strain")."""
+    from scipy.interpolate import LinearNDInterpolator, NearestNDInterpolator
+
+    model = LayerModel(pad, 0.0)
+    c = model.contact(indentation)
+    load = np.zeros(model.basis.N)
+    load[model.surface] = -c["f"]
+    grad = model.basis.interpolate(model.solve(load)).grad  # (2, 2, elements, points)
+    pts = model.basis.mapping.F(model.basis.X)  # (2, elements, points)
+    xy = np.stack([pts[0].ravel(), pts[1].ravel()], axis=1)
+    f2 = np.eye(2)[:, :, None] + grad.reshape(2, 2, -1)
+    u, sv, vt = np.linalg.svd(np.moveaxis(f2, 2, 0))  # F2 = U S V^T per point
+    v = np.swapaxes(vt, 1, 2)  # columns: the right singular vectors (reference frame)
+    m = 2.0 * pad.shear_modulus * np.einsum("nik,nk,njk->nij", v, sv / (1.0 + sv), v).reshape(-1, 4)
+    linear, nearest = LinearNDInterpolator(xy, m), NearestNDInterpolator(xy, m)
+
+    def modulus(x, y):
+        q = np.stack([x.ravel(), y.ravel()], axis=1)
+        out = linear(q)
+        bad = np.isnan(out).any(axis=1)
+        out[bad] = nearest(q[bad])
+        return np.moveaxis(out.reshape(*x.shape, 2, 2), (-2, -1), (0, 1))
+
+    return modulus
 
 
 def reference(pad: Pad | None = None, *, nus=NUS, loads=LOADS, level: int = LEVEL,
