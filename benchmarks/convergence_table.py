@@ -24,6 +24,10 @@ so that the groups keep their shape as the tissue is refined). The rows and thei
   (pad_reference.tangential_compliance_3d's ``indentation``: under 3 N the layer is compressed by
   up to 36 %, and the continuum energy's shear modulus across a layer compressed to a stretch s
   is G 2 s / (1 + s), a property of the material at finite strain that linear elasticity lacks).
+- ``band`` (spatial_convergence.tangential_at, same rig): the tangential compliance at 2 / 2.5 / 3 /
+  3.5 / 4 N against the compressed reference at each load: the mean error and its spread. At one
+  load the error depends on where the reference's strip edge falls between two particle columns
+  (it jumps as the next column starts to touch); over the band that quantisation averages out.
 - ``slip`` (partial_slip.ramp, same rig, pressed to 3 N and driven along the cylinder's axis): the
   Q / mu P at which the first contact slides (Cattaneo-Mindlin: at once, 0) and at which the whole
   strip does (Coulomb: 1).
@@ -63,7 +67,9 @@ from softgrasp_env.config import FRICTION_LAWS, GROUP_ENERGIES, TissueConfig
 
 OUT = Path(__file__).resolve().parent / "out"
 DENSITIES = (4_000.0, 16_000.0, 64_000.0, 256_000.0)
-ROWS = ("rig", "slip", "env", "lever", "rim")
+ROWS = ("rig", "band", "slip", "env", "lever", "rim")
+BAND_LOADS = (2.0, 2.5, 3.0, 3.5, 4.0)
+"""The normal loads of the tangential band [N]."""
 LEVER_FORCES = (1.0, 6.0)
 """The squeezes per finger at which the torsional lever is read [N]."""
 
@@ -88,6 +94,14 @@ def measure(density: float, rows, *, material: str, law: str, layers: int, seeds
         out.update({key: r[key] for key in ("compression_1N", "compression_3N", "compression_6N", "width_3N",
                                             "compliance", "particles", "substeps")})  # fmt: skip
         out["compliance_compressed"] = r["compliance"]
+    if "band" in rows:
+        from benchmarks.spatial_convergence import tangential_at
+
+        refs = band_references()
+        errors = [tangential_at(density, load, material=material, layers=layers, law=law, hourglass=hourglass)
+                  / refs[load] - 1.0 for load in BAND_LOADS]  # fmt: skip
+        out["band_mean"] = float(np.mean(errors))
+        out["band_spread"] = float(np.max(errors) - np.min(errors))
     if "slip" in rows:
         from benchmarks.partial_slip import ramp
 
@@ -133,6 +147,23 @@ def measure(density: float, rows, *, material: str, law: str, layers: int, seeds
     return out
 
 
+_BAND: dict[float, float] = {}
+
+
+def band_references() -> dict[float, float]:
+    """The compressed 3-D reference's tangential compliance at each of BAND_LOADS [m/N] (nu 0,
+    the plane-strain model's indentation and half-width at that load); computed once."""
+    if not _BAND:
+        from benchmarks.pad_reference import LayerModel, default_pad, tangential_compliance_3d
+
+        pad = default_pad()
+        model = LayerModel(pad, 0.0)
+        for load in BAND_LOADS:
+            delta, contact = model.indentation(load)
+            _BAND[load] = tangential_compliance_3d(pad, contact["a"], 0.0, indentation=delta)
+    return _BAND
+
+
 def observed_orders(values: list[float], ref: float) -> list[float]:
     """log2 of the ratio of successive errors |value - ref| (the spacing halves per density)."""
     e = [abs(v - ref) for v in values]
@@ -150,7 +181,7 @@ def self_orders(values: list[float]) -> list[float]:
 def references(rows) -> dict[str, float]:
     """The row keys with an external reference, and its value."""
     refs = {"first_slide": 0.0, "gross_slide": 1.0, "hold_ratio": 1.0, "hold_ratio_press": 1.0, "hold_ratio_cylinder": 1.0,
-            "friction_ratio_cylinder": 1.0,
+            "friction_ratio_cylinder": 1.0, "band_mean": 0.0, "band_spread": 0.0,
             "friction_ratio": 1.0, "rim_push": 0.0}  # fmt: skip
     if "rig" in rows:
         from benchmarks.pad_reference import default_pad, reference, tangential_compliance_3d
@@ -169,6 +200,8 @@ TITLES = {
     "compression_6N": ("compression, 6 N [mm]", 1e3), "width_3N": ("RMS half-width, 3 N [mm]", 1e3),
     "compliance": ("tangential compliance, one pad [mm/N]", 1e3),
     "compliance_compressed": ("... against the compressed pad's reference [mm/N]", 1e3),
+    "band_mean": ("tangential over 2-4 N against the compressed ref: mean error", 1.0),
+    "band_spread": ("... its spread (largest - smallest error)", 1.0),
     "first_slide": ("first contact slides at Q / mu P", 1.0), "gross_slide": ("whole strip slides at Q / mu P", 1.0),
     "hold_bound": ("hold bound [kg]", 1.0), "hold_ratio": ("hold bound / (2 mu F / (g + a))", 1.0),
     "hold_ratio_press": ("hold bound / (mu sum N / (g + a))", 1.0),

@@ -274,6 +274,20 @@ def measure_tissue(density: float, loads=LOADS, *, tangential: bool = True, mate
     return out
 
 
+def tangential_at(density: float, load: float, *, material: str = "shape_matching", layers: int = 1,
+                  law: str = "patch", hourglass: float = 0.0) -> float:  # fmt: skip
+    """One pad's tangential compliance [m/N] pressed to ``load`` [N], as measure_tissue's at 3 N,
+    the axial moves scaled with the load (SHEAR load / 3 N) so that the contact sticks."""
+    tissue = TissueConfig(group_energy=material, layers=layers, friction_law=law, hourglass_stiffness=hourglass)
+    rig = PadRig(density, tissue=tissue)
+    c, _ = rig.press_to(load, guess=2.7e-3 * (load / 3.0) ** 0.7)
+    shear = SHEAR * load / 3.0
+    rig.move_to(c, axial=-0.5 * shear, speed=RAMP_SPEED / 2)
+    first = rig.hold()
+    rig.move_to(c, axial=-1.5 * shear, speed=RAMP_SPEED / 2)
+    return shear / float(rig.hold()[2] - first[2])
+
+
 def measure_env(density: float) -> float:
     """The pad's compression at the end of the env's scripted grasp (3 N per finger) [m]."""
     from benchmarks.grasp_checks import scripted_episode
