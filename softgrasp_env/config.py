@@ -101,8 +101,8 @@ class TissueConfig:
     hourglass_stiffness: float = 0.0
     """The continuum group energy's hourglass control h [-]: each member's miss r from its group's
     affine fit costs h G V ||r||^2 / l^2 (l the group's radius of gyration; builder.continuum_groups),
-    which stops the zig-zag patterns the energy G V ||F - R||^2 cannot see (it sees only a group's
-    affine part) and leaves every affine motion's energy alone. 0 (default): none. At most 1;
+    which stiffens the zig-zag patterns the energy G V ||F - R||^2 sees only through the groups'
+    affine fits and leaves every affine motion's energy alone. 0 (default): none. At most 1;
     only with group_energy "continuum"."""
     contact_cone: bool = False
     """Coulomb per contact as well as per patch (tissue/friction.py, _apply_with_cones): each tissue

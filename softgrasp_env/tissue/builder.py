@@ -15,7 +15,7 @@ import numba as nb
 import numpy as np
 
 from ..config import TissueConfig, kinetic_friction
-from .model import TissueModel
+from .model import CONTINUUM_COLUMNS, TissueModel
 
 ShapeKind = Literal["box", "cylinder", "capsule", "sphere"]
 SHAPE_KINDS: tuple[str, ...] = ("box", "cylinder", "capsule", "sphere")
@@ -433,9 +433,9 @@ def continuum_groups(offsets: np.ndarray, members: np.ndarray, rest_offset: np.n
     q_j, and M^-1/2 H M^-1/2 has the eigenvalues of 2 G V sum_j b_j b_j^T / m_j (3 x 3).
 
     ``hourglass`` (TissueConfig.hourglass_stiffness, h): the energy above sees only the affine part
-    of a group's motion, so a pattern whose every group fit is affine (a member ahead of its fit,
-    its neighbours behind: a zig-zag across the groups' overlaps) costs nothing and the pad's
-    free surface goes ragged under shear. The term E_h = (beta / 2) sum_j m_j ||x_j - c - F q_j||^2
+    of a group's motion, so a pattern that the groups' overlapping fits average away (a member
+    ahead of its fit, its neighbours behind: a checkerboard across the surface) costs little, and a
+    layered pad's free surface goes ragged under shear. The term E_h = (beta / 2) sum_j m_j ||x_j - c - F q_j||^2
     penalises each member's miss from the group's affine fit (hourglass control, as for
     under-integrated finite elements: Flanagan & Belytschko 1981), beta = h G V / tr(A_qq), the
     strain energy h G V ||r||^2 / l^2 of a miss r in a group of radius of gyration l. It is zero for
@@ -464,10 +464,6 @@ def continuum_groups(offsets: np.ndarray, members: np.ndarray, rest_offset: np.n
         cont[i] = (ainv[0, 0], ainv[0, 1], ainv[0, 2], ainv[1, 1], ainv[1, 2], ainv[2, 2], k2, beta,
                    aqq[0, 0], aqq[0, 1], aqq[0, 2], aqq[1, 1], aqq[1, 2], aqq[2, 2])  # fmt: skip
     return cont, kappa
-
-
-CONTINUUM_COLUMNS = 14
-"""Columns of TissueModel.group_continuum (continuum_groups)."""
 
 
 BYTES_PER_PARTICLE = 3200

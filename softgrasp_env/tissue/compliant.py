@@ -423,10 +423,11 @@ def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs,
         x0 = xp[j, 0]
         x1 = xp[j, 1]
         x2 = xp[j, 2]
-        w = g_pack[e, 0]
-        cx += w * x0
-        cy += w * x1
-        cz += w * x2
+        if hb > 0.0:
+            w = g_pack[e, 0]
+            cx += w * x0
+            cy += w * x1
+            cz += w * x2
         q0 = g_pack[e, 1]
         q1 = g_pack[e, 2]
         q2 = g_pack[e, 3]

@@ -27,7 +27,6 @@ def solve_sym3(i00, i01, i02, i11, i12, i22, bx, by, bz):
             inv * (c02 * bx + c12 * by + c22 * bz))  # fmt: skip
 
 
-
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def inv_sym3(i00, i01, i02, i11, i12, i22):
     """The inverse of a symmetric positive definite 3x3, as (00, 01, 02, 11, 12, 22): its columns

@@ -14,6 +14,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+CONTINUUM_COLUMNS = 14
+"""Columns of TissueModel.group_continuum (builder.continuum_groups writes them, the solver packs
+them, compliant.continuum_group reads them)."""
+
 
 @dataclass(frozen=True, eq=False)
 class TissueModel:
@@ -63,10 +67,10 @@ class TissueModel:
     stick/slide state (TissueConfig.friction_law "contact"; friction.load_anchors); None: all False
     (the patch law)."""
     group_continuum: np.ndarray | None = None
-    """(N, 14) per group, the continuum group energy E = G V ||F - R||_F^2 (TissueConfig.group_energy
-    "continuum"; builder.continuum_groups, compliant.continuum_group): [A_qq^+ (6: xx, xy, xz, yy,
-    yz, zz) [1/(kg m^2)], 2 G V [N m], beta [1/s^2] (the hourglass term's stiffness per unit mass),
-    A_qq (6) [kg m^2]], A_qq = sum_j m_j q_j q_j^T the group's rest second moment and V the volume it
+    """(N, CONTINUUM_COLUMNS) per group, the continuum group energy E = G V ||F - R||_F^2
+    (TissueConfig.group_energy "continuum"; builder.continuum_groups, compliant.continuum_group):
+    [A_qq^+ (6: xx, xy, xz, yy, yz, zz) [1/(kg m^2)], 2 G V [N m], beta [1/s^2] (the hourglass
+    term's stiffness per unit mass), A_qq (6) [kg m^2]], A_qq = sum_j m_j q_j q_j^T the group's rest second moment and V the volume it
     stands for; a row of zeros is a shape-matching group. None: all zeros (every group shape
     matching, the default material)."""
 
@@ -78,7 +82,7 @@ class TissueModel:
         if self.body_contact_law is None:
             object.__setattr__(self, "body_contact_law", np.zeros(self.body_core_shape.shape[0], dtype=np.bool_))
         if self.group_continuum is None:
-            object.__setattr__(self, "group_continuum", np.zeros((self.group_offsets.shape[0] - 1, 14)))
+            object.__setattr__(self, "group_continuum", np.zeros((self.group_offsets.shape[0] - 1, CONTINUUM_COLUMNS)))
 
     @property
     def continuum(self) -> bool:

@@ -60,7 +60,7 @@ from .contacts import (
 )
 from .friction import friction_pairs, friction_patches, friction_velocity_pass, load_anchors, store_anchors
 from .integrate import predict_particles, update_velocities
-from .model import TissueModel
+from .model import CONTINUUM_COLUMNS, TissueModel
 from .rigid import Colliders, predict_rigid
 from .shape_matching import balance_torques, group_frames, group_pack, rest_moments
 from .state import TissueState
@@ -141,7 +141,7 @@ _B_SCRATCH = (("c_inner", "contacts", 0), ("patch_slide", "patches", 0), ("patch
 _F_MODEL = (("rest_x", "n", 3), ("rest_q", "n", 4), ("rest_moment", "n", 9), ("inertia", "n", 3), ("radii", "n", 3),
             ("mass", "n", 0), ("inv_mass", "n", 0), ("g_pack", "members", 8),
             ("body_friction", "bodies", 2), ("group_kappa", "n", 0), ("body_max_deviation", "bodies", 0),
-            ("g_cont", "n", 14))  # fmt: skip
+            ("g_cont", "n", CONTINUUM_COLUMNS))  # fmt: skip
 _I_MODEL = (("p_body", "n", 0), ("g_off", "groups", 0), ("g_mem", "members", 0), ("body_off", "body_offsets", 0),
             ("body_core_shape", "bodies", 0))  # fmt: skip
 _B_MODEL = (("attached", "n", 0), ("body_contact_cone", "bodies", 0), ("body_contact_law", "bodies", 0))

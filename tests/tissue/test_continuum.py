@@ -383,3 +383,54 @@ def test_layers_as_thick_as_the_spacing_keep_the_compression_on_the_reference():
         r = measure_tissue(density, material="continuum", layers=layers, hourglass=1.0, tangential=False)
         errors = {f: r[f"compression_{f:g}N"] / ref - 1.0 for f, ref in refs.items()}
         assert all(abs(e) < 0.05 for e in errors.values()), (density, layers, errors)
+
+
+def _candidate_grasp(coupling: str, mass: float, steps: int) -> dict:
+    """The scripted aligned grasp (SoftGraspEasy-v3) on the continuum energy with hourglass control
+    1 and Coulomb per contact, run for ``steps`` env steps (20 Hz), under ``coupling``."""
+    import gymnasium as gym
+
+    import softgrasp_env  # noqa: F401
+    from benchmarks.grasp_checks import ALIGNED
+    from softgrasp_env.config import SimConfig
+    from softgrasp_env.policies import ScriptedGraspPolicy
+
+    tissue = TissueConfig(group_energy="continuum", hourglass_stiffness=1.0, friction_law="contact")
+    env = gym.make("SoftGraspEasy-v3", max_episode_steps=steps, tissue=tissue, sim=SimConfig(coupling=coupling))
+    try:
+        policy = ScriptedGraspPolicy.for_env(env)
+        obs, _ = env.reset(seed=0, options={**ALIGNED, "cylinder_mass": mass})
+        lifts, held, diverged = [], [], False
+        for _ in range(steps):
+            obs, _, term, trunc, info = env.step(policy(obs))
+            lifts.append(info["lift_height"])
+            held.append(info["held"])
+            diverged |= bool(info["diverged"])
+            if term or trunc:
+                break
+        return {"lifts": np.array(lifts), "held": np.array(held), "diverged": diverged}
+    finally:
+        env.close()
+
+
+@pytest.mark.slow
+def test_the_candidate_tissue_holds_near_its_bound_for_a_minute():
+    """0.45 kg (86 % of the hold bound, 0.529 kg) held for 65 s, past any episode, under the
+    thesis coupling: held at every step after the lift, and the cylinder settles by at most 1 mm
+    (measured 0.6 mm: 65.3 mm at 5 s, 64.7 mm at 65 s) without diverging."""
+    r = _candidate_grasp("thesis", 0.45, 1300)
+    assert not r["diverged"] and r["held"][100:].all()
+    assert r["lifts"][100:].min() > r["lifts"][100] - 1e-3, (r["lifts"][100], r["lifts"][100:].min())
+
+
+@pytest.mark.xfail(strict=True, reason="under the consistent coupling the continuum energy's pads press the "
+                   "cylinder 15-17 % less than under the thesis coupling (4.85 against 5.90 N at 2 x 3 N; shape "
+                   "matching: 5.96 against 5.99 N), and the hold bound falls to 0.416 kg: continuum_group has no "
+                   "core unknown under the consistent coupling, project_group does")  # fmt: skip
+def test_both_couplings_press_the_cylinder_alike_on_the_continuum_energy():
+    from benchmarks.grasp_checks import scripted_episode
+
+    tissue = TissueConfig(group_energy="continuum", hourglass_stiffness=1.0, friction_law="contact")
+    press = [scripted_episode({"fingers": "tissue", "coupling": c}, "v3", options={"cylinder_mass": 0.3},
+                              tissue=tissue)["press"] for c in ("thesis", "consistent")]  # fmt: skip
+    assert abs(press[1] / press[0] - 1.0) < 0.03, press
