@@ -74,12 +74,6 @@ LEVER_FORCES = (1.0, 6.0)
 """The squeezes per finger at which the torsional lever is read [N]."""
 
 
-def auto_layers(density: float) -> int:
-    """Element layers through the pad that keep a layer about as thick as the particle spacing."""
-    spacing = TissueConfig(particle_density=density).spacing
-    return max(1, round(TissueConfig().extrude / spacing))
-
-
 def measure(density: float, rows, *, material: str, law: str, layers: int, seeds: int, hourglass: float = 0.0,
             report=print) -> dict:  # fmt: skip
     """Every row in ``rows`` at one density; keys as in the CSV."""
@@ -238,7 +232,7 @@ def main(argv: list[str] | None = None) -> int:
     if ns.seeds < 1:
         parser.error(f"--seeds must be >= 1, got {ns.seeds}")
     if ns.layers == "auto":
-        layers = [auto_layers(d) for d in densities]
+        layers = [TissueConfig(particle_density=d).auto_layers for d in densities]
     else:
         try:
             layers = [int(v) for v in ns.layers.split(",")]

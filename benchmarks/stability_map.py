@@ -55,7 +55,8 @@ the v3 success, held through the whole carry with slide <= 5 mm), 1 = slipped (l
 carry maps: lifted, then lost or slid more than 5 mm in the carry), 0 = dropped (never lifted),
 -1 = diverged, -2 = refused (gym.make or reset raises a ValueError: the setting is outside what the
 method or the scene accepts, e.g. the consistent coupling's squeeze impulse limit, config.py).
-Methods: the finger kinds of softgrasp_env.fingers.FINGERS, ours with both couplings (the v3
+Methods: the finger kinds of softgrasp_env.fingers.FINGERS, ours with both couplings and on the
+v4 tissue ("tissue, v4": registration.TISSUE_V4, SoftGraspEasy-v4's physics) (the v3
 maps leave out 'fem', V3_SKIP, unless --methods names it). Writes benchmarks/out/<name>.csv and
 .png (one heatmap per method and map; ``--name``, default stability_map) and prints the grids;
 the CSV's ``lift_mm``, ``tilt_deg`` and ``slide_mm`` are the last step's lift, the largest tilt
@@ -79,6 +80,7 @@ from agents.scripted import ScriptedGraspPolicy
 from softgrasp_env.config import SimConfig
 from softgrasp_env.fingers import FINGERS
 from softgrasp_env.observation import CARRY_OBS_NAMES, OBS_NAMES
+from softgrasp_env.registration import TISSUE_V4
 
 OUT = Path(__file__).resolve().parent / "out"
 LABELS = {2: "held", 1: "slipped", 0: "dropped", -1: "diverged", -2: "refused"}
@@ -102,6 +104,7 @@ def methods(*, tiny: bool = False, skip: tuple[str, ...] = ()) -> dict[str, dict
         if kind == "tissue":
             out["tissue, thesis"] = dict(fingers="tissue")
             out["tissue, consistent"] = dict(fingers="tissue", sim=SimConfig(coupling="consistent"))
+            out["tissue, v4"] = dict(fingers="tissue", **TISSUE_V4)
         else:
             out[kind] = dict(fingers=kind)
     return out

@@ -134,6 +134,16 @@ KEYWORDS: tuple[Keyword, ...] = (
     _kw("shear_modulus", "physics", "float", None,
         "The compliant tissue's shear modulus [Pa] (None: the preset's, 4,000: the pad compresses ~4.4 mm under 3"
         " N)"),
+    _kw("group_energy", "physics", "str", None,
+        "Each tissue group's elastic energy: 'shape_matching' (the thesis' fit, whose stiffness changes with the "
+        "groups' size) or 'continuum' (G V ||F - R||², the same material at every particle_density); None: the "
+        "preset's, 'shape_matching'"),
+    _kw("hourglass_stiffness", "physics", "float", None,
+        "The continuum energy's hourglass control, 0 to 1 (a member's miss from its group's affine fit costs "
+        "h G V ||r||² / l²; keeps a layered pad's surface smooth); None: the preset's, 0"),
+    _kw("layers", "physics", "int or 'auto'", None,
+        "Element layers through the pad's thickness, 1 to 8, or 'auto' (a layer about as thick as the particle "
+        "spacing: 1 up to 16,000 per m², 2 at 64,000, 4 at 256,000); None: the preset's, 1"),
     _kw("tissue", "physics", "TissueConfig", None,
         "A whole TissueConfig to start from (None: the preset's)"),
     _kw("sim", "physics", "SimConfig", None,
@@ -269,9 +279,13 @@ class PhysicsConfig:
            fem_resolution: str | None = None, preset: str = "default", particle_density: float | None = None,
            friction_static: float | None = None, friction_kinetic: float | None = None,
            tissue_contact_cone: bool | None = None, friction_law: str | None = None,
-           shear_modulus: float | None = None, tissue: TissueConfig | None = None, sim: SimConfig | None = None) -> PhysicsConfig:  # fmt: skip
+           shear_modulus: float | None = None, group_energy: str | None = None,
+           hourglass_stiffness: float | None = None, layers: int | str | None = None,
+           tissue: TissueConfig | None = None, sim: SimConfig | None = None) -> PhysicsConfig:  # fmt: skip
         """The configs the keywords mean: the kind's config with its own keywords folded in, the
-        preset's tissue and solver (or the whole ones given) with the tissue keywords over them."""
+        preset's tissue and solver (or the whole ones given) with the tissue keywords over them.
+        ``layers="auto"`` (given, or the preset's when neither ``layers`` nor ``tissue`` is given)
+        is resolved last, for the density the tissue ends up with (TissueConfig.auto_layers)."""
         fingers = finger_config(fingers)
         if tissue_faces is not None:
             if not isinstance(fingers, TissueFingerConfig):
@@ -290,11 +304,19 @@ class PhysicsConfig:
                 and tissue.friction_kinetic != friction_kinetic:  # fmt: skip
             raise ValueError(f"friction_kinetic={friction_kinetic!r} and tissue.friction_kinetic="
                              f"{tissue.friction_kinetic!r} disagree: give one of them")  # fmt: skip
+        if layers is None and given is None:
+            layers = presets.PRESETS[preset].get("tissue", {}).get("layers")
+        if layers is not None and layers != "auto" and not (isinstance(layers, int) and not isinstance(layers, bool)):
+            raise ValueError(f"layers must be an int from 1 to 8 or 'auto', got {layers!r}")
         overrides = {k: v for k, v in (("particle_density", particle_density), ("friction_static", friction_static),
                                        ("friction_kinetic", friction_kinetic), ("contact_cone", tissue_contact_cone),
-                                       ("friction_law", friction_law), ("shear_modulus", shear_modulus))
+                                       ("friction_law", friction_law), ("shear_modulus", shear_modulus),
+                                       ("group_energy", group_energy), ("hourglass_stiffness", hourglass_stiffness),
+                                       ("layers", layers if layers != "auto" else None))
                      if v is not None}  # fmt: skip
         tissue = replace(tissue, **overrides)  # validated by TissueConfig
+        if layers == "auto":
+            tissue = replace(tissue, layers=tissue.auto_layers)
         sim = sim if sim is not None else base.sim
         check_type("sim", sim, SimConfig)
         return cls(fingers, tissue, sim)
@@ -590,6 +612,7 @@ class EnvArguments:
         physics = PhysicsConfig.of(**{k: v[k] for k in ("fingers", "tissue_faces", "fem_resolution", "preset",
                                                          "particle_density", "friction_static", "friction_kinetic",
                                                          "tissue_contact_cone", "friction_law", "shear_modulus",
+                                                         "group_energy", "hourglass_stiffness", "layers",
                                                          "tissue", "sim")})  # fmt: skip
         lift = LiftConfig(v["start"], v["reward_type"], v["success_height"], v["reach_weight"], v["max_tilt"],
                           _tuple(v["approach_range"]))  # fmt: skip

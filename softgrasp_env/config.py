@@ -172,6 +172,14 @@ class TissueConfig:
         """Mean distance between neighbouring attached particles [m]."""
         return 1.0 / math.sqrt(self.particle_density)
 
+    @property
+    def auto_layers(self) -> int:
+        """The element layers that keep a layer about as thick as the particle spacing,
+        max(1, round(extrude / spacing)): 1 / 1 / 2 / 4 at 4,000 / 16,000 / 64,000 / 256,000 per m^2
+        for the 8 mm pad, so that the groups keep their shape as the tissue is refined (``layers="auto"``
+        of ``gym.make`` and the presets)."""
+        return max(1, round(self.extrude / self.spacing))
+
 
 @dataclass(frozen=True)
 class SimConfig:

@@ -7,6 +7,8 @@ import math
 import gymnasium as gym
 from gymnasium.envs.registration import WrapperSpec
 
+from . import presets
+
 MAX_EPISODE_STEPS = 100
 """5 s at the default 20 Hz control frequency."""
 
@@ -21,42 +23,57 @@ observation (a gripper's own sensors do not give them; the documentation's Tacti
 what a learner does with them)."""
 _ENV, _GOAL = "softgrasp_env.env:SoftGraspEnv", "softgrasp_env.env:SoftGraspGoalEnv"
 
+TISSUE_V4: dict[str, object] = dict(presets.TISSUE_V4)
+"""The v4 tissue, as the soft ids' ``gym.make`` keywords (softgrasp_env.presets.TISSUE_V4): the
+continuum group energy (a shear modulus that means the same pad at every particle density) with
+hourglass control, Coulomb's law in every contact's own cone, and an element layer through the pad
+about as thick as the particle spacing. The resolution stays the caller's (``preset=``,
+``particle_density=``): ``preset="converged"`` is the pad within 5 % of the finite-element
+reference on every row of the package's spatial convergence table (Results: convergence in space)."""
 
 _SPECS: dict[str, tuple[str, dict]] = {
+    "SoftGrasp-v4": (_ENV, {"fingers": "tissue", "reward_type": "dense", "carry": True, **TISSUE_V4}),
     "SoftGrasp-v3": (_ENV, {"fingers": "tissue", "reward_type": "dense", "carry": True}),
     "SoftGraspRigid-v3": (_ENV, {"fingers": "rigid", "reward_type": "dense", "carry": True}),
+    "SoftGraspSparse-v4": (_ENV, {"fingers": "tissue", "reward_type": "sparse", "carry": True, **TISSUE_V4}),
     "SoftGraspSparse-v3": (_ENV, {"fingers": "tissue", "reward_type": "sparse", "carry": True}),
-    # v4: the v3 physics; a knocked-over cylinder no longer ends the episode (tasks/goal.py says
-    # why). v3 keeps the end it was released with.
+    # v5: the v4 tissue. v4: the v3 physics; a knocked-over cylinder no longer ends the episode
+    # (tasks/goal.py says why).
+    "SoftGraspGoal-v5": (_GOAL, {"fingers": "tissue", "end_when_knocked_over": False, **TISSUE_V4}),
     "SoftGraspGoal-v4": (_GOAL, {"fingers": "tissue", "end_when_knocked_over": False}),
-    "SoftGraspGoal-v3": (_GOAL, {"fingers": "tissue", "end_when_knocked_over": True}),
+    "SoftGraspEasy-v4": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", **TISSUE_V4}),
     "SoftGraspEasy-v3": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy"}),
     "SoftGraspEasyRigid-v3": (_ENV, {"fingers": "rigid", "reward_type": "dense", "start": "easy"}),
     "SoftGraspRigidTorsion-v3": (_ENV, {"fingers": "rigid_torsion", "reward_type": "dense", "carry": True}),
     "SoftGraspEasyRigidTorsion-v3": (_ENV, {"fingers": "rigid_torsion", "reward_type": "dense", "start": "easy"}),
+    "SoftGraspGrip-v4": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", "carry": True,
+                                **GRIP_TASK, **TISSUE_V4}),
     **{f"SoftGraspGrip{name}-v3": (_ENV, {"fingers": kind, "reward_type": "dense", "start": "easy", "carry": True,
                                           **GRIP_TASK})
        for name, kind in (("", "tissue"), ("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion"))},
 }
 
 ENV_IDS: tuple[str, ...] = tuple(_SPECS)
-"""The registered ids, per family the latest version and the one before it. v3: the reach task
-with the carry test (approach from above and away, misaligned fingers, lift, then the arm sways the
-cylinder for the last 1.5 s, a sway drawn per episode; success means held through all of it) with
-soft fingers and the dense lift reward, its rigid-only twin, the torsional rigid peer, the
+"""The registered ids, per family the latest version and the one before it. The task (v3 on): the
+reach with the carry test (approach from above and away, misaligned fingers, lift, then the arm
+sways the cylinder for the last 1.5 s, a sway drawn per episode; success means held through all of
+it) with soft fingers and the dense lift reward, its rigid-only twin, the torsional rigid peer, the
 sparse-reward variant, the goal-conditioned variant (dict observations, ``compute_reward`` for HER;
-SoftGraspGoal-v4: the v3 physics, and a knocked-over cylinder no longer ends its episode) and the
-gentle start (``start="easy"``: the open fingers around the cylinder's top, aligned) for debugging a
-policy or the physics; the grip-force task (SoftGraspGrip-v3, soft / rigid / torsional: the gentle
-start with the carry, the squeeze as the action, mass and friction drawn and not observed, the
-squeeze charged and success within 2 x the least that holds, 4 x 4 taxels per pad, the cylinder's
-pose and motion not observed: softgrasp_env/tasks/grip.py). The arm moves the palm at the action's
-velocity along a smooth path (at most 0.15 m/s and 1.5 m/s^2). Older versions live in the tagged
-release that last registered them (:data:`RETIRED`)."""
+a knocked-over cylinder does not end its episode since SoftGraspGoal-v4) and the gentle start
+(``start="easy"``: the open fingers around the cylinder's top, aligned) for debugging a policy or
+the physics; the grip-force task (SoftGraspGrip, soft / rigid / torsional: the gentle start with
+the carry, the squeeze as the action, mass and friction drawn and not observed, the squeeze charged
+and success within 2 x the least that holds, 4 x 4 taxels per pad, the cylinder's pose and motion
+not observed: softgrasp_env/tasks/grip.py). The arm moves the palm at the action's velocity along a
+smooth path (at most 0.15 m/s and 1.5 m/s^2). The soft ids' v4 (the goal's v5) is the same task on
+the v4 tissue (:data:`TISSUE_V4`); v3 (the goal's v4) keeps the thesis' shape matching with a
+friction law per patch. The rigid kinds have no tissue and stay v3. Older versions live in the
+tagged release that last registered them (:data:`RETIRED`)."""
 
 RETIRED: dict[str, str] = {
     **{f"SoftGrasp{family}-{v}": "0.6.0" for family in ("", "Rigid", "Sparse") for v in ("v1", "v2")},
     **{f"SoftGrasp{family}-v1": "0.6.0" for family in ("Goal", "Easy", "EasyRigid")},
+    "SoftGraspGoal-v3": "0.6.0",
 }
 """Retired id -> the last release that registers it. ``gym.make`` of one raises
 :class:`gymnasium.error.DeprecatedEnv` naming that release (:func:`retired_env`); they are not in

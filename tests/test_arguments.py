@@ -111,3 +111,27 @@ def test_the_contact_cones_reach_the_tissue_model_and_bad_values_are_named():
         env.close()
     with pytest.raises(ValueError, match="TissueConfig.contact_cone must be a bool, got 'yes'"):
         EnvArguments.from_kwargs(tissue_contact_cone="yes")
+
+
+def test_the_material_keywords_reach_the_tissue_and_auto_layers_follow_the_final_density():
+    """group_energy, hourglass_stiffness and layers go to TissueConfig; layers='auto' (given, or a
+    preset's) is resolved for the density the tissue ends up with; bad values are named."""
+    t = EnvArguments.from_kwargs(group_energy="continuum", hourglass_stiffness=0.5, layers=3).physics.tissue
+    assert (t.group_energy, t.hourglass_stiffness, t.layers) == ("continuum", 0.5, 3)
+    assert EnvArguments.from_kwargs(layers="auto", particle_density=256_000.0).physics.tissue.layers == 4
+    # the preset's 'auto' follows a density given beside it; a layers count given wins
+    conv = EnvArguments.from_kwargs(preset="converged").physics.tissue
+    assert (conv.particle_density, conv.layers, conv.group_energy) == (64_000.0, 2, "continuum")
+    assert EnvArguments.from_kwargs(preset="converged", particle_density=256_000.0).physics.tissue.layers == 4
+    assert EnvArguments.from_kwargs(preset="converged", layers=1).physics.tissue.layers == 1
+    # a whole TissueConfig given is taken as it is (its own layers)
+    from softgrasp_env.config import TissueConfig
+
+    assert EnvArguments.from_kwargs(preset="converged", tissue=TissueConfig()).physics.tissue.layers == 1
+    for bad, match in ((dict(layers="two"), "layers must be an int from 1 to 8 or 'auto', got 'two'"),
+                       (dict(layers=True), "layers must be an int"),
+                       (dict(layers=9), "TissueConfig.layers"),
+                       (dict(group_energy="fem"), "group_energy must be one of"),
+                       (dict(hourglass_stiffness=0.5), "acts on the continuum group energy only")):  # fmt: skip
+        with pytest.raises(ValueError, match=match):
+            EnvArguments.from_kwargs(**bad)

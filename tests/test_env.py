@@ -19,7 +19,7 @@ import softgrasp_env
 from softgrasp_env import ENV_IDS
 from softgrasp_env.env import SoftGraspEnv
 from softgrasp_env.observation import OBS_NAMES, obs_slice
-from softgrasp_env.registration import RETIRED, retired_message
+from softgrasp_env.registration import RETIRED, TISSUE_V4, retired_message
 from tests.helpers import assert_same, obs_vector, rollout, run_episode
 
 # Gymnasium's checker notes unbounded observation boxes; like its MuJoCo envs, ours are unbounded.
@@ -30,10 +30,11 @@ _INF_BOUND = "observation space m"
 
 
 def test_ids_are_registered_with_time_limits():
-    """Per family the latest version and the one before it: 12 ids."""
-    assert ENV_IDS == ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspSparse-v3", "SoftGraspGoal-v4",
-                       "SoftGraspGoal-v3", "SoftGraspEasy-v3", "SoftGraspEasyRigid-v3", "SoftGraspRigidTorsion-v3",
-                       "SoftGraspEasyRigidTorsion-v3", "SoftGraspGrip-v3", "SoftGraspGripRigid-v3",
+    """Per family the latest version and the one before it: 17 ids."""
+    assert ENV_IDS == ("SoftGrasp-v4", "SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspSparse-v4", "SoftGraspSparse-v3",
+                       "SoftGraspGoal-v5", "SoftGraspGoal-v4", "SoftGraspEasy-v4", "SoftGraspEasy-v3",
+                       "SoftGraspEasyRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspEasyRigidTorsion-v3",
+                       "SoftGraspGrip-v4", "SoftGraspGrip-v3", "SoftGraspGripRigid-v3",
                        "SoftGraspGripRigidTorsion-v3")  # fmt: skip
     gym.register_envs(softgrasp_env)  # the documented idiom is accepted
     for env_id in ENV_IDS:
@@ -42,19 +43,34 @@ def test_ids_are_registered_with_time_limits():
         assert "arm" not in spec.kwargs
         versions = [i.rsplit("-", 1)[1] for i in ENV_IDS if i.rsplit("-", 1)[0] == env_id.rsplit("-", 1)[0]]
         assert len(versions) <= 2
-    # SoftGraspGoal-v4 is v3's goal id with its episodes ended by physics failures only
-    assert gym.spec("SoftGraspGoal-v4").kwargs == {**gym.spec("SoftGraspGoal-v3").kwargs, "end_when_knocked_over": False}
+    # the soft ids' newest version is the one before on the v4 tissue, and nothing else
+    for new, old in (("SoftGrasp-v4", "SoftGrasp-v3"), ("SoftGraspSparse-v4", "SoftGraspSparse-v3"),
+                     ("SoftGraspEasy-v4", "SoftGraspEasy-v3"), ("SoftGraspGrip-v4", "SoftGraspGrip-v3"),
+                     ("SoftGraspGoal-v5", "SoftGraspGoal-v4")):  # fmt: skip
+        assert gym.spec(new).kwargs == {**gym.spec(old).kwargs, **TISSUE_V4}, new
+    assert gym.spec("SoftGraspGoal-v4").kwargs["end_when_knocked_over"] is False
     assert gym.spec("SoftGrasp-v3").kwargs["fingers"] == "tissue"
     assert gym.spec("SoftGraspRigid-v3").kwargs["fingers"] == "rigid"
     for name in ("SoftGrasp", "SoftGraspRigid", "SoftGraspSparse"):
         assert gym.spec(f"{name}-v3").kwargs["carry"] is True
 
 
+def test_the_v4_tissue_is_the_continuum_with_coulomb_per_contact():
+    tissue = gym.make("SoftGrasp-v4").unwrapped.args.physics.tissue
+    assert (tissue.group_energy, tissue.hourglass_stiffness, tissue.friction_law) == ("continuum", 1.0, "contact")
+    assert (tissue.particle_density, tissue.layers) == (4_000.0, 1)
+    # the resolution is the caller's preset; the layers follow it
+    fine = gym.make("SoftGrasp-v4", particle_density=64_000.0).unwrapped.args.physics.tissue
+    assert (fine.group_energy, fine.layers) == ("continuum", 2)
+    v3 = gym.make("SoftGrasp-v3").unwrapped.args.physics.tissue
+    assert (v3.group_energy, v3.hourglass_stiffness, v3.friction_law, v3.layers) == ("shape_matching", 0.0, "patch", 1)
+
+
 @pytest.mark.parametrize("env_id", sorted(RETIRED))
 def test_a_retired_id_names_the_release_that_has_it(env_id):
-    """The v1/v2 ids (and SoftGraspGoal-v1) are retired: gym.make of one, with any arguments, is
+    """The v1/v2 ids (and SoftGraspGoal-v1, -v3) are retired: gym.make of one, with any arguments, is
     gymnasium's DeprecatedEnv naming release 0.6.0 and its tag; they are not in ENV_IDS."""
-    assert env_id not in ENV_IDS and env_id.endswith(("-v1", "-v2"))
+    assert env_id not in ENV_IDS and (env_id.endswith(("-v1", "-v2")) or env_id == "SoftGraspGoal-v3")
     message = (rf"{env_id} was retired; `pip install softgrasp-env==0\.6\.0` \(git tag v0\.6\.0\) reproduces its "
                "results")  # fmt: skip
     with pytest.warns(DeprecationWarning, match="is out of date"):  # gymnasium's own, on any older version
@@ -66,9 +82,10 @@ def test_a_retired_id_names_the_release_that_has_it(env_id):
 
 def test_the_retired_table_is_the_ids_0_6_0_had_beyond_these():
     assert sorted(RETIRED) == sorted([*(f"SoftGrasp{f}-{v}" for f in ("", "Rigid", "Sparse") for v in ("v1", "v2")),
-                                      "SoftGraspGoal-v1", "SoftGraspEasy-v1", "SoftGraspEasyRigid-v1"])  # fmt: skip
+                                      "SoftGraspGoal-v1", "SoftGraspEasy-v1", "SoftGraspEasyRigid-v1",
+                                      "SoftGraspGoal-v3"])  # fmt: skip
     assert set(RETIRED.values()) == {"0.6.0"}
-    assert "This release registers SoftGraspGoal-v4, SoftGraspGoal-v3" in retired_message("SoftGraspGoal-v1")
+    assert "This release registers SoftGraspGoal-v5, SoftGraspGoal-v4" in retired_message("SoftGraspGoal-v1")
 
 
 def test_register_envs_is_idempotent():

@@ -233,8 +233,12 @@ def test_presets_build_and_the_env_takes_them():
             counts[name] = scene.world.model.particle_count
         finally:
             scene.close()
-    assert counts == {"fast": 32, "default": 60, "accurate": 60}
+    assert counts == {"fast": 32, "default": 60, "accurate": 60, "fine": 200, "converged": 1140}
     assert presets.scene_config("default") == SceneConfig()
+    for name, layers in (("fine", 1), ("converged", 2)):  # the v4 tissue, its layers as thick as the spacing
+        tissue = presets.scene_config(name).tissue
+        assert (tissue.group_energy, tissue.friction_law, tissue.hourglass_stiffness, tissue.layers) == (
+            "continuum", "contact", 1.0, layers)
     assert presets.scene_config("accurate").sim.dt == pytest.approx(1 / 480)
     with pytest.raises(ValueError, match="preset must be one of"):
         presets.scene_config("slow")
