@@ -1,6 +1,6 @@
 """Train a stable-baselines3 agent on a SoftGrasp environment.
 
-    python train.py --env SoftGrasp-v3 --algo sac --timesteps 100000
+    python train.py --env SoftGrasp-v4 --algo sac --timesteps 100000
     python train.py --env SoftGraspGoal-v4 --demos 100   # HER + SAC by default for the goal env
     python train.py --env SoftGraspRigid-v3 --algo ppo --n-envs 2
     python train.py --env SoftGrasp-v3 --env-kwargs cylinder_mass=0.2 fingers="'segmented'"
@@ -208,7 +208,7 @@ def algo_kwargs_error(algo: str, algo_kwargs: dict) -> str | None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python train.py", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
-    parser.add_argument("--env", default=None, choices=softgrasp_env.ENV_IDS, help="default: SoftGrasp-v3")
+    parser.add_argument("--env", default=None, choices=softgrasp_env.ENV_IDS, help="default: SoftGrasp-v4")
     parser.add_argument("--env-kwargs", nargs="+", type=parse_kwarg, default=None, metavar="KEY=VALUE",
                         help="keyword arguments of gym.make (values as Python literals, else strings), "
                              "recorded in run.json; e.g. cylinder_mass=0.2 fingers=rigid")  # fmt: skip
@@ -297,7 +297,7 @@ def main(argv: list[str] | None = None) -> int:
     else:
         ns.eval_every = EVAL_EVERY if ns.eval_every is None else ns.eval_every
         ns.eval_episodes = EVAL_EPISODES if ns.eval_episodes is None else ns.eval_episodes
-        env_id = ns.env or "SoftGrasp-v3"
+        env_id = ns.env or "SoftGrasp-v4"
         algo = ns.algo or default_algo(env_id)
         n_envs = ns.n_envs or 1
         seed = 0 if ns.seed is None else ns.seed
@@ -310,7 +310,7 @@ def main(argv: list[str] | None = None) -> int:
         run = ns.out / (ns.name or f"{env_id}_{algo}_{seed}")
     goal = default_algo(env_id) == "her-sac"  # the goal-conditioned ids
     if algo == "her-sac" and not goal:
-        parser.error("--algo her-sac needs a goal-conditioned env (SoftGraspGoal-v4 or -v3)")
+        parser.error("--algo her-sac needs a goal-conditioned env (SoftGraspGoal-v5 or -v4)")
     if algo == "her-sac" and n_envs != 1:
         parser.error("--algo her-sac runs with --n-envs 1")
     if ns.demos is not None and algo == "ppo":

@@ -33,7 +33,8 @@ import numpy as np
 import softgrasp_env  # noqa: F401  (registers the ids)
 from softgrasp_env.policies import ScriptedGraspPolicy
 
-IDS = {"tissue": "SoftGrasp-v3", "rigid": "SoftGraspRigid-v3", "rigid_torsion": "SoftGraspRigidTorsion-v3"}
+IDS = {"tissue_v4": "SoftGrasp-v4", "tissue": "SoftGrasp-v3", "rigid": "SoftGraspRigid-v3",
+       "rigid_torsion": "SoftGraspRigidTorsion-v3"}  # fmt: skip
 FREQUENCIES = (1.2, 1.6, 1.9, 2.3, 3.0)
 ACCELERATIONS = (0.5, 1.0)
 DIRECTIONS = {"across": 0.0, "diagonal": math.pi / 4, "along": math.pi / 2}

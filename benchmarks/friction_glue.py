@@ -42,6 +42,7 @@ import numpy as np
 import softgrasp_env  # noqa: F401  (registers the ids)
 from softgrasp_env.config import SimConfig, kinetic_friction
 from softgrasp_env.policies import ScriptedGraspPolicy
+from softgrasp_env.registration import TISSUE_V4
 from softgrasp_env.scene.scene import LEFT, RIGHT
 from softgrasp_env.tasks.lift import MIN_GRIP_FORCE
 
@@ -90,9 +91,11 @@ after_slack = 0.05
 its core with, plus this (the pad's own weight, ~0.01 N, and its inertia): more is a force the
 friction law made, not the cores."""
 
-LAWS = {"patch": {}, "cones": {"tissue_contact_cone": True}, "contact": {"friction_law": "contact"}}
-"""The tissue friction laws compared, as gym.make keywords: the patch law (the default), the patch
-law with contact cones, and Coulomb per contact."""
+LAWS = {"patch": {}, "cones": {"tissue_contact_cone": True}, "contact": {"friction_law": "contact"},
+        "v4": dict(TISSUE_V4)}  # fmt: skip
+"""The tissue friction laws compared, as gym.make keywords: the patch law (the v3 ids'), the patch
+law with contact cones, Coulomb per contact on the shape-matching material, and the v4 tissue
+(Coulomb per contact on the continuum material, registration.TISSUE_V4)."""
 
 
 def glue(seed: int = 1013, report=print, cones: bool = False, law: str | None = None,
@@ -112,7 +115,8 @@ def glue(seed: int = 1013, report=print, cones: bool = False, law: str | None = 
     u = env.unwrapped
     world, cfg = u.scene.world, u.scene.config
     mu, mass = cfg.tissue.friction_static, cfg.cylinder_mass
-    law = {"patch": "the patch law (default)", "cones": "contact cones", "contact": "Coulomb per contact"}[law]
+    law = {"patch": "the patch law (the v3 ids')", "cones": "contact cones", "contact": "Coulomb per contact",
+           "v4": "the v4 tissue (Coulomb per contact, continuum)"}[law]
     report(f"{law}, seed {seed}: {mass:.3f} kg, mu_s {mu:.2f}, least squeeze m g / (2 mu_s) = "
            f"{mass * 9.81 / (2 * mu):.3f} N per finger")  # fmt: skip
     arm = ScriptedGraspPolicy.for_env(u, grip_force=MIN_GRIP_FORCE)

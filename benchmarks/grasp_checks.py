@@ -25,6 +25,7 @@ from agents.scripted import ScriptedGraspPolicy
 from softgrasp_env.config import SimConfig
 from softgrasp_env.scene.scene import LEFT, PALM, RIGHT
 from softgrasp_env.tasks.carry import CARRY_SLIDE_LIMIT
+from softgrasp_env.registration import TISSUE_V4
 
 ALIGNED = {"yaw": 0.0, "jaw_wedge": 0.0, "lateral_offset": 0.0, "cylinder_xy": (0.0, 0.0)}
 KINDS = {"soft": dict(fingers="tissue"), "soft-consistent": dict(fingers="tissue", coupling="consistent"),
@@ -34,9 +35,12 @@ KINDS = {"soft": dict(fingers="tissue"), "soft-consistent": dict(fingers="tissue
          "soft-contact": dict(fingers="tissue", friction_law="contact"),
          "soft-contact-mu_k=0.7": dict(fingers="tissue", friction_law="contact", friction_kinetic=0.7),
          "soft-contact-16k": dict(fingers="tissue", friction_law="contact", particle_density=16_000.0),
-         "soft-16k": dict(fingers="tissue", particle_density=16_000.0)}  # fmt: skip
+         "soft-16k": dict(fingers="tissue", particle_density=16_000.0),
+         "soft-v4": dict(fingers="tissue", **TISSUE_V4),
+         "soft-v4-mu_k=0.7": dict(fingers="tissue", friction_kinetic=0.7, **TISSUE_V4)}  # fmt: skip
 """The finger kinds compared (the tissue at its default mu_k = mu_s, pybullet's one coefficient),
-and the tissue with a two-coefficient law (mu_k 0.7 < mu_s 0.9)."""
+and the tissue with a two-coefficient law (mu_k 0.7 < mu_s 0.9); ``soft-v4`` is the v4 tissue
+(registration.TISSUE_V4: SoftGraspEasy-v4's physics)."""
 NO_SLIP = CARRY_SLIDE_LIMIT
 """The mass and friction rows count a cylinder held only if it also moved at most this in the hand
 from lift-off to the end [m], the v3 success's slide limit: a grasp that slips while the arm

@@ -28,7 +28,7 @@ import softgrasp_env  # noqa: F401  (registers the ids)
 from softgrasp_env.policies.grip import ConstantGripPolicy, TactileGripPolicy
 from softgrasp_env.tasks import CarryTest
 
-GRIP_IDS = ("SoftGraspGrip-v3", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3")
+GRIP_IDS = ("SoftGraspGrip-v4", "SoftGraspGrip-v3", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3")
 CONSTANT_FORCES = (0.5, 1.0, 2.0, 3.0)
 """Force-blind squeezes [N]: the least force of the task's draws spans 0.16-3.0 N."""
 

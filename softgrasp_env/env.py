@@ -52,10 +52,11 @@ def _display_available() -> bool:
 
 class SoftGraspEnv(gym.Env):
     """Two fingers pick up a cylinder and hold it while the arm carries it: soft fingers, each a
-    rigid core wrapped in oriented-particle tissue (``SoftGrasp-v3``), or the same cores touching
-    the cylinder through pybullet's rigid contacts (``SoftGraspRigid-v3``; with the torsional
-    friction of the tissue's contact patch, ``SoftGraspRigidTorsion-v3``). Older versions live in
-    the release that last registered them (Version history).
+    rigid core wrapped in oriented-particle tissue (``SoftGrasp-v4``; the thesis' shape matching
+    in ``SoftGrasp-v3``), or the same cores touching the cylinder through pybullet's rigid contacts
+    (``SoftGraspRigid-v3``; with the torsional friction of the tissue's contact patch,
+    ``SoftGraspRigidTorsion-v3``). Older versions live in the release that last registered them
+    (Version history).
 
     ## Description
     A gripper hangs above a cylinder (radius 3 cm, height 10 cm, 0.1 kg) standing on the ground.
@@ -153,7 +154,7 @@ class SoftGraspEnv(gym.Env):
     - Truncated: by the registered time limit (100 steps = 5 s at 20 Hz).
 
     ## Arguments
-    ``gym.make("SoftGrasp-v3", **kwargs)``, every one keyword-only but ``render_mode``
+    ``gym.make("SoftGrasp-v4", **kwargs)``, every one keyword-only but ``render_mode``
     (softgrasp_env/arguments.py checks them all; a bad value or a combination that would not run
     is a ``ValueError`` naming it and the limit):
 
@@ -168,8 +169,41 @@ class SoftGraspEnv(gym.Env):
     ``carry_amplitude=``, ``carry_slide_limit=None``) are a ``ValueError`` naming release 0.6.0,
     which has them.
 
+    ## The tissue and its resolution
+    The soft ids' v4 tissue (``registration.TISSUE_V4``) is a material that means the same at every
+    resolution: each particle group's energy is the continuum's, ``G V ||F - R||^2`` (F the group's
+    least-squares deformation gradient, G = 4,000 Pa the shear modulus; Poisson's ratio 0), with
+    hourglass control, and Coulomb's law holds in every contact's own cone (mu_s = mu_k = 0.9 by
+    default), each contact sticking or sliding on its own, so the strip's edges slide before its
+    centre. The v3 ids keep the thesis' shape matching, whose stiffness changes with the particle
+    density, and a friction law per pad patch, which lets the patch's self-equilibrated friction
+    grow without bound. The resolution is the ``preset``: the default (4,000 particles per m² of
+    core face, one element layer) is the cheapest; ``preset="fine"`` (16,000 per m²) and
+    ``preset="converged"`` (64,000 per m², two layers) are the same material refined. Against a
+    finite-element model of the pad (pressed by a rigid 3 cm cylinder) and Coulomb's law, the
+    default's errors beside the converged pad's:
+
+    | row | reference | default | fine | converged |
+    |---|---|---|---|---|
+    | compression under 1 / 3 / 6 N | 1.34 / 2.87 / 4.60 mm | -1 / -24 / -24 % | -2 / -4 / -2 % | -1 / -1 / -1 % |
+    | contact strip's RMS half-width, 3 N | 5.56 mm | +78 % | +13 % | +3 % |
+    | tangential compliance, 2-4 N (mean) | 1.2-1.5 mm/N | -34 % | -1 % | -1 % |
+    | first contact / whole strip slides at Q / mu P | 0 / 1 | 0.55 / 1.03 | 0.04 / 1.02 | 0.02 / 1.02 |
+    | heaviest cylinder held, over Coulomb's | 1 | 1.05 | 1.04 | 1.07 |
+    | squeeze at which a grip lowered from 4 N lets go, over Coulomb's least | 1 | 1.02-1.77 | 1.02-1.18 | 1.05-1.19 |
+    | env steps/s (SoftGraspEasy, random actions) | | 60 | 36 | 3 |
+
+    The last row was measured on one core of an AMD EPYC (2 cores, no AVX-512) with another job on
+    the other; the grip-lowering row over five grip-force episodes (seeds 1000-1003, 1013; the
+    squeeze falls 10 % every other step, so a drop lands up to about 1.1 times late). At the
+    default, the pad is too coarse for the strip (three particle columns across it): it is stiffer
+    than the continuum under load and in shear, slides as one until about half its slip load, and
+    a squeeze lowered after a harder one can lose the cylinder at up to 1.8 times Coulomb's least
+    force. The package's documentation (Results: convergence in space) has every row at every
+    level, with its observed order.
+
     ## Grip-force task
-    The grip ids (``SoftGraspGrip-v3``, ``SoftGraspGripRigid-v3``, ``SoftGraspGripRigidTorsion-v3``)
+    The grip ids (``SoftGraspGrip-v4``, ``SoftGraspGrip-v3``, ``SoftGraspGripRigid-v3``, ``SoftGraspGripRigidTorsion-v3``)
     ask for the least squeeze that holds. They take the easy start with the carry test; the
     action's last entry is the squeeze itself (``finger_action="force"``, up to ``finger_force`` =
     6 N); the cylinder's mass (0.17 kg × U(1 ± 0.75)) and every friction (× U(1 ± 0.45)) are drawn
@@ -203,6 +237,9 @@ class SoftGraspEnv(gym.Env):
     step 99).
 
     ## Version history
+    - v4 (the soft ids; the goal id's v5): the v3 task on the v4 tissue - the continuum group
+      energy with hourglass control, Coulomb's law per contact, element layers as thick as the
+      particle spacing (The tissue and its resolution). The rigid kinds have no tissue and stay v3.
     - v3: the smooth arm and velocity actions, 40 N; the carry test
       drawn per episode over a band and success held through it; the tissue's mu_k = mu_s (one
       friction law for every kind); the torsional rigid peer. Since 0.5.0 the tissue is the

@@ -13,13 +13,18 @@ pybullet's contacts.
 - ``accurate``: the default tissue at half the time step (dt 1/480 s) with 2 iterations: smaller
   steps converge faster than more iterations, at half the simulated seconds per wall second.
 - ``fine`` and ``converged``: the v4 tissue (the continuum group energy with hourglass control,
-  Coulomb per contact, layers about as thick as the particle spacing: TISSUE_V4) at
-  16,000 and at 64,000 particles per m^2 (one and two element layers). ``converged`` is the
-  cheapest resolution whose every row of the spatial convergence table is within 5 % of its
-  reference; ``fine`` is within 5 % on every row but the contact strip's width (+13 %), at about
-  ten times ``converged``'s speed (the package's documentation, Results: convergence in space).
+  Coulomb per contact, layers about as thick as the particle spacing: TISSUE_V4) at 16,000 and at
+  64,000 particles per m^2 (one and two element layers). ``converged`` is the cheapest resolution
+  whose rows of the spatial convergence table are within 5 % of their reference, or within 10 %
+  where no resolution measured is within 5 % (the hold bound and the lowest friction against
+  Coulomb's, the tangential compliance at a single load); ``fine`` meets the same but for the
+  contact strip's width (+13 %), at about ten times ``converged``'s speed (the package's
+  documentation, Results: convergence in space).
 
-``scene_config(name)`` gives the SceneConfig; the env takes ``preset=name``.
+``scene_config(name)`` gives the SceneConfig; the env takes ``preset=name``. The soft v4 ids
+register the v4 tissue's keywords, which override a preset's material: there every preset is that
+tissue at the preset's resolution. ``fine`` and ``converged`` carry the v4 material with them, so
+on a v3 id they give the v4 tissue too.
 """
 
 from __future__ import annotations

@@ -397,7 +397,7 @@ def test_pickled_fresh_env_behaves_like_the_original():
     twin.close()
 
 
-@pytest.mark.parametrize("env_id", ["SoftGrasp-v3", "SoftGraspGoal-v3"])
+@pytest.mark.parametrize("env_id", ["SoftGrasp-v4", "SoftGraspGoal-v5"])
 def test_deepcopy_mid_episode_is_exact(env_id):
     env = gym.make(env_id)
     env.reset(seed=5)

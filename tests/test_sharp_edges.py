@@ -44,7 +44,7 @@ def test_steps_to_succeed_is_the_first_step_the_carry_is_over():
         assert base.task.over(30 * base.plan.substeps) and not base.task.over(29 * base.plan.substeps)
     finally:
         env.close()
-    env = gym.make("SoftGraspGoal-v3")
+    env = gym.make("SoftGraspGoal-v5")
     assert steps_to_succeed(env) is None
     env.close()
 
@@ -57,7 +57,7 @@ def test_the_observation_box_is_bounded_where_bounds_hold():
             assert (box.low[k], box.high[k]) == (np.float32(lo), np.float32(hi)), name
     assert np.isinf(box.low[CARRY_OBS_NAMES.index("finger_gap")])  # soft joint limits: no bound
     env = gym.make("SoftGrasp-v3")
-    goal = gym.make("SoftGraspGoal-v3")
+    goal = gym.make("SoftGraspGoal-v5")
     try:
         assert env.observation_space == box
         assert goal.observation_space["observation"] == observation_box(OBS_NAMES)
@@ -67,7 +67,7 @@ def test_the_observation_box_is_bounded_where_bounds_hold():
         goal.close()
 
 
-@pytest.mark.parametrize("env_id", ["SoftGraspRigid-v3", "SoftGrasp-v3", "SoftGraspGoal-v3"])
+@pytest.mark.parametrize("env_id", ["SoftGraspRigid-v3", "SoftGrasp-v4", "SoftGraspGoal-v4"])
 def test_every_observation_lies_in_the_box(env_id, make_env, scripted):
     """Scripted grasps (the forces, the lift, the carry) and random flailing (tilts, fast spins)."""
     env = make_env(env_id)

@@ -1,7 +1,8 @@
 """Seeded trajectories of the registered ids (and of the settings reached only through kwargs),
 recorded through the public API alone: ``gym.make``, ``reset``, ``step`` and the scripted policy.
 ``tests/data/trajectories_v3.npz`` holds the v3 ids as 0.5.0 shipped them, ``trajectories_more.npz``
-the other ids and the settings reached only through kwargs; ``tests/test_trajectories.py``
+the other ids and the settings reached only through kwargs, ``trajectories_v4.npz`` the soft ids'
+v4 (recorded on a CPU without AVX-512, where the others skip); ``tests/test_trajectories.py``
 replays them and asserts bit-identical observations, rewards and flags, so a refactor or a speed-up
 that changes behaviour cannot land quietly. (The v1/v2 ids' recording went with them: release 0.6.0
 replays it.)
@@ -22,6 +23,7 @@ import gymnasium as gym
 import numpy as np
 
 DATA_V3 = Path(__file__).parent / "data" / "trajectories_v3.npz"
+DATA_V4 = Path(__file__).parent / "data" / "trajectories_v4.npz"
 DATA_MORE = Path(__file__).parent / "data" / "trajectories_more.npz"
 
 INFO_FLAGS = ("is_success", "held", "carrying", "diverged", "action_clipped")
@@ -31,9 +33,19 @@ INFO_FLAGS = ("is_success", "held", "carrying", "diverged", "action_clipped")
 # (clipping exercised) and resets after an episode ends; "scripted" runs the scripted policy.
 V3_IDS = ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspSparse-v3", "SoftGraspGoal-v3", "SoftGraspEasy-v3",
           "SoftGraspEasyRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspEasyRigidTorsion-v3")
+RETIRED_AS: dict[str, tuple[str, dict]] = {"SoftGraspGoal-v3": ("SoftGraspGoal-v4", {"end_when_knocked_over": True})}
+"""A recorded id that is retired, and the registered id with the keywords that are it (the goal's
+v3 is v4's physics with the lift task's ends)."""
+
+
+def _case(name: str, env_id: str, policy: str, steps: int) -> tuple[str, str, dict, str, int]:
+    made, kwargs = RETIRED_AS.get(env_id, (env_id, {}))
+    return (name, made, kwargs, policy, steps)
+
+
 V3_CASES: tuple[tuple[str, str, dict, str, int], ...] = (
-    *((f"{env_id}/random", env_id, {}, "random", 130) for env_id in V3_IDS),
-    *((f"{env_id}/scripted", env_id, {}, "scripted", 100) for env_id in V3_IDS),  # through the carry (3.5-5 s)
+    *(_case(f"{env_id}/random", env_id, "random", 130) for env_id in V3_IDS),
+    *(_case(f"{env_id}/scripted", env_id, "scripted", 100) for env_id in V3_IDS),  # through the carry (3.5-5 s)
     ("v3-consistent/scripted", "SoftGrasp-v3", {"sim": "consistent"}, "scripted", 100),
     ("v3-dt1000/scripted", "SoftGraspEasy-v3", {"sim": "dt1000"}, "scripted", 40),
     ("v3-dt120/scripted", "SoftGraspEasy-v3", {"sim": "dt120"}, "scripted", 60),
@@ -59,7 +71,17 @@ action, taxels), and the settings reached only through kwargs - the segmented an
 on every face with the consistent coupling, the fast preset, the randomised ranges. Recorded after
 the v1/v2 ids (which covered these settings) were retired, on the same physics."""
 
-SETS = {"v3": (V3_CASES, DATA_V3), "more": (MORE_CASES, DATA_MORE)}
+V4_IDS = ("SoftGrasp-v4", "SoftGraspSparse-v4", "SoftGraspGoal-v5", "SoftGraspEasy-v4", "SoftGraspGrip-v4")
+V4_CASES: tuple[tuple[str, str, dict, str, int], ...] = (
+    *((f"{env_id}/random", env_id, {}, "random", 130) for env_id in V4_IDS),
+    *((f"{env_id}/scripted", env_id, {}, "scripted", 100) for env_id in V4_IDS if "Grip" not in env_id),
+    ("v4-fine/scripted", "SoftGraspEasy-v4", {"preset": "fine"}, "scripted", 40),
+    ("v4-consistent/scripted", "SoftGrasp-v4", {"sim": "consistent"}, "scripted", 100),
+)  # fmt: skip
+"""The soft ids' v4 (the goal's v5) on the v4 tissue (the grip id with random squeezes: the scripted
+grasp does not read taxels), its fine preset and the consistent coupling."""
+
+SETS = {"v3": (V3_CASES, DATA_V3), "more": (MORE_CASES, DATA_MORE), "v4": (V4_CASES, DATA_V4)}
 
 
 def _kwargs(kwargs: dict) -> dict:

@@ -260,7 +260,7 @@ def test_the_grasp_holds_through_a_30_s_carry(env_id, coupling, make_env):
         ("SoftGrasp-v3", dict(carry_direction="across"), r"carry_direction='across' was retired.*==0\.6\.0"),
         ("SoftGrasp-v3", dict(carry_direction="up"), "carry_direction is no longer an argument"),
         ("SoftGrasp-v3", dict(carry_slide_limit=None), r"carry_slide_limit=None .* was retired.*==0\.6\.0"),
-        ("SoftGraspGoal-v3", dict(carry=True), "no carry test"),
+        ("SoftGraspGoal-v5", dict(carry=True), "no carry test"),
     ],
 )
 def test_carry_settings_are_checked(env_id, kwargs, match):
@@ -269,7 +269,7 @@ def test_carry_settings_are_checked(env_id, kwargs, match):
 
 
 def test_the_easy_task_has_no_carry_and_no_clock(make_env):
-    for env_id in ("SoftGraspEasy-v3", "SoftGraspEasyRigid-v3", "SoftGraspGoal-v3"):
+    for env_id in ("SoftGraspEasy-v3", "SoftGraspEasyRigid-v3", "SoftGraspGoal-v5"):
         env = make_env(env_id)
         assert not env.unwrapped.carry
         obs, info = env.reset(seed=0)

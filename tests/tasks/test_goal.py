@@ -1,4 +1,4 @@
-"""The goal task (SoftGraspGoal-v3, softgrasp_env/tasks/goal.py): its reward is compute_reward on
+"""The goal task (SoftGraspGoal-v5, -v4, softgrasp_env/tasks/goal.py): its reward is compute_reward on
 (achieved, desired) goals, vectorised over batches, the same online and for HER's relabelled
 samples."""
 
@@ -13,7 +13,7 @@ from tests.helpers import run_episode
 
 
 def test_goal_env_compute_reward_is_vectorised_and_matches_step(make_env):
-    env = make_env("SoftGraspGoal-v3")
+    env = make_env("SoftGraspGoal-v4")
     u = env.unwrapped
     obs, _ = env.reset(seed=0)
     policy = ScriptedGraspPolicy(lift_to=obs["desired_goal"][2] - 0.05)
@@ -35,7 +35,7 @@ def test_goal_env_compute_reward_is_vectorised_and_matches_step(make_env):
 def test_her_trains_on_the_goal_env():
     from stable_baselines3 import SAC, HerReplayBuffer
 
-    env = gym.make("SoftGraspGoal-v3", max_episode_steps=20)
+    env = gym.make("SoftGraspGoal-v4", max_episode_steps=20)
     try:
         model = SAC("MultiInputPolicy", env, replay_buffer_class=HerReplayBuffer,
                     replay_buffer_kwargs={"n_sampled_goal": 2, "goal_selection_strategy": "future"},
@@ -81,8 +81,8 @@ def test_knocking_the_cylinder_over_ends_the_lift_task_but_not_the_goal_episode(
     assert len(goal) == gym.spec("SoftGraspGoal-v4").max_episode_steps
     assert goal[-1][2] and not any(term for _, term, _ in goal)
     assert all(r == -1.0 for r, _, _ in goal[len(lift) :])
-    # SoftGraspGoal-v3 keeps the ends it was released with.
-    assert _knock_over(make_env("SoftGraspGoal-v3"))[-1][1]
+    # end_when_knocked_over=True keeps the lift task's ends (SoftGraspGoal-v3, retired, had them).
+    assert _knock_over(make_env("SoftGraspGoal-v4", end_when_knocked_over=True))[-1][1]
     # a flag, not a truthy value
     with pytest.raises(TypeError, match="end_when_knocked_over must be True or False"):
         gym.make("SoftGraspGoal-v4", end_when_knocked_over="yes")

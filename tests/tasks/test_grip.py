@@ -147,16 +147,19 @@ def test_feeling_the_pads_beats_every_force_blind_grip(make_env):
 
 
 @pytest.mark.slow
-def test_feeling_the_tissue_pads_beats_every_force_blind_grip(make_env):
-    """As above with the soft fingers (whose pads read less cleanly: docs/RESULTS.md). Measured:
-    tactile 13 / 20; constant 0.5 / 1 / 2 / 3 N 3 / 1 / 3 / 4 of 20."""
-    env = make_env("SoftGraspGrip-v3")
+@pytest.mark.parametrize(("env_id", "least_wins", "margin"), [("SoftGraspGrip-v3", 10, 5), ("SoftGraspGrip-v4", 15, 8)])
+def test_feeling_the_tissue_pads_beats_every_force_blind_grip(make_env, env_id, least_wins, margin):
+    """As above with the soft fingers. Measured on v3 (the patch law, whose pads read less cleanly:
+    a patch slides all at once): tactile 13 / 20; constant 0.5 / 1 / 2 / 3 N 3 / 1 / 3 / 4 of 20.
+    On v4 (Coulomb per contact, the strip's edges slide first): tactile 18 / 20; constant 3 / 5 / 6
+    / 4 of 20 (benchmarks/grip_force.py, 50 seeds: 41 / 50 against v3's 31)."""
+    env = make_env(env_id)
     seeds = range(1000, 1020)
     wins = sum(i["is_success"] for i in _episodes(env, TactileGripPolicy(env), seeds))
-    assert wins >= 10
+    assert wins >= least_wins
     for force in (0.5, 1.0, 2.0, 3.0):
         blind = sum(i["is_success"] for i in _episodes(env, ConstantGripPolicy(env, force), seeds))
-        assert blind <= wins - 5, force
+        assert blind <= wins - margin, force
 
 
 def _soak(env, seeds) -> list[tuple[float, float]]:
