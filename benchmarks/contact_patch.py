@@ -89,7 +89,10 @@ def measure(options: dict, *, steps: int = 100, seed: int = 0, **env_kwargs) -> 
     env = gym.make("SoftGraspEasy-v3", **env_kwargs)
     try:
         base = env.unwrapped
-        policy = ScriptedGraspPolicy.for_env(env)
+        # below 1 N per finger the policy's grip threshold (0.5 N) would be the motors' whole force:
+        # at most half of it, as the stability maps take it (stability_map.policy_for)
+        force = base.args.control.finger_force
+        policy = ScriptedGraspPolicy.for_env(env, grip_force=min(ScriptedGraspPolicy().grip_force, 0.5 * force))
         obs, _ = env.reset(seed=seed, options=options)
         scene = base.scene
         # the solver's own step: a world step, dt / world_substeps (the multipliers are per step)

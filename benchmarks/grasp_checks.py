@@ -23,9 +23,9 @@ import numpy as np
 import softgrasp_env  # noqa: F401  (registers the ids)
 from agents.scripted import ScriptedGraspPolicy
 from softgrasp_env.config import SimConfig
+from softgrasp_env.registration import TISSUE_V4
 from softgrasp_env.scene.scene import LEFT, PALM, RIGHT
 from softgrasp_env.tasks.carry import CARRY_SLIDE_LIMIT
-from softgrasp_env.registration import TISSUE_V4
 
 ALIGNED = {"yaw": 0.0, "jaw_wedge": 0.0, "lateral_offset": 0.0, "cylinder_xy": (0.0, 0.0)}
 KINDS = {"soft": dict(fingers="tissue"), "soft-consistent": dict(fingers="tissue", coupling="consistent"),

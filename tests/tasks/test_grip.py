@@ -193,8 +193,11 @@ def test_the_light_grip_holds_six_times_longer_than_an_episode(make_env):
 
 
 @pytest.mark.slow
-def test_the_light_tissue_grip_holds_six_times_longer_than_an_episode(make_env):
-    """As above with the soft fingers: measured 13 of 13 held, 0.00 mm lower at 30 s."""
-    runs = _soak(make_env("SoftGraspGrip-v3", max_episode_steps=600), range(1000, 1020))
-    assert len(runs) >= 10
-    assert all(at30 > 0.0 and at5 - at30 < 0.5e-3 for at5, at30 in runs), runs
+@pytest.mark.parametrize(("env_id", "least_runs", "settle"), [("SoftGraspGrip-v3", 10, 0.5e-3),
+                                                              ("SoftGraspGrip-v4", 15, 1.0e-3)])  # fmt: skip
+def test_the_light_tissue_grip_holds_six_times_longer_than_an_episode(make_env, env_id, least_runs, settle):
+    """As above with the soft fingers: measured on v3 13 of 13 held, 0.00 mm lower at 30 s; on v4
+    18 of 18 held, at most 0.37 mm lower."""
+    runs = _soak(make_env(env_id, max_episode_steps=600), range(1000, 1020))
+    assert len(runs) >= least_runs
+    assert all(at30 > 0.0 and at5 - at30 < settle for at5, at30 in runs), runs
