@@ -25,7 +25,7 @@ late, from ringing: MAX_COUPLING_FOLD).
 An attached particle sits on its core through the solve (thesis 5.1.3, "the
 core infinitely heavy inside the solve", taken literally): a group's force on it is an impulse on
 the core at its spot. Under the consistent coupling the core slides inside the solve, and the
-group's Newton step moves it (project_group's core unknown). Moving attached particles with their
+group's Newton step moves it (the core unknown of project_group and continuum_group). Moving attached particles with their
 own mass inside the solve and handing the error over afterwards (anchors.snap_attached) gives an
 impulse m e / dt that can carry at most about m e / dt^2, a force that falls with dt^2 (pads
 crushed at 1/120 s and stiff at 1/1000 s).
@@ -132,9 +132,9 @@ def compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_m
         for i in range(body_off[b], body_off[b + 1]):
             s = group_kappa[i] * dt * dt
             if continuum and g_cont[i, 6] > 0.0:
-                qr = continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs, xp, group_q, fixed,
-                                     g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin,
-                                     imp_ang, coupling_imp, dt)  # fmt: skip
+                qr = continuum_group(i, core, body_off[b], body_off[b + 1], m_att, rot_iters, g_cont, g_off, g_mem,
+                                     g_pack, frame, xs, xp, group_q, fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass,
+                                     rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
             else:
                 qr = project_group(i, s, core, body_off[b], body_off[b + 1], m_att, rot_iters, g_off, g_mem, g_pack,
                                    frame, xs, xp, group_q, moment, fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass,
@@ -383,8 +383,9 @@ def _apply_deformation(i, start, end, g_mem, g_pack, frame, xs, xp, g_u, g_raw):
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
-def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs, xp, group_q, fixed, g_u, g_raw, mass,
-                    rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang, coupling_imp, dt):  # fmt: skip
+def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs, xp, group_q,
+                    fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin,
+                    imp_ang, coupling_imp, dt):  # fmt: skip
     """One Newton step of group i's implicit equations under E = G V ||F - R||_F^2; returns quat(R).
 
     F = sum_j x_j b_j^T, b_j = A_qq^-1 m_j q_j (sum_j b_j = 0: F ignores translation), so with R
@@ -404,9 +405,25 @@ def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs,
     exact for the group (R held). A member held by its core (``fixed``) does not move; what is left
     of its residual after the step goes to the core as an impulse (deliver_to_core), so
     sum_j m_j u_j = -dt^2 sum_j grad_j E = 0: momentum is exact every pass, as in project_group.
-    Under the consistent coupling the core is held inside this step too (no core unknown: its
-    impulse reaches it afterwards). A group with no fixed member is made free of momentum and
-    angular momentum about the step's start positions (_apply_deformation)."""
+
+    Under the consistent coupling a core that slides along its joint axis a inside the solve (mass
+    m_c, with all its attached particles, M_att) is one more unknown dc, as in project_group.
+    Moving the fixed members by dc a changes free member j's residual by gamma_j dc a,
+    gamma_j = h (b_j . beta_f) - hb m_j (W_f + beta_f . o_j) (h = k dt^2, hb = beta dt^2,
+    beta_f = sum_fix b_j, W_f the fixed members' share of the fit centre, o_j the rest offset), and
+    the core's own row is
+
+        R_c = (m_c + M_att - M_fix) U_c + a . sum_fix m_j z_j
+        H_c = m_c + M_att + h |beta_f|^2 + hb (M_fix (1 - W_f) - beta_f . sum_fix m_j o_j)
+
+    (U_c what this group has moved the core this step). The Schur complement on the core gives
+    dc = -(R_c + sum_j gamma_j a . dx_j) / (H_c + sum_j gamma_j q_j), where dx_j is the step above
+    with the core held and q_j a the free block's solve of the column gamma a (the same S, one more
+    3 x 3 solve); the members then step by dx_j + dc q_j a. The Newton step stays exact for the
+    group, core included; the core's impulse m_c dc / dt reaches pybullet as project_group's does,
+    and each fixed member's residual across a goes to the core (the joint takes it). A group with
+    no fixed member is made free of momentum and angular momentum about the step's start
+    positions (_apply_deformation)."""
     i = np.uint64(i)
     start = np.uint64(g_off[i])
     end = np.uint64(g_off[i + 1])
@@ -469,6 +486,20 @@ def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs,
     m_free = 0.0
     m_all = 0.0
     held = False
+    # a core that slides along its joint axis inside the solve (the consistent coupling): one more
+    # unknown, dc (docstring); its sums over the members
+    ax = ay = az = 0.0
+    sliding = rig_move[core] and rig_inv_mass[core] > 0.0
+    if sliding:
+        ax, ay, az = rig_axis[core, 0], rig_axis[core, 1], rig_axis[core, 2]
+        sliding = ax != 0.0 or ay != 0.0 or az != 0.0
+    rc = uc = mfix = wfix = 0.0  # a . sum_fix m_j z_j, U_c, M_fix, W_f
+    bf0 = bf1 = bf2 = 0.0  # beta_f = sum_fix b_j
+    fo0 = fo1 = fo2 = 0.0  # sum_fix m_j o_j
+    no0 = no1 = no2 = 0.0  # sum_free m_j o_j
+    t00 = t01 = t02 = t10 = t11 = t12 = t20 = t21 = t22 = 0.0  # sum_free b_j o_j^T
+    v00 = v01 = v02 = v11 = v12 = v22 = 0.0  # sum_free b b^T / m, before the hourglass term's scaling
+    tb0 = tb1 = tb2 = 0.0  # sum_free b_j
     for e in range(start, end):
         j = np.uint64(g_mem[e])
         m = mass[j]
@@ -478,6 +509,42 @@ def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs,
         b0 = p00 * q0 + p01 * q1 + p02 * q2
         b1 = p01 * q0 + p11 * q1 + p12 * q2
         b2 = p02 * q0 + p12 * q1 + p22 * q2
+        if sliding:
+            o0 = g_pack[e, 4]
+            o1 = g_pack[e, 5]
+            o2 = g_pack[e, 6]
+            if fixed[j]:
+                mfix += m
+                wfix += g_pack[e, 0]
+                bf0 += b0
+                bf1 += b1
+                bf2 += b2
+                fo0 += m * o0
+                fo1 += m * o1
+                fo2 += m * o2
+                uc = ax * g_u[e, 0] + ay * g_u[e, 1] + az * g_u[e, 2]
+            else:
+                no0 += m * o0
+                no1 += m * o1
+                no2 += m * o2
+                t00 += b0 * o0
+                t01 += b0 * o1
+                t02 += b0 * o2
+                t10 += b1 * o0
+                t11 += b1 * o1
+                t12 += b1 * o2
+                t20 += b2 * o0
+                t21 += b2 * o1
+                t22 += b2 * o2
+                v00 += b0 * b0 / m
+                v01 += b0 * b1 / m
+                v02 += b0 * b2 / m
+                v11 += b1 * b1 / m
+                v12 += b1 * b2 / m
+                v22 += b2 * b2 / m
+                tb0 += b0
+                tb1 += b1
+                tb2 += b2
         # z_j = u_j + D b_j / m_j (per unit mass)
         inv_m = 1.0 / m
         zx = g_u[e, 0] + (d00 * b0 + d01 * b1 + d02 * b2) * inv_m
@@ -497,6 +564,8 @@ def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs,
         g_raw[e, 2] = zz
         if fixed[j]:
             held = True
+            if sliding:
+                rc += m * (ax * zx + ay * zy + az * zz)
             continue
         if hb > 0.0:
             sb0 += b0
@@ -562,11 +631,69 @@ def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs,
     y00, y10, y20 = solve_sym3(s00, s01, s02, s11, s12, s22, w00, w10, w20)
     y01, y11, y21 = solve_sym3(s00, s01, s02, s11, s12, s22, w01, w11, w21)
     y02, y12, y22 = solve_sym3(s00, s01, s02, s11, s12, s22, w02, w12, w22)
+    # the core's column: moving the fixed members by dc a changes free member j's residual by
+    # gamma_j dc a, gamma_j = h (b_j . beta_f) - hb m_j (W_f + beta_f . o_j); the free block's
+    # solve of that right-hand side is dx'_j = q_j a with q_j below (w' = sum_free b_j gamma_j / m_j)
+    h = dt * dt * k
+    yc0 = yc1 = yc2 = 0.0
+    gsum = tq = 0.0
+    if sliding and held:
+        vw0 = h * (v00 * bf0 + v01 * bf1 + v02 * bf2)
+        vw1 = h * (v01 * bf0 + v11 * bf1 + v12 * bf2)
+        vw2 = h * (v02 * bf0 + v12 * bf1 + v22 * bf2)
+        gsum = h * (bf0 * tb0 + bf1 * tb1 + bf2 * tb2)  # sum_free gamma_j
+        if hb > 0.0:
+            vw0 -= hb * (wfix * tb0 + t00 * bf0 + t01 * bf1 + t02 * bf2)
+            vw1 -= hb * (wfix * tb1 + t10 * bf0 + t11 * bf1 + t12 * bf2)
+            vw2 -= hb * (wfix * tb2 + t20 * bf0 + t21 * bf1 + t22 * bf2)
+            gsum -= hb * (wfix * m_free + bf0 * no0 + bf1 * no1 + bf2 * no2)
+            io = 1.0 / opm
+            vw0 = vw0 * io + t * sb0 * gsum
+            vw1 = vw1 * io + t * sb1 * gsum
+            vw2 = vw2 * io + t * sb2 * gsum
+        yc0, yc1, yc2 = solve_sym3(s00, s01, s02, s11, s12, s22, vw0, vw1, vw2)
+        tq = t * (gsum - (yc0 * sb0 + yc1 * sb1 + yc2 * sb2))
     # the free members' step dx_j = -(z_j - Y^T b_j / m_j), and dF = sum_free dx_j b_j^T (times dt^2 k);
     # with the hourglass term dx_j = -(z_j - Y^T b_j / m_j) / (1 + hb) - t (sum m z - Y^T sum b)
     gx = t * (mzx - (y00 * sb0 + y10 * sb1 + y20 * sb2))
     gy = t * (mzy - (y01 * sb0 + y11 * sb1 + y21 * sb2))
     gz = t * (mzz - (y02 * sb0 + y12 * sb1 + y22 * sb2))
+    dc = 0.0
+    mcore = 0.0
+    if sliding and held:
+        # Schur complement on the core: dc = -(R_c + sum gamma_j a . dx_j) / (H_c + sum gamma_j q_j),
+        # dx_j the free block's step with the core held (below), R_c and H_c as in the docstring
+        mcore = 1.0 / rig_inv_mass[core]
+        num = (mcore + m_att - mfix) * uc + rc
+        den = mcore + m_att + h * (bf0 * bf0 + bf1 * bf1 + bf2 * bf2)
+        if hb > 0.0:
+            den += hb * (mfix * (1.0 - wfix) - (bf0 * fo0 + bf1 * fo1 + bf2 * fo2))
+        for e in range(start, end):
+            j = np.uint64(g_mem[e])
+            if fixed[j]:
+                continue
+            inv_m = 1.0 / mass[j]
+            q0 = g_pack[e, 1]
+            q1 = g_pack[e, 2]
+            q2 = g_pack[e, 3]
+            b0 = p00 * q0 + p01 * q1 + p02 * q2
+            b1 = p01 * q0 + p11 * q1 + p12 * q2
+            b2 = p02 * q0 + p12 * q1 + p22 * q2
+            gam = h * (b0 * bf0 + b1 * bf1 + b2 * bf2)
+            if hb > 0.0:
+                gam -= hb * mass[j] * (wfix + bf0 * g_pack[e, 4] + bf1 * g_pack[e, 5] + bf2 * g_pack[e, 6])
+            dx = (y00 * b0 + y10 * b1 + y20 * b2) * inv_m - g_raw[e, 0]
+            dy = (y01 * b0 + y11 * b1 + y21 * b2) * inv_m - g_raw[e, 1]
+            dz = (y02 * b0 + y12 * b1 + y22 * b2) * inv_m - g_raw[e, 2]
+            qj = ((yc0 * b0 + yc1 * b1 + yc2 * b2) - gam) * inv_m
+            if hb > 0.0:
+                dx = dx / opm - gx
+                dy = dy / opm - gy
+                dz = dz / opm - gz
+                qj = qj / opm - tq
+            num += gam * (ax * dx + ay * dy + az * dz)
+            den += gam * qj
+        dc = -num / den
     mx = my = mz = 0.0  # sum_free (m_j / M) dx_j: the fit centre's move
     e00 = e01 = e02 = e10 = e11 = e12 = e20 = e21 = e22 = 0.0
     for e in range(start, end):
@@ -587,6 +714,17 @@ def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs,
             dx = dx / opm - gx
             dy = dy / opm - gy
             dz = dz / opm - gz
+        if dc != 0.0:
+            gam = h * (b0 * bf0 + b1 * bf1 + b2 * bf2)
+            if hb > 0.0:
+                gam -= hb * mass[j] * (wfix + bf0 * g_pack[e, 4] + bf1 * g_pack[e, 5] + bf2 * g_pack[e, 6])
+            qj = ((yc0 * b0 + yc1 * b1 + yc2 * b2) - gam) * inv_m
+            if hb > 0.0:
+                qj = qj / opm - tq
+            dx += dc * qj * ax
+            dy += dc * qj * ay
+            dz += dc * qj * az
+        if hb > 0.0:
             w = g_pack[e, 0]
             mx += w * dx
             my += w * dy
@@ -614,7 +752,7 @@ def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs,
         _apply_deformation(i, start, end, g_mem, g_pack, frame, xs, xp, g_u, g_raw)
         return qr
     # each fixed member's residual once the free members moved, r_j = m_j u_j + dt^2 grad_j E:
-    # z_j (before) + dt^2 k dF b_j / m_j; its force goes to the core and its u takes it up
+    # z_j (before) + dt^2 k dF b_j / m_j, kept in g_raw (the core's move changes it along a only)
     for e in range(start, end):
         j = np.uint64(g_mem[e])
         if not fixed[j]:
@@ -637,6 +775,45 @@ def continuum_group(i, core, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs,
             rx -= hb * (mx + e00 * o0 + e01 * o1 + e02 * o2)
             ry -= hb * (my + e10 * o0 + e11 * o1 + e12 * o2)
             rz -= hb * (mz + e20 * o0 + e21 * o1 + e22 * o2)
+        g_raw[e, 0] = rx
+        g_raw[e, 1] = ry
+        g_raw[e, 2] = rz
+    if dc != 0.0:
+        # the core slides by dc with all its attached particles: the impulse m_c dc on it, which
+        # pybullet applies too
+        rig_x[core, 0] += dc * ax
+        rig_x[core, 1] += dc * ay
+        rig_x[core, 2] += dc * az
+        k = mcore * dc / dt
+        imp_lin[core, 0] += k * ax
+        imp_lin[core, 1] += k * ay
+        imp_lin[core, 2] += k * az
+        coupling_imp[core, 0] += k * ax
+        coupling_imp[core, 1] += k * ay
+        coupling_imp[core, 2] += k * az
+        for k in range(core_lo, core_hi):
+            if fixed[k]:
+                xp[k, 0] += dc * ax
+                xp[k, 1] += dc * ay
+                xp[k, 2] += dc * az
+    # each fixed member's force goes to the core and its u takes it up; along a sliding core's axis
+    # the core's own step has balanced it (its inertia: m_c dc above)
+    for e in range(start, end):
+        j = np.uint64(g_mem[e])
+        if not fixed[j]:
+            continue
+        m = mass[j]
+        rx = g_raw[e, 0]
+        ry = g_raw[e, 1]
+        rz = g_raw[e, 2]
+        if sliding:
+            k = ax * rx + ay * ry + az * rz
+            rx -= k * ax
+            ry -= k * ay
+            rz -= k * az
+            g_u[e, 0] += dc * ax
+            g_u[e, 1] += dc * ay
+            g_u[e, 2] += dc * az
         deliver_to_core(j, -m * rx, -m * ry, -m * rz, core, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
                         imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
         g_u[e, 0] -= rx
