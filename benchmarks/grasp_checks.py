@@ -37,7 +37,8 @@ KINDS = {"soft": dict(fingers="tissue"), "soft-consistent": dict(fingers="tissue
          "soft-contact-16k": dict(fingers="tissue", friction_law="contact", particle_density=16_000.0),
          "soft-16k": dict(fingers="tissue", particle_density=16_000.0),
          "soft-v4": dict(fingers="tissue", **TISSUE_V4),
-         "soft-v4-mu_k=0.7": dict(fingers="tissue", friction_kinetic=0.7, **TISSUE_V4)}  # fmt: skip
+         "soft-v4-mu_k=0.7": dict(fingers="tissue", friction_kinetic=0.7, **TISSUE_V4),
+         "soft-v4-16k": dict(fingers="tissue", particle_density=16_000.0, **TISSUE_V4)}  # fmt: skip
 """The finger kinds compared (the tissue at its default mu_k = mu_s, pybullet's one coefficient),
 and the tissue with a two-coefficient law (mu_k 0.7 < mu_s 0.9); ``soft-v4`` is the v4 tissue
 (registration.TISSUE_V4: SoftGraspEasy-v4's physics)."""
