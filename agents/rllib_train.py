@@ -186,7 +186,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m agents.rllib_train", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     vector_ids = [i for i in softgrasp_env.ENV_IDS if not i.startswith("SoftGraspGoal")]
-    parser.add_argument("--env", default="SoftGrasp-v3", choices=vector_ids)
+    parser.add_argument("--env", default="SoftGrasp-v4", choices=vector_ids)
     parser.add_argument("--env-kwargs", nargs="+", type=parse_kwarg, default=None, metavar="KEY=VALUE",
                         help="passed to gym.make")  # fmt: skip
     parser.add_argument("--algo", choices=ALGOS, default="ppo")
