@@ -268,23 +268,7 @@ def project_group(i, s, core, core_lo, core_hi, m_att, rot_iters, g_off, g_mem, 
         dcy -= w * dy
         dcz -= w * dz
     if dc != 0.0:
-        # the core slides by dc with all its attached particles: the impulse m_c dc on it, which
-        # pybullet applies too
-        rig_x[core, 0] += dc * ax
-        rig_x[core, 1] += dc * ay
-        rig_x[core, 2] += dc * az
-        k = mcore * dc / dt
-        imp_lin[core, 0] += k * ax
-        imp_lin[core, 1] += k * ay
-        imp_lin[core, 2] += k * az
-        coupling_imp[core, 0] += k * ax
-        coupling_imp[core, 1] += k * ay
-        coupling_imp[core, 2] += k * az
-        for k in range(core_lo, core_hi):
-            if fixed[k]:
-                xp[k, 0] += dc * ax
-                xp[k, 1] += dc * ay
-                xp[k, 2] += dc * az
+        slide_core(core, dc, ax, ay, az, mcore, core_lo, core_hi, fixed, xp, rig_x, imp_lin, coupling_imp, dt)
     # each fixed member's force, the rest of its residual once the group moved (its own move, the
     # core's, enters u and e; the centre's shifts e by -dc), goes to its core
     for e in range(start, end):
@@ -313,6 +297,28 @@ def project_group(i, s, core, core_lo, core_hi, m_att, rot_iters, g_off, g_mem, 
         g_u[e, 1] -= ry
         g_u[e, 2] -= rz
     return qr
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def slide_core(core, dc, ax, ay, az, mcore, core_lo, core_hi, fixed, xp, rig_x, imp_lin, coupling_imp, dt):
+    """A core sliding along its joint axis a inside the solve (the consistent coupling) moves by dc
+    with all its attached particles (``fixed`` in core_lo..core_hi): the impulse m_c dc on it,
+    recorded for pybullet, which applies it too."""
+    rig_x[core, 0] += dc * ax
+    rig_x[core, 1] += dc * ay
+    rig_x[core, 2] += dc * az
+    k = mcore * dc / dt
+    imp_lin[core, 0] += k * ax
+    imp_lin[core, 1] += k * ay
+    imp_lin[core, 2] += k * az
+    coupling_imp[core, 0] += k * ax
+    coupling_imp[core, 1] += k * ay
+    coupling_imp[core, 2] += k * az
+    for k in range(core_lo, core_hi):
+        if fixed[k]:
+            xp[k, 0] += dc * ax
+            xp[k, 1] += dc * ay
+            xp[k, 2] += dc * az
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
@@ -779,23 +785,7 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
         g_raw[e, 1] = ry
         g_raw[e, 2] = rz
     if dc != 0.0:
-        # the core slides by dc with all its attached particles: the impulse m_c dc on it, which
-        # pybullet applies too
-        rig_x[core, 0] += dc * ax
-        rig_x[core, 1] += dc * ay
-        rig_x[core, 2] += dc * az
-        k = mcore * dc / dt
-        imp_lin[core, 0] += k * ax
-        imp_lin[core, 1] += k * ay
-        imp_lin[core, 2] += k * az
-        coupling_imp[core, 0] += k * ax
-        coupling_imp[core, 1] += k * ay
-        coupling_imp[core, 2] += k * az
-        for k in range(core_lo, core_hi):
-            if fixed[k]:
-                xp[k, 0] += dc * ax
-                xp[k, 1] += dc * ay
-                xp[k, 2] += dc * az
+        slide_core(core, dc, ax, ay, az, mcore, core_lo, core_hi, fixed, xp, rig_x, imp_lin, coupling_imp, dt)
     # each fixed member's force goes to the core and its u takes it up; along a sliding core's axis
     # the core's own step has balanced it (its inertia: m_c dc above)
     for e in range(start, end):
