@@ -388,6 +388,34 @@ def _apply_deformation(i, start, end, g_mem, g_pack, frame, xs, xp, g_u, g_raw):
 # =================================================================================================
 
 
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _held_step(b0, b1, b2, inv_m, zx, zy, zz, y00, y01, y02, y10, y11, y12, y20, y21, y22, hb, opm, gx, gy, gz):
+    """continuum_group's step of a free member with the core held: dx_j = -(z_j - Y^T b_j / m_j),
+    with the hourglass term / (1 + hb) - t (sum m z - Y^T sum b) (g)."""
+    dx = (y00 * b0 + y10 * b1 + y20 * b2) * inv_m - zx
+    dy = (y01 * b0 + y11 * b1 + y21 * b2) * inv_m - zy
+    dz = (y02 * b0 + y12 * b1 + y22 * b2) * inv_m - zz
+    if hb > 0.0:
+        dx = dx / opm - gx
+        dy = dy / opm - gy
+        dz = dz / opm - gz
+    return dx, dy, dz
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _core_column(b0, b1, b2, inv_m, m, o0, o1, o2, h, hb, bf0, bf1, bf2, wfix, yc0, yc1, yc2, opm, tq):
+    """continuum_group's coupling of a free member to a sliding core: gamma_j (its residual's change
+    per unit of the core's move, along the axis) and q_j (the free block's solve of that column,
+    along the axis)."""
+    gam = h * (b0 * bf0 + b1 * bf1 + b2 * bf2)
+    if hb > 0.0:
+        gam -= hb * m * (wfix + bf0 * o0 + bf1 * o1 + bf2 * o2)
+    qj = ((yc0 * b0 + yc1 * b1 + yc2 * b2) - gam) * inv_m
+    if hb > 0.0:
+        qj = qj / opm - tq
+    return gam, qj
+
+
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs, xp, group_q,
                     fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin,
@@ -685,18 +713,10 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
             b0 = p00 * q0 + p01 * q1 + p02 * q2
             b1 = p01 * q0 + p11 * q1 + p12 * q2
             b2 = p02 * q0 + p12 * q1 + p22 * q2
-            gam = h * (b0 * bf0 + b1 * bf1 + b2 * bf2)
-            if hb > 0.0:
-                gam -= hb * mass[j] * (wfix + bf0 * g_pack[e, 4] + bf1 * g_pack[e, 5] + bf2 * g_pack[e, 6])
-            dx = (y00 * b0 + y10 * b1 + y20 * b2) * inv_m - g_raw[e, 0]
-            dy = (y01 * b0 + y11 * b1 + y21 * b2) * inv_m - g_raw[e, 1]
-            dz = (y02 * b0 + y12 * b1 + y22 * b2) * inv_m - g_raw[e, 2]
-            qj = ((yc0 * b0 + yc1 * b1 + yc2 * b2) - gam) * inv_m
-            if hb > 0.0:
-                dx = dx / opm - gx
-                dy = dy / opm - gy
-                dz = dz / opm - gz
-                qj = qj / opm - tq
+            dx, dy, dz = _held_step(b0, b1, b2, inv_m, g_raw[e, 0], g_raw[e, 1], g_raw[e, 2], y00, y01, y02, y10, y11,
+                                    y12, y20, y21, y22, hb, opm, gx, gy, gz)  # fmt: skip
+            gam, qj = _core_column(b0, b1, b2, inv_m, mass[j], g_pack[e, 4], g_pack[e, 5], g_pack[e, 6], h, hb, bf0,
+                                   bf1, bf2, wfix, yc0, yc1, yc2, opm, tq)  # fmt: skip
             num += gam * (ax * dx + ay * dy + az * dz)
             den += gam * qj
         dc = -num / den
@@ -713,20 +733,11 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
         b0 = p00 * q0 + p01 * q1 + p02 * q2
         b1 = p01 * q0 + p11 * q1 + p12 * q2
         b2 = p02 * q0 + p12 * q1 + p22 * q2
-        dx = (y00 * b0 + y10 * b1 + y20 * b2) * inv_m - g_raw[e, 0]
-        dy = (y01 * b0 + y11 * b1 + y21 * b2) * inv_m - g_raw[e, 1]
-        dz = (y02 * b0 + y12 * b1 + y22 * b2) * inv_m - g_raw[e, 2]
-        if hb > 0.0:
-            dx = dx / opm - gx
-            dy = dy / opm - gy
-            dz = dz / opm - gz
+        dx, dy, dz = _held_step(b0, b1, b2, inv_m, g_raw[e, 0], g_raw[e, 1], g_raw[e, 2], y00, y01, y02, y10, y11, y12,
+                                y20, y21, y22, hb, opm, gx, gy, gz)  # fmt: skip
         if dc != 0.0:
-            gam = h * (b0 * bf0 + b1 * bf1 + b2 * bf2)
-            if hb > 0.0:
-                gam -= hb * mass[j] * (wfix + bf0 * g_pack[e, 4] + bf1 * g_pack[e, 5] + bf2 * g_pack[e, 6])
-            qj = ((yc0 * b0 + yc1 * b1 + yc2 * b2) - gam) * inv_m
-            if hb > 0.0:
-                qj = qj / opm - tq
+            _, qj = _core_column(b0, b1, b2, inv_m, mass[j], g_pack[e, 4], g_pack[e, 5], g_pack[e, 6], h, hb, bf0, bf1,
+                                 bf2, wfix, yc0, yc1, yc2, opm, tq)  # fmt: skip
             dx += dc * qj * ax
             dy += dc * qj * ay
             dz += dc * qj * az
