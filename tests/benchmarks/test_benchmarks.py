@@ -111,7 +111,8 @@ def test_no_tearing_in_a_hundred_thousand_random_steps(stream, env_id, law):
     times, caught on the cylinder's top rim; 0.4.0's per-step pad 0 and 1. The same with Coulomb at
     every contact (friction_law="contact"): none in either (1,008 and 1,067 episodes, 13-14 min
     each), the largest deviation 20.00 mm. On SoftGrasp-v4 (the continuum material, Coulomb per
-    contact): none in the uniform stream (1,015 episodes, 33 min at 50 env steps/s), NOISY."""
+    contact): none in either (1,015 and 1,091 episodes, 31-33 min each at 50-54 env steps/s), the largest
+    deviation 20.00 mm."""
     from benchmarks.random_soak import soak
 
     r = soak(env_id, 100_000, stream, **({} if law is None else {"friction_law": law}))
