@@ -99,7 +99,8 @@ law with contact cones, Coulomb per contact on the shape-matching material, and 
 
 
 def glue(seed: int = 1013, report=print, cones: bool = False, law: str | None = None,
-         friction_kinetic: float | None = None, coupling: str | None = None) -> dict:
+         friction_kinetic: float | None = None, coupling: str | None = None,
+         particle_density: float | None = None) -> dict:  # fmt: skip
     """The scene of the module docstring from ``seed``; ``report`` gets the table's lines. Returns
     the last step's figures: the squeeze commanded, the pads' measured normal force, the
     load-bearing contacts and how many have friction above mu_s times their normal multiplier,
@@ -110,7 +111,8 @@ def glue(seed: int = 1013, report=print, cones: bool = False, law: str | None = 
     Coulomb's least force (``least``)."""
     law = law or ("cones" if cones else "patch")
     sim = None if coupling is None else SimConfig(coupling=coupling)  # the tissue's coupling (SimConfig.coupling)
-    env = gym.make("SoftGraspGrip-v3", observe_object=True, friction_kinetic=friction_kinetic, sim=sim, **LAWS[law])
+    env = gym.make("SoftGraspGrip-v3", observe_object=True, friction_kinetic=friction_kinetic, sim=sim,
+                   particle_density=particle_density, **LAWS[law])  # fmt: skip
     obs, _ = env.reset(seed=seed)
     u = env.unwrapped
     world, cfg = u.scene.world, u.scene.config

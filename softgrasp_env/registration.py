@@ -28,8 +28,10 @@ TISSUE_V4: dict[str, object] = dict(presets.TISSUE_V4)
 continuum group energy (a shear modulus that means the same pad at every particle density) with
 hourglass control, Coulomb's law in every contact's own cone, and an element layer through the pad
 about as thick as the particle spacing. The resolution stays the caller's (``preset=``,
-``particle_density=``): ``preset="converged"`` is the pad within 5 % of the finite-element
-reference on every row of the package's spatial convergence table (Results: convergence in space)."""
+``particle_density=``): ``preset="converged"`` is the cheapest pad whose rows of the package's
+spatial convergence table are within 5 % of the finite-element reference and Coulomb's law (the
+hold bound and the lowest friction within 10 %, as at every resolution measured; Results:
+convergence in space)."""
 
 _SPECS: dict[str, tuple[str, dict]] = {
     "SoftGrasp-v4": (_ENV, {"fingers": "tissue", "reward_type": "dense", "carry": True, **TISSUE_V4}),

@@ -515,7 +515,7 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
     d20, d21, d22 = h * (f20 - r20), h * (f21 - r21), h * (f22 - r22)
     s00 = s01 = s02 = s11 = s12 = s22 = 0.0  # sum_free b b^T / m
     w00 = w01 = w02 = w10 = w11 = w12 = w20 = w21 = w22 = 0.0  # sum_free b z^T, row a = b's component
-    sb0 = sb1 = sb2 = 0.0  # sum_free b (the hourglass term's translation coupling)
+    sb0 = sb1 = sb2 = 0.0  # sum_free b (the hourglass term's translation coupling; the core's column)
     mzx = mzy = mzz = 0.0  # sum_free m z
     m_free = 0.0
     m_all = 0.0
@@ -532,8 +532,6 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
     fo0 = fo1 = fo2 = 0.0  # sum_fix m_j o_j
     no0 = no1 = no2 = 0.0  # sum_free m_j o_j
     t00 = t01 = t02 = t10 = t11 = t12 = t20 = t21 = t22 = 0.0  # sum_free b_j o_j^T
-    v00 = v01 = v02 = v11 = v12 = v22 = 0.0  # sum_free b b^T / m, before the hourglass term's scaling
-    tb0 = tb1 = tb2 = 0.0  # sum_free b_j
     for e in range(start, end):
         j = np.uint64(g_mem[e])
         m = mass[j]
@@ -570,15 +568,6 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
                 t20 += b2 * o0
                 t21 += b2 * o1
                 t22 += b2 * o2
-                v00 += b0 * b0 / m
-                v01 += b0 * b1 / m
-                v02 += b0 * b2 / m
-                v11 += b1 * b1 / m
-                v12 += b1 * b2 / m
-                v22 += b2 * b2 / m
-                tb0 += b0
-                tb1 += b1
-                tb2 += b2
         # z_j = u_j + D b_j / m_j (per unit mass)
         inv_m = 1.0 / m
         zx = g_u[e, 0] + (d00 * b0 + d01 * b1 + d02 * b2) * inv_m
@@ -601,10 +590,10 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
             if sliding:
                 rc += m * (ax * zx + ay * zy + az * zz)
             continue
+        sb0 += b0
+        sb1 += b1
+        sb2 += b2
         if hb > 0.0:
-            sb0 += b0
-            sb1 += b1
-            sb2 += b2
             mzx += m * zx
             mzy += m * zy
             mzz += m * zz
@@ -624,6 +613,7 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
         w20 += b2 * zx
         w21 += b2 * zy
         w22 += b2 * zz
+    v00, v01, v02, v11, v12, v22 = s00, s01, s02, s11, s12, s22  # sum_free b b^T / m (the core's column)
     opm = 1.0
     t = 0.0
     if hb > 0.0:
@@ -675,11 +665,11 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
         vw0 = h * (v00 * bf0 + v01 * bf1 + v02 * bf2)
         vw1 = h * (v01 * bf0 + v11 * bf1 + v12 * bf2)
         vw2 = h * (v02 * bf0 + v12 * bf1 + v22 * bf2)
-        gsum = h * (bf0 * tb0 + bf1 * tb1 + bf2 * tb2)  # sum_free gamma_j
+        gsum = h * (bf0 * sb0 + bf1 * sb1 + bf2 * sb2)  # sum_free gamma_j
         if hb > 0.0:
-            vw0 -= hb * (wfix * tb0 + t00 * bf0 + t01 * bf1 + t02 * bf2)
-            vw1 -= hb * (wfix * tb1 + t10 * bf0 + t11 * bf1 + t12 * bf2)
-            vw2 -= hb * (wfix * tb2 + t20 * bf0 + t21 * bf1 + t22 * bf2)
+            vw0 -= hb * (wfix * sb0 + t00 * bf0 + t01 * bf1 + t02 * bf2)
+            vw1 -= hb * (wfix * sb1 + t10 * bf0 + t11 * bf1 + t12 * bf2)
+            vw2 -= hb * (wfix * sb2 + t20 * bf0 + t21 * bf1 + t22 * bf2)
             gsum -= hb * (wfix * m_free + bf0 * no0 + bf1 * no1 + bf2 * no2)
             io = 1.0 / opm
             vw0 = vw0 * io + t * sb0 * gsum
@@ -768,8 +758,12 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
     if not held:
         _apply_deformation(i, start, end, g_mem, g_pack, frame, xs, xp, g_u, g_raw)
         return qr
+    if dc != 0.0:
+        slide_core(core, dc, ax, ay, az, mcore, core_lo, core_hi, fixed, xp, rig_x, imp_lin, coupling_imp, dt)
     # each fixed member's residual once the free members moved, r_j = m_j u_j + dt^2 grad_j E:
-    # z_j (before) + dt^2 k dF b_j / m_j, kept in g_raw (the core's move changes it along a only)
+    # z_j (before) + dt^2 k dF b_j / m_j; its force goes to the core and its u takes it up. A sliding
+    # core's move changes it along a alone, where the core's own step has balanced it (its inertia:
+    # m_c dc above)
     for e in range(start, end):
         j = np.uint64(g_mem[e])
         if not fixed[j]:
@@ -792,21 +786,6 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
             rx -= hb * (mx + e00 * o0 + e01 * o1 + e02 * o2)
             ry -= hb * (my + e10 * o0 + e11 * o1 + e12 * o2)
             rz -= hb * (mz + e20 * o0 + e21 * o1 + e22 * o2)
-        g_raw[e, 0] = rx
-        g_raw[e, 1] = ry
-        g_raw[e, 2] = rz
-    if dc != 0.0:
-        slide_core(core, dc, ax, ay, az, mcore, core_lo, core_hi, fixed, xp, rig_x, imp_lin, coupling_imp, dt)
-    # each fixed member's force goes to the core and its u takes it up; along a sliding core's axis
-    # the core's own step has balanced it (its inertia: m_c dc above)
-    for e in range(start, end):
-        j = np.uint64(g_mem[e])
-        if not fixed[j]:
-            continue
-        m = mass[j]
-        rx = g_raw[e, 0]
-        ry = g_raw[e, 1]
-        rz = g_raw[e, 2]
         if sliding:
             k = ax * rx + ay * ry + az * rz
             rx -= k * ax
