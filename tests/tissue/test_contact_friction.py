@@ -82,10 +82,8 @@ def test_no_contact_leaves_its_cone_through_a_v4_episode_with_the_carry(coupling
     """SoftGrasp-v4's scripted episode - reach, grasp through the misaligned jaw, lift, and the
     carry's sway - checked at every world step: no tissue contact's friction exceeds its cone.
     Measured: 1.0000000 at most (seed 1000, held through the carry, either coupling)."""
-    from softgrasp_env.config import SimConfig
-
     from benchmarks.friction_glue import cone_excess
-    from softgrasp_env.config import kinetic_friction
+    from softgrasp_env.config import SimConfig, kinetic_friction
     from softgrasp_env.policies import ScriptedGraspPolicy
 
     env = gym.make("SoftGrasp-v4", sim=SimConfig(coupling=coupling))
