@@ -321,6 +321,84 @@ class LayerModel:
         q = float((k @ w)[held].sum())  # force per unit length holding the strip at U = 1 m
         return 1.0 / (q * self.pad.height)
 
+    def partial_slip(self, normal: np.ndarray, mu: float, *, steps: int = 400) -> dict:
+        """Partial slip of the strip under a growing axial load: anti-plane shear (G Laplace(w) = 0, w = 0
+        on the core) with Coulomb's law at every surface node, the cylinder moved by U along its axis.
+
+        ``normal``: the nodal normal forces [N/m] per surface node (``contact(delta)["f"]``); in linear
+        elasticity the anti-plane problem does not disturb the in-plane one, so this pressure holds
+        through the whole ramp. A node with normal force f_n sticks (w = U) while its axial force r
+        stays within mu f_n, else slides with r = mu f_n and w <= U (it lags the cylinder). For each U
+        on a grid up to gross slip the stick set is found by an active-set iteration from the last
+        U's (it shrinks monotonically toward the strip's centre, as in Cattaneo-Mindlin), which is
+        exact for the discrete problem: every stuck node within its cone, every sliding node behind
+        the cylinder (to 1e-12 relative); the ramp's last U, u_gross, is gross slip. Returns arrays over the ramp: "ratio" Q / mu P, "share" the
+        sticking nodes' share of the normal load, "c_over_a" the |y| within which the nodes carry
+        that share (read off their cumulative load, the tissue's measure: partial_slip.ramp) over the
+        contact's outermost loaded |y|, "c_geom" the outermost sticking node's |y| over the same,
+        "U" [m] and "Q" [N/m]; and "gross" the U at which every node slides."""
+        from scipy.sparse.linalg import splu
+
+        self._strip_compliance(np.ones(self.y.size, bool))  # builds the anti-plane system
+        sb, k, base, top = self._anti
+        if normal.shape != self.y.shape:
+            raise ValueError(f"normal must give one force per surface node ({self.y.size}), got shape {normal.shape}")
+        if not mu > 0.0:
+            raise ValueError(f"mu must be positive, got {mu!r}")
+        touch = normal > 0.0
+        if not touch.any():
+            raise ValueError("no surface node carries a normal force")
+        limit = mu * normal  # each node's cone [N/m]
+        big_p = float(normal.sum())
+        ya = np.abs(self.y)
+        a = float(ya[touch].max())
+        k = k.tocsr()
+
+        def solve(stick: np.ndarray, u: float) -> tuple[np.ndarray, np.ndarray]:
+            held = top[stick]
+            fixed = np.union1d(base, held)
+            free = np.setdiff1d(np.arange(sb.N), fixed)
+            w = np.zeros(sb.N)
+            w[held] = u
+            rhs = -(k[free][:, fixed] @ w[fixed])
+            slide = top[touch & ~stick]
+            load = np.zeros(sb.N)
+            load[slide] = limit[touch & ~stick]
+            rhs += load[free]
+            w[free] = splu(k[free][:, free].tocsc()).solve(rhs)
+            r = k @ w - load  # the cylinder's force on each held node
+            return w[top], r[top]
+
+        # the largest U first: with every node at its cone the strip lags by w_gross; beyond it all slide
+        w_all, _ = solve(np.zeros(self.y.size, bool), 0.0)
+        u_gross = float(w_all[touch].max())
+        stick = touch.copy()
+        rows = []
+        for u in np.linspace(u_gross / steps, u_gross, steps)[:-1]:
+            for _ in range(4 * self.y.size):
+                w, r = solve(stick, u)
+                over = stick & (r > limit * (1.0 + 1e-12))
+                ahead = touch & ~stick & (w > u * (1.0 + 1e-12))
+                if not over.any() and not ahead.any():
+                    break
+                stick = (stick & ~over) | ahead
+            else:
+                raise RuntimeError("the active set did not settle")
+            q = float(r[stick].sum() + limit[touch & ~stick].sum())
+            share = float(normal[stick].sum() / big_p)
+            order = np.argsort(ya[touch])
+            cum = np.concatenate(([0.0], np.cumsum(normal[touch][order]) / big_p))
+            c_load = float(np.interp(share, cum, np.concatenate(([0.0], ya[touch][order])))) / a
+            c_geom = float(ya[stick].max()) / a if stick.any() else 0.0
+            rows.append((q / (mu * big_p), share, c_load, c_geom, u, q))
+            if not stick.any():
+                break
+        else:  # at u_gross every node at its cone is the solution (the last to stick is exactly there)
+            rows.append((1.0, 0.0, 0.0, 0.0, u_gross, mu * big_p))
+        arr = np.array(rows)
+        return {"ratio": arr[:, 0], "share": arr[:, 1], "c_over_a": arr[:, 2], "c_geom": arr[:, 3], "U": arr[:, 4],
+                "Q": arr[:, 5], "gross": u_gross, "a": a}  # fmt: skip
+
 
 def pressure_width(y: np.ndarray, pressure: np.ndarray) -> float:
     """The pressure-weighted RMS half-width of a contact strip, sqrt(int p y^2 dy / int p dy) [m]
@@ -420,6 +498,124 @@ def tangential_compliance_3d(pad: Pad, a: float, nu: float, *, element: float = 
     u[free] = spsolve(k[free][:, free].tocsc(), -(k[free][:, fixed] @ u[fixed]))
     force = 4.0 * float((k @ u)[held].sum())  # the whole pad's axial force at U = 1 m
     return length / (pad.height * force)
+
+
+def partial_slip_3d(pad: Pad, y_profile: np.ndarray, pressure: np.ndarray, mu: float, *, nu: float = 0.0,
+                    element: float = TANGENTIAL_ELEMENT, across: float = 5e-4, steps: int = 120) -> dict:  # fmt: skip
+    """Partial slip of the 3-D pad of finite length under a growing axial load, Coulomb's law at every
+    node of the contact strip: the reference for the tissue rig, whose face has free ends.
+
+    The pad is tangential_compliance_3d's (the quarter by its symmetry planes, 27-node hexahedra,
+    ``element`` along x and z, ``across`` across the strip, a node line at |y| = a). The contact's
+    pressure is the plane-strain one, ``pressure`` [Pa] at ``y_profile`` [m] (LayerModel.contact),
+    uniform along the face's height, and is held through the ramp (Goodman's approximation: the
+    axial shear does not change the normal pressure; exact in anti-plane shear, where the two
+    problems decouple). Every strip node (|y| <= a, a the outermost |y| with pressure) is held in x
+    (the rigid cylinder) and in y (friction across the strip: a lateral slip is not modelled); along
+    z it sticks (u_z = U, the cylinder's travel) while its axial force stays within mu times its
+    normal force (the pressure's consistent nodal load), else slides at that bound behind the
+    cylinder (u_z <= U). The strip's axial compliance is condensed onto its nodes (one
+    factorisation), and for each U on a grid up to gross slip an active-set iteration from the last
+    U's finds the stick set (exact for the discrete problem).
+
+    Returns arrays over the ramp: "ratio" Q / mu P, "share" the sticking nodes' share of the normal
+    load, "c_over_a" the tissue's measure of the stick zone (partial_slip.ramp: the |y| within which
+    the nodes carry that share, off their cumulative load, over a), "c_over_a_mid" the same over the
+    middle half of the face's height (|z| <= H / 4), "U" [m], "Q" [N] (the whole pad)."""
+    from scipy.sparse.linalg import splu
+    from skfem import Basis, ElementHex2, ElementVector, FacetBasis, LinearForm, MeshHex, asm
+    from skfem.models.elasticity import lame_parameters, linear_elasticity
+
+    if not mu > 0.0:
+        raise ValueError(f"mu must be positive, got {mu!r}")
+    touching = pressure > 0.0
+    if not touching.any():
+        raise ValueError("the pressure profile is zero everywhere")
+    a = float(np.abs(y_profile[touching]).max())
+    if not 0.0 < a < pad.width / 2:
+        raise ValueError(f"the strip's half-width must lie inside the face's half-width {pad.width / 2!r}, got {a!r}")
+
+    def grid(span: float, size: float) -> np.ndarray:
+        return np.linspace(0.0, span, max(1, math.ceil(span / size - 1e-9)) + 1)
+
+    h, half_h = pad.thickness, pad.height / 2
+    ys = np.concatenate([grid(a, across), a + grid(pad.width / 2 - a, element)[1:]])
+    mesh = MeshHex.init_tensor(grid(h, element), ys, grid(half_h, element))
+    basis = Basis(mesh, ElementVector(ElementHex2()), intorder=4)
+    lam, g = lame_parameters(2.0 * pad.shear_modulus * (1.0 + nu), nu)
+    k = asm(linear_elasticity(lam, g), basis).tocsr()
+    on_strip = lambda p: np.isclose(p[0], h) & (p[1] <= a + 1e-12)  # noqa: E731
+    strip = basis.get_dofs(on_strip)
+    axial = strip.all("u^3")
+    core = basis.get_dofs(lambda p: np.isclose(p[0], 0.0)).all()
+    mid_y = basis.get_dofs(lambda p: np.isclose(p[1], 0.0)).all("u^2")
+    mid_z = basis.get_dofs(lambda p: np.isclose(p[2], 0.0))
+    fixed = np.unique(np.concatenate([core, strip.all("u^1"), strip.all("u^2"), mid_y, mid_z.all("u^1"),
+                                      mid_z.all("u^2")]))  # fmt: skip
+    axial = np.setdiff1d(axial, fixed)
+    # the normal force on each strip node: the pressure's consistent load, read on the z component
+    top = mesh.facets_satisfying(lambda x: np.isclose(x[0], h) & (x[1] <= a + 1e-12))
+    fb = FacetBasis(mesh, basis.elem, facets=top, intorder=6)
+    order = np.argsort(y_profile)
+    yp, pp = y_profile[order], pressure[order]
+    weights = asm(LinearForm(lambda v, w: v[2] * np.interp(np.abs(w.x[1]), yp, pp)), fb)
+    normal = np.asarray(weights[axial]).ravel()
+    loc = basis.doflocs[:, axial]
+    y_node, z_node = loc[1], loc[2]
+    # the strip's axial compliance: C[i, j] the axial displacement of node i per unit axial force at j
+    free = np.setdiff1d(np.arange(k.shape[0]), fixed)
+    lu = splu(k[free][:, free].tocsc())
+    pos = np.searchsorted(free, axial)
+    rhs = np.zeros((free.size, axial.size))
+    rhs[pos, np.arange(axial.size)] = 1.0
+    c = lu.solve(rhs)[pos]
+    c = 0.5 * (c + c.T)
+    limit = mu * normal
+    big_p = float(normal.sum())
+    u_gross = float((c @ limit).max())  # every node at its cone: the strip's farthest lag
+    on = normal > 0.0
+    stick = on.copy()
+    mid = z_node <= 0.25 * pad.height
+    rows = []
+
+    def zone(sel: np.ndarray, stuck: np.ndarray) -> float:
+        lam_, y_ = normal[sel], y_node[sel]
+        share = float(lam_[stuck[sel]].sum() / lam_.sum())
+        o = np.argsort(y_)
+        cum = np.concatenate(([0.0], np.cumsum(lam_[o]) / lam_.sum()))
+        return float(np.interp(share, cum, np.concatenate(([0.0], y_[o])))) / a
+
+    for u in np.linspace(u_gross / steps, u_gross, steps)[:-1]:
+        for _ in range(4 * axial.size):
+            force = np.where(on & ~stick, limit, 0.0)
+            s = np.flatnonzero(stick)
+            if s.size:
+                force[s] = np.linalg.solve(c[np.ix_(s, s)], u - c[s] @ force)
+            w = c @ force
+            over = stick & (force > limit * (1.0 + 1e-12))
+            ahead = on & ~stick & (w > u * (1.0 + 1e-12))
+            if not over.any() and not ahead.any():
+                break
+            stick = (stick & ~over) | ahead
+        else:
+            raise RuntimeError("the active set did not settle")
+        q = float(force.sum())
+        rows.append((q / (mu * big_p), float(normal[stick].sum() / big_p), zone(on, stick), zone(on & mid, stick),
+                     u, 4.0 * q))  # fmt: skip
+        if not stick.any():
+            break
+    else:  # at u_gross every node at its cone is the solution (the last to stick is exactly there)
+        rows.append((1.0, 0.0, 0.0, 0.0, u_gross, 4.0 * mu * big_p))
+    arr = np.array(rows)
+    return {"ratio": arr[:, 0], "share": arr[:, 1], "c_over_a": arr[:, 2], "c_over_a_mid": arr[:, 3], "U": arr[:, 4],
+            "Q": arr[:, 5], "a": a}  # fmt: skip
+
+
+def at_ratios(ramp: dict, ratios, key: str = "c_over_a") -> np.ndarray:
+    """A partial-slip ramp's ``key`` (LayerModel.partial_slip, partial_slip_3d) at each Q / mu P in
+    ``ratios``, linearly between the ramp's steps; NaN beyond its last step."""
+    r = np.asarray(ramp["ratio"])
+    return np.array([np.interp(x, r, ramp[key]) if x <= r[-1] else math.nan for x in ratios])
 
 
 def _shear_pair_modulus(pad: Pad, indentation: float):

@@ -69,21 +69,36 @@ def contacts(rig: PadRig) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return particles, lc.normal_lambda[:n][keep].copy(), y
 
 
+def stick_zone(lam: np.ndarray, y: np.ndarray, stuck: np.ndarray) -> tuple[float, float]:
+    """(share, c / a): the sticking contacts' share of the normal load, and the |y| within which the
+    contacts carry that share (between contacts, linearly, off their cumulative load) over the
+    outermost contact's |y|."""
+    total = float(lam.sum())
+    a = float(np.abs(y).max())
+    share = float(lam[stuck].sum() / total)
+    if a <= 0.0:
+        return share, 0.0
+    order = np.argsort(np.abs(y))
+    cum = np.concatenate(([0.0], np.cumsum(lam[order]) / total))
+    return share, float(np.interp(share, cum, np.concatenate(([0.0], np.abs(y)[order])))) / a
+
+
 def ramp(density: float, *, material: str = "shape_matching", law: str = "contact", layers: int = 1,
-         hourglass: float = 0.0, report=print) -> dict:  # fmt: skip
+         hourglass: float = 0.0, friction: float | None = None, speed: float = SPEED, report=print) -> dict:  # fmt: skip
     """Press to PRESS, then drive the cylinder down its axis until every contact slides. Returns
     the rows (Q / mu P, stick share, c / a) and the summary figures. ``layers``: TissueConfig.layers;
-    ``hourglass``: TissueConfig.hourglass_stiffness."""
+    ``hourglass``: TissueConfig.hourglass_stiffness; ``friction``: mu (TissueConfig's default if None);
+    ``speed``: the cylinder's axial speed [m/s]."""
     tissue = TissueConfig(group_energy=material, friction_law=law, layers=layers, hourglass_stiffness=hourglass)
-    rig = PadRig(density, tissue=tissue)
+    rig = PadRig(density, tissue=tissue, friction=friction)
     mu = rig.tissue.friction_static
     c, _ = rig.press_to(PRESS, guess=2e-3)
     rows, u0 = [], rig.axial
     first_slide = gross = None
-    v = np.array([0.0, 0.0, -SPEED])
+    v = np.array([0.0, 0.0, -speed])
     history: list[tuple[np.ndarray, float]] = []  # the particles' and the cylinder's axial positions
     loads: list[tuple[float, float]] = []
-    for _ in range(round(0.02 / (SPEED * rig.sim.dt))):  # at most 20 mm
+    for _ in range(round(0.02 / (speed * rig.sim.dt))):  # at most 20 mm
         f = rig.step(v)
         history.append((rig.state.particle_x[:, 2].copy(), rig.axial))
         loads.append((abs(float(f[2])), float(f[0])))
@@ -98,15 +113,15 @@ def ramp(density: float, *, material: str = "shape_matching", law: str = "contac
         q, p = np.mean(loads[-WINDOW:], axis=0)
         ratio = q / (mu * p)
         a = float(np.abs(y).max())
-        share = float(lam[stuck].sum() / lam.sum())
+        share, c_load = stick_zone(lam, y, stuck)
         band = np.minimum((np.abs(y) / a * len(BANDS)).astype(int), len(BANDS) - 1) if a > 0 else np.zeros(y.size, int)
         bands = tuple(float(lam[stuck & (band == b)].sum() / max(lam[band == b].sum(), 1e-300)) for b in range(len(BANDS)))
-        # the stick zone's half-width read off the load: the |y| within which the contacts carry
-        # the sticking share of the normal load (between contacts, linearly)
-        order = np.argsort(np.abs(y))
-        cum = np.concatenate(([0.0], np.cumsum(lam[order]) / lam.sum()))
-        c_load = float(np.interp(share, cum, np.concatenate(([0.0], np.abs(y)[order])))) / a if a > 0 else 0.0
-        rows.append((ratio, share, c_load, u0 - rig.axial, q, bands))
+        # the same over the middle half of the face's height, away from its free ends, where the
+        # pad shears as the anti-plane reference's pad of infinite length
+        z = rig.state.particle_x[particles, 2]  # the core's centre is the origin
+        mid = np.abs(z) <= 0.25 * rig.face_height
+        c_mid = stick_zone(lam[mid], y[mid], stuck[mid])[1] if mid.any() else math.nan
+        rows.append((ratio, share, c_load, u0 - rig.axial, q, bands, c_mid))
         if first_slide is None and not stuck.all():
             first_slide = ratio
         if not stuck.any():
@@ -122,16 +137,34 @@ def ramp(density: float, *, material: str = "shape_matching", law: str = "contac
     report(f"{density:>9,.0f}/m^2 ({rig.particle_count} particles, {material}, law {law}): pressed {c * 1e3:.2f} mm; "
            f"first contact slides at Q/muP {first_slide if first_slide is None else round(first_slide, 3)}, all at "
            f"{gross if gross is None else round(gross, 3)}")  # fmt: skip
-    report("   Q/muP   stick share (centre middle edges)   c/a    (1-Q/muP)^1/2   (1-Q/muP)^1/3")
+    report("   Q/muP   stick share (centre middle edges)   c/a (all, mid-height)   (1-Q/muP)^1/2   (1-Q/muP)^1/3")
     out["levels"] = {}
     for level in LEVELS:
         hit = next((r for r in rows if r[0] >= level), None)
         if hit is None:
             continue
-        out["levels"][level] = {"ratio": hit[0], "share": hit[1], "c_over_a": hit[2], "bands": hit[5]}
-        report(f"   {hit[0]:5.3f}   {hit[1]:9.3f}   ({hit[5][0]:.2f} {hit[5][1]:.2f} {hit[5][2]:.2f})   {hit[2]:6.3f}   "
-               f"{math.sqrt(max(0.0, 1 - hit[0])):11.3f}   {max(0.0, 1 - hit[0]) ** (1 / 3):11.3f}")  # fmt: skip
+        out["levels"][level] = {"ratio": hit[0], "share": hit[1], "c_over_a": hit[2], "bands": hit[5],
+                                "c_over_a_mid": hit[6]}  # fmt: skip
+        report(f"   {hit[0]:5.3f}   {hit[1]:9.3f}   ({hit[5][0]:.2f} {hit[5][1]:.2f} {hit[5][2]:.2f})   {hit[2]:6.3f} "
+               f"{hit[6]:6.3f}   {math.sqrt(max(0.0, 1 - hit[0])):11.3f}   {max(0.0, 1 - hit[0]) ** (1 / 3):11.3f}")  # fmt: skip
     return out
+
+
+def reference(mu: float, *, load: float = PRESS, full: bool = True) -> dict:
+    """The finite-element reference's partial slip at ``load`` (benchmarks/pad_reference.py, nu 0,
+    Coulomb's law at every node): the anti-plane pad of infinite length ("anti_plane") and, with
+    ``full``, the 3-D pad of the face's length ("3d", 2 mm elements, 0.5 mm across the strip; about
+    4 minutes). Each maps LEVELS to (stick share, c / a). In linear elasticity neither depends on mu."""
+    from benchmarks.pad_reference import LayerModel, at_ratios, default_pad, partial_slip_3d
+
+    pad = default_pad()
+    model = LayerModel(pad, 0.0)
+    _, c = model.indentation(load)
+    ramps = {"anti_plane": model.partial_slip(c["f"], mu)}
+    if full:
+        ramps["3d"] = partial_slip_3d(pad, model.y, c["pressure"], mu)
+    return {name: dict(zip(LEVELS, zip(at_ratios(r, LEVELS, "share"), at_ratios(r, LEVELS), strict=True), strict=True))
+            for name, r in ramps.items()}  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -139,9 +172,27 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--densities", default="4000,16000,64000")
     parser.add_argument("--material", default="shape_matching", choices=["shape_matching", "continuum"])
     parser.add_argument("--law", default="contact", choices=["contact", "patch"])
+    parser.add_argument("--layers", default="1", help="TissueConfig.layers per density, a comma list (one for all)")
+    parser.add_argument("--hourglass", type=float, default=0.0, help="TissueConfig.hourglass_stiffness")
+    parser.add_argument("--friction", type=float, default=None, help="mu (TissueConfig's default if not given)")
+    parser.add_argument("--reference", choices=["none", "anti-plane", "3d"], default="none",
+                        help="also print the finite-element reference's stick share and c/a (needs scikit-fem; "
+                             "'3d' adds the pad of finite length, about 4 minutes)")  # fmt: skip
     args = parser.parse_args(argv)
-    for d in args.densities.split(","):
-        ramp(float(d), material=args.material, law=args.law)
+    densities = [float(d) for d in args.densities.split(",")]
+    layers = [int(v) for v in args.layers.split(",")]
+    if len(layers) not in (1, len(densities)):
+        parser.error(f"--layers gives {len(layers)} counts for {len(densities)} densities")
+    layers = layers * len(densities) if len(layers) == 1 else layers
+    for d, n in zip(densities, layers, strict=True):
+        ramp(d, material=args.material, law=args.law, layers=n, hourglass=args.hourglass, friction=args.friction)
+    if args.reference != "none":
+        mu = args.friction if args.friction is not None else TissueConfig().friction_static
+        ref = reference(mu, full=args.reference == "3d")
+        print(f"reference (finite elements, nu 0, {PRESS:g} N):   Q/muP   stick share   c/a")
+        for name, rows in ref.items():
+            for level, (share, c) in rows.items():
+                print(f"   {name:>10}   {level:5.2f}   {share:11.3f}   {c:5.3f}")
     return 0
 
 

@@ -92,6 +92,8 @@ class PadRig:
         self.sim = replace(sim or SimConfig(), gravity=0.0)
         hx, hy, hz = scene.finger_half_extents
         self.face_x = hx
+        self.face_height = 2.0 * hz
+        """The face's height along the cylinder's axis [m]; the core's centre is the origin."""
         self.radius = scene.cylinder_radius
         self.pad = self.tissue.extrude + self.tissue.normal_radius
         model = build_combined_body(CoreShape("box", half_extents=(hx, hy, hz)), self.tissue, faces=("+x",))

@@ -17,6 +17,7 @@ import numpy as np
 
 from .accuracy import GraspPlan, run_grasp
 from .config import SimConfig, TissueConfig
+from .presets import TISSUE_V4
 from .scene import GraspScene, SceneConfig
 
 _OLD_FLAGS = {"particle_density": "--density", "mass_density": "--tissue-density"}
@@ -58,6 +59,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m softgrasp_env.demo", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     parser.add_argument("--rigid", action="store_true", help="rigid-only fingers (no tissue)")
+    parser.add_argument("--tissue", choices=["v4", "v3"], default="v4",
+                        help="the tissue of the soft ids of that version: v4 the continuum energy with Coulomb's law "
+                             "per contact (presets.TISSUE_V4), v3 the thesis' shape matching with its patch law")  # fmt: skip
     parser.add_argument("--coupling", choices=["thesis", "consistent"], default=None, help="core-tissue coupling")
     parser.add_argument("--gui", action="store_true", help="open the pybullet GUI (needs a display)")
     parser.add_argument("--hold", type=float, default=GraspPlan().hold, help="seconds to hold the lifted cylinder")
@@ -68,7 +72,12 @@ def main(argv: list[str] | None = None) -> int:
     ns = parser.parse_args(argv)
     try:
         tissue_kw = _collect(ns, TissueConfig)
-        tissue = TissueConfig(**tissue_kw)
+        if ns.tissue == "v4":
+            tissue = TissueConfig(**{**{k: v for k, v in TISSUE_V4.items() if k != "layers"}, **tissue_kw})
+            if "layers" not in tissue_kw:  # "auto": as thick as the spacing at the density given
+                tissue = dataclasses.replace(tissue, layers=tissue.auto_layers)
+        else:
+            tissue = TissueConfig(**tissue_kw)
         sim_kw = _collect(ns, SimConfig)
         if ns.coupling:
             sim_kw["coupling"] = ns.coupling
@@ -89,7 +98,8 @@ def main(argv: list[str] | None = None) -> int:
         n_particles = 0 if scene.world.model is None else scene.world.model.particle_count
     finally:
         scene.close()
-    print(f"fingers:            {'rigid-only' if ns.rigid else 'soft'} ({n_particles} tissue particles)")
+    kind = "rigid-only" if ns.rigid else f"soft, {ns.tissue} tissue"
+    print(f"fingers:            {kind} ({n_particles} tissue particles)")
     print(f"lift height:        {res.lift_height * 100:.2f} cm (min during hold {res.min_lift_during_hold * 100:.2f} cm)")
     print(f"max penetration:    {res.max_penetration * 1000:.3f} mm (tissue into rigid shapes, every step)")
     print(f"max core intrusion: {res.max_core_intrusion * 1000:.3f} mm (outer particles into own core)")

@@ -39,3 +39,18 @@ def test_the_retired_material_flags_are_gone(built, capsys):
             demo.main(argv)
         assert "unrecognized arguments" in capsys.readouterr().err
     assert not built
+
+
+def test_the_main_job_runs_the_newest_soft_ids_tissue_and_the_thesis_one_on_request(built):
+    """By default the demo's tissue is the v4 soft ids' (presets.TISSUE_V4: the continuum energy,
+    hourglass control, Coulomb per contact, layers as thick as the spacing); ``--tissue v3`` is the
+    thesis' shape matching with its patch law; a ``--layers`` given is kept."""
+    from softgrasp_env.config import TissueConfig
+
+    for argv in ([], ["--particle-density", "64000"], ["--particle-density", "64000", "--layers", "1"], ["--tissue", "v3"]):
+        with pytest.raises(_Built):
+            demo.main(argv)
+    v4, dense, dense_one, v3 = (cfg.tissue for cfg in built)
+    assert (v4.group_energy, v4.friction_law, v4.hourglass_stiffness, v4.layers) == ("continuum", "contact", 1.0, 1)
+    assert dense.layers == 2 and dense_one.layers == 1
+    assert v3 == TissueConfig()

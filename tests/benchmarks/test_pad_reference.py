@@ -150,3 +150,68 @@ def test_the_plane_strain_profile_agrees_with_the_thin_layer_under_a_flat_punch(
     assert field == pytest.approx(thin, rel=5e-3), (thin, field)
     with pytest.raises(ValueError, match="profile"):
         tangential_compliance_3d(punch, 19.9e-3, 0.0, indentation=1e-3, profile="exact")
+
+
+def test_the_references_partial_slip_grows_in_from_the_edges_to_gross_slip_at_coulombs_load():
+    """The anti-plane pad of the default scene pressed to 3 N, then pulled along the cylinder's axis
+    with Coulomb's law at every surface node (LayerModel.partial_slip): Q / mu P rises to 1 as the
+    last node slides, the stick share falls from 1 to 0, and the stick zone shrinks from the edges
+    (the outermost sticking node moves in monotonically). For this pad (h / a = 0.71) the stick zone
+    follows Cattaneo-Mindlin's (1 - Q / mu P)^(1/2) (measured 0.867 / 0.733 / 0.533 / 0.333 at
+    0.25 / 0.5 / 0.75 / 0.9: +0.3 / +3.7 / +6.6 / +5.4 %), not the thin layer's
+    (1 - Q / mu P)^(1/3) (0.908 / 0.794 / 0.630 / 0.464)."""
+    _skfem()
+    from benchmarks.pad_reference import LayerModel, at_ratios, default_pad
+
+    model = LayerModel(default_pad(), 0.0)
+    _, c = model.indentation(3.0)
+    out = model.partial_slip(c["f"], 0.9, steps=200)
+    assert all(np.diff(out["ratio"]) > 0.0) and out["ratio"][-1] == 1.0, out["ratio"][-3:]
+    assert all(np.diff(out["share"]) <= 0.0) and out["share"][-1] == 0.0 and out["share"][0] > 0.99
+    assert all(np.diff(out["c_geom"]) <= 0.0)
+    levels = np.array([0.25, 0.5, 0.75, 0.9])
+    cm = np.sqrt(1.0 - levels)
+    c_over_a = at_ratios(out, levels, "c_geom")
+    assert np.all(np.abs(c_over_a / cm - 1.0) < 0.1), c_over_a / cm
+    assert np.all(c_over_a < (1.0 - levels) ** (1 / 3)), c_over_a
+
+
+def test_the_references_partial_slip_meets_the_thin_layer_limit():
+    """On a layer thin against its contact (h / a 0.18, then 0.09, the parabolic pressure of an
+    elastic foundation) each node's shear is its own, so the stick zone is where mu p(y) exceeds
+    the uniform stuck traction: c / a = (1 - Q / mu P)^(1/3). Measured at Q / mu P 0.9: 0.401 and
+    0.434 against 0.464, the gap halving with h."""
+    _skfem()
+    from benchmarks.pad_reference import LayerModel, Pad, at_ratios, default_pad
+
+    pad = default_pad()
+    delta = 5e-4
+    a = math.sqrt(pad.radius**2 - (pad.radius - delta) ** 2)
+    limit = (1.0 - 0.9) ** (1 / 3)
+    gaps = []
+    for h in (1e-3, 5e-4):
+        thin = Pad(h, 8 * a, pad.height, pad.radius, pad.shear_modulus)
+        model = LayerModel(thin, 0.0, 4, across=min(h / 4, a / 60))
+        out = model.partial_slip(model.contact(delta)["f"], 0.9, steps=200)
+        gaps.append(limit - float(at_ratios(out, [0.9], "c_geom")[0]))
+    assert 0.0 < gaps[1] < 0.6 * gaps[0] and gaps[1] < 0.04, gaps
+
+
+def test_the_3d_references_partial_slip_has_the_anti_plane_pads_stick_zone_away_from_its_ends():
+    """The 3-D pad of the face's length (partial_slip_3d, coarse: 4 mm elements, 1 mm across the
+    strip) under the same ramp: its stick share follows the anti-plane pad's to three quarters of
+    the slip load (measured 0.858 / 0.643 against 0.860 / 0.665 at 0.5 / 0.75); the free ends, where
+    the shear traction must fall to zero, stick longer, so over the middle half of the height the
+    stick zone is narrower than over the whole face."""
+    _skfem()
+    from benchmarks.pad_reference import LayerModel, at_ratios, default_pad, partial_slip_3d
+
+    pad = default_pad()
+    model = LayerModel(pad, 0.0)
+    _, c = model.indentation(3.0)
+    plane = model.partial_slip(c["f"], 0.9)
+    full = partial_slip_3d(pad, model.y, c["pressure"], 0.9, element=4e-3, across=1e-3)
+    assert all(np.diff(full["ratio"]) > 0.0) and full["ratio"][-1] == 1.0 and all(np.diff(full["share"]) <= 0.0)
+    levels = [0.5, 0.75]
+    assert np.allclose(at_ratios(full, levels, "share"), at_ratios(plane, levels, "share"), rtol=0.05)
+    assert np.all(at_ratios(full, [0.5, 0.75, 0.9], "c_over_a_mid") < at_ratios(full, [0.5, 0.75, 0.9]))
