@@ -80,6 +80,8 @@ def cone_excess(world, mu_s: float, mu_k: float) -> float:
     return float(np.max(tangential / (np.where(slid, mu_k, mu_s) * lam)))
 
 
+OFF_GROUND = 0.01
+"""[m] The cylinder counts as off the ground above this lift."""
 HELD_SPEED = 0.01
 """[m/s] The cylinder counts as held up while it sinks slower than this: a cylinder sliding out of
 a grip under kinetic friction is still "held" by the env's flag (it touches both pads, off the
@@ -125,7 +127,7 @@ def glue(seed: int = 1013, report=print, cones: bool = False, law: str | None = 
     i = {n: k for k, n in enumerate(u.obs_names)}
     axis = np.array([math.cos(cfg.yaw), math.sin(cfg.yaw), 0.0])
     force, still, floor = 4.0, 0, None
-    weakest = math.inf  # the least mean push of the cores the cylinder was held up with, once lifted
+    history: list[tuple[float, bool]] = []  # per step once the squeeze falls: (the cores' mean push, held)
     impulses = np.zeros(2)
     dt_world = world.solver.sim.dt  # one world step (the env may take several per physics step)
     cylinder_shape = u.scene.fingers.site.cylinder_shape
@@ -179,8 +181,14 @@ def glue(seed: int = 1013, report=print, cones: bool = False, law: str | None = 
             peak[0] = max(peak[0], u._last.lift)
             slipped[0] = slipped[0] or u._last.lift < peak[0] - 0.002
         n, over, med, top = contact_cone(world, mu)
-        if floor is not None and info["held"] and obs[i["cyl_vz"]] > -HELD_SPEED:
-            weakest = min(weakest, float(np.mean(np.abs(impulses))) / dt)  # the cores' push, not the contacts' press
+        if floor is not None:
+            # held: off the ground in both pads' grip and sinking slower than HELD_SPEED (a pad that
+            # slides a little as its squeeze falls and sticks again holds). Not the env's flag: a grip
+            # that sinks a few mm over its unloading slips falls below the task's success height
+            # while it still holds.
+            gripped = bool(u._last.force.min() >= MIN_GRIP_FORCE and u._last.lift > OFF_GROUND)
+            history.append((float(np.mean(np.abs(impulses))) / dt,  # the cores' push, not the contacts' press
+                            gripped and obs[i["cyl_vz"]] > -HELD_SPEED))  # fmt: skip
         if k % 6 == 0 or k >= 96:
             report(f"{k:5d}  {force:7.3f} N  {u._last.force[0]:6.3f} {u._last.force[1]:6.3f} N      "
                    f"{-impulses[0] / dt:+.3f} {impulses[1] / dt:+.3f} N  {u._last.lift:.4f} {obs[i['cyl_vz']] * 1e3:+6.1f}  {over:2d} of {n:2d} "
@@ -188,6 +196,7 @@ def glue(seed: int = 1013, report=print, cones: bool = False, law: str | None = 
         if terminated:
             break
     least = mass * 9.81 / (2 * mu)
+    weakest = min((push for push, ok in history if ok), default=math.inf)
     result = {"commanded": force, "measured": u._last.force.copy(), "contacts": n, "over": over,
               "held": bool(info["held"]), "weakest_hold": weakest, "least": least, "top_ratio": top, "mu": mu,
               "pads_after": after["tissue"], "cores_after": after["cores"], "steps_over_cores": after["over"],

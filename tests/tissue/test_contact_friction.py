@@ -38,9 +38,9 @@ def test_no_contact_leaves_its_cone_and_the_grip_needs_coulombs_least_force(seed
     still. Checked at every world step of the grasp, the lift and the slip: no contact's whole
     friction (both halves) exceeds mu_s lambda_n while it sticks or mu_k lambda_n while it slides
     (measured: 1.0000000 at most, every seed and coupling). The cylinder drops once the cores push
-    less than about m g / (2 mu): measured held down to 1.018 (seed 1013), 1.061, 1.077, 1.123,
-    1.046 (seeds 1000-1003) x the least under the thesis coupling, the consistent one within 0.01
-    of those (the squeeze falls 10 % every second step, so a drop lands up to ~1.1 x); with
+    less than about m g / (2 mu): measured held down to 1.018 (seed 1013, either coupling), 1.061,
+    1.077 (seeds 1000, 1001, thesis), 1.118, 1.049 (seeds 1002, 1003, consistent) x the least (the
+    squeeze falls 10 % every second step, so a drop lands up to ~1.1 x); with
     mu_k = 0.5 < mu_s = 0.69 the sliding contacts' bound rules, held down to 1.13 x m g / (2 mu_k).
     After the slip a pad presses the cylinder with at most 0.2 N more than its core pushes in any
     env step (seed 1001; its inertia as it stops), where the patch law's 'flicker' read 21-31 N
@@ -56,25 +56,34 @@ def test_no_contact_leaves_its_cone_and_the_grip_needs_coulombs_least_force(seed
     assert r["steps_after"] >= 20 and r["after_excess"] <= 0.5, r
 
 
-@pytest.mark.parametrize(("seed", "coupling", "density", "most"),
-                         [(1000, "thesis", None, 1.3), (1013, "thesis", None, 1.1), (1013, "consistent", None, 1.1),
-                          pytest.param(1001, "thesis", 16_000.0, 1.2, marks=pytest.mark.slow),
-                          pytest.param(1003, "thesis", 16_000.0, 1.25, marks=pytest.mark.slow)])  # fmt: skip
-def test_the_v4_tissue_keeps_every_contact_in_its_cone_and_needs_coulombs_squeeze(seed, coupling, density, most):
+@pytest.mark.parametrize(("seed", "coupling", "density", "most", "excess"),
+                         [(1000, "thesis", None, 1.25, 0.5), (1013, "thesis", None, 1.1, 0.5),
+                          (1013, "consistent", None, 1.1, 0.5), (1003, "thesis", None, 1.1, 0.8),
+                          pytest.param(1001, "thesis", 16_000.0, 1.15, 0.5, marks=pytest.mark.slow),
+                          pytest.param(1003, "thesis", 16_000.0, 1.25, 0.5, marks=pytest.mark.slow)])  # fmt: skip
+def test_the_v4_tissue_keeps_every_contact_in_its_cone_and_needs_coulombs_squeeze(seed, coupling, density, most,
+                                                                                   excess):  # fmt: skip
     """The glue scene on the v4 tissue (SoftGraspGrip-v4's physics). Every contact stays in its cone
     in every world step and a squeeze lowered below Coulomb's least lets the cylinder go. Measured
-    at the default 4,000 per m^2 (seeds 1013, 1000, 1001, 1002, 1003): let go at 1.02, 1.19, 1.48,
-    1.72, 1.77 x the least under the thesis coupling, and the same under the consistent one (1.02
-    for seed 1013). The coarse pad (three particle columns across the strip) unloads badly; refined,
-    the same seeds let go at 1.02 / 1.18 / 1.08 / 1.13 / 1.16 (16,000 per m^2) and 1.05-1.19
-    (64,000 per m^2, two layers), and the schedule lands a drop up to ~1.1 x late."""
+    at the default 4,000 per m^2 (seeds 1013, 1000, 1001, 1002, 1003): held down to 1.016, 1.188,
+    1.070, 1.004, 1.045 x the least under the thesis coupling, and the same under the consistent
+    one (1.016 for seed 1013, 1.046 for 1003); refined, 1.016 / 1.179 / 1.078 / 1.129 / 1.161
+    (16,000 per m^2). The schedule lowers the squeeze 10 % every second step, so a drop lands up
+    to ~1.1 x late, and a little more where the pad's unloading slips (the cylinder sinks a
+    fraction of a mm at each lowering and sticks again) carry it into the next one. The held
+    criterion is friction_glue's (off the ground, both pads pressing, sinking slower than 1 cm/s),
+    not the env's success height: at 4,000 per m^2 those slips sink the cylinder 5-6 mm before it
+    goes, and the env's flag read seeds 1002 and 1003 as let go at 1.72 and 1.77 x while the pads
+    still held them. After the slip a pad's summed contact normals exceed its core's push by at
+    most 0.07-0.32 N, and 0.71 N for seed 1003, whose wrapped pad already read 5.04 N against its
+    core's 4.0 N while holding (the normals round the cylinder, not their jaw component)."""
     from benchmarks.friction_glue import glue
 
     r = glue(seed, report=lambda line: None, law="v4", coupling=coupling, particle_density=density)
     assert r["cone_excess"] <= 1.0 + 1e-6, r
     assert not r["held"], r
     assert 0.97 <= r["weakest_hold"] / r["least"] <= most, r
-    assert r["steps_after"] >= 20 and r["after_excess"] <= 0.5, r
+    assert r["steps_after"] >= 20 and r["after_excess"] <= excess, r
 
 
 @pytest.mark.parametrize("coupling", ["thesis", "consistent"])
