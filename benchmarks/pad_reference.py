@@ -377,11 +377,9 @@ class LayerModel:
         for u in np.linspace(u_gross / steps, u_gross, steps)[:-1]:
             for _ in range(4 * self.y.size):
                 w, r = solve(stick, u)
-                over = stick & (r > limit * (1.0 + 1e-12))
-                ahead = touch & ~stick & (w > u * (1.0 + 1e-12))
-                if not over.any() and not ahead.any():
+                settled, stick = _coulomb_update(stick, touch, r, limit, w, u)
+                if settled:
                     break
-                stick = (stick & ~over) | ahead
             else:
                 raise RuntimeError("the active set did not settle")
             q = float(r[stick].sum() + limit[touch & ~stick].sum())
@@ -398,6 +396,18 @@ class LayerModel:
         arr = np.array(rows)
         return {"ratio": arr[:, 0], "share": arr[:, 1], "c_over_a": arr[:, 2], "c_geom": arr[:, 3], "U": arr[:, 4],
                 "Q": arr[:, 5], "gross": u_gross, "a": a}  # fmt: skip
+
+
+def _coulomb_update(stick: np.ndarray, touch: np.ndarray, force: np.ndarray, limit: np.ndarray, lag: np.ndarray,
+                    travel: float) -> tuple[bool, np.ndarray]:  # fmt: skip
+    """One active-set update of Coulomb's law at each node of a strip pulled by ``travel``: a stuck
+    node whose force exceeds its cone ``limit`` slides; a sliding node whose displacement ``lag``
+    got ahead of the cylinder sticks. Returns (settled, the new stick set)."""
+    over = stick & (force > limit * (1.0 + 1e-12))
+    ahead = touch & ~stick & (lag > travel * (1.0 + 1e-12))
+    if not over.any() and not ahead.any():
+        return True, stick
+    return False, (stick & ~over) | ahead
 
 
 def pressure_width(y: np.ndarray, pressure: np.ndarray) -> float:
@@ -591,12 +601,9 @@ def partial_slip_3d(pad: Pad, y_profile: np.ndarray, pressure: np.ndarray, mu: f
             s = np.flatnonzero(stick)
             if s.size:
                 force[s] = np.linalg.solve(c[np.ix_(s, s)], u - c[s] @ force)
-            w = c @ force
-            over = stick & (force > limit * (1.0 + 1e-12))
-            ahead = on & ~stick & (w > u * (1.0 + 1e-12))
-            if not over.any() and not ahead.any():
+            settled, stick = _coulomb_update(stick, on, force, limit, c @ force, u)
+            if settled:
                 break
-            stick = (stick & ~over) | ahead
         else:
             raise RuntimeError("the active set did not settle")
         q = float(force.sum())
