@@ -82,7 +82,11 @@ class PadRig:
     """One finger's inner face of tissue, its core fixed, pressed by a kinematic cylinder."""
 
     def __init__(self, density: float, *, friction: float | None = None, sim: SimConfig | None = None,
-                 tissue: TissueConfig | None = None) -> None:  # fmt: skip
+                 tissue: TissueConfig | None = None, punch: float | None = None) -> None:  # fmt: skip
+        """``punch``: instead of the cylinder, a flat rigid punch of this half-width across the face
+        [m] (a box longer than the face, its flat side parallel to the core's face)."""
+        if punch is not None and not punch > 0.0:
+            raise ValueError(f"punch must be a positive half-width [m], got {punch!r}")
         scene = SceneConfig()
         base = tissue or TissueConfig()
         kw = {"particle_density": density}
@@ -106,8 +110,9 @@ class PadRig:
             rigid_x=np.zeros((2, 3)), rigid_q=np.repeat(ident, 2, axis=0), rigid_v=np.zeros((2, 3)),
             rigid_w=np.zeros((2, 3)), rigid_inv_mass=np.zeros(2), rigid_inv_inertia=np.zeros((2, 3)),
             rigid_gravity=np.zeros(2, dtype=np.bool_), rigid_in_solve=np.zeros(2, dtype=np.bool_),
-            shape_kind=np.array([SHAPE_CODES["box"], SHAPE_CODES["cylinder"]], dtype=np.int32),
-            shape_params=np.array([[hx, hy, hz], [self.radius, 2.0 * hz, 0.0]]),
+            shape_kind=np.array([SHAPE_CODES["box"], SHAPE_CODES["cylinder" if punch is None else "box"]], dtype=np.int32),
+            shape_params=np.array([[hx, hy, hz], [self.radius, 2.0 * hz, 0.0] if punch is None
+                                   else [self.radius, punch, 2.0 * hz]]),
             shape_rigid=np.array([0, 1], dtype=np.int32), shape_local_x=np.zeros((2, 3)),
             shape_local_q=np.repeat(ident, 2, axis=0),
         )  # fmt: skip
