@@ -1,7 +1,8 @@
-"""Partial slip of the tissue's pad under a growing tangential load, against Cattaneo-Mindlin.
+"""Partial slip of the tissue's pad under a growing tangential load, against Cattaneo-Mindlin and
+the finite-element reference.
 
     PYTHONPATH=. python benchmarks/partial_slip.py [--densities 4000,16000,64000] [--material continuum]
-                                                   [--law contact]
+        [--law contact] [--layers 1,2,4] [--hourglass 1] [--friction 0.3] [--reference anti-plane | 3d]
 
 The rig is the convergence benchmark's (spatial_convergence.PadRig: one finger's inner face of
 tissue, its core fixed, the scene's 3 cm cylinder standing upright, moved kinematically), with the
@@ -22,8 +23,12 @@ c / a = (1 - Q / mu P)^(1/2) for a Hertzian (elliptic) pressure on an elastic ha
 (Cattaneo 1938, Mindlin 1949; Johnson 1985, sec. 7.2), and (1 - Q / mu P)^(1/3) for a parabolic
 pressure on a thin elastic layer, whose shear traction in the stick zone is uniform (a layer of
 tangential springs; the pad's contact half-width is 0.9 to 1.8 times its thickness, between the
-two). Also printed: the tangential compliance (dU / dQ over the first and the last stretch) and the
-load at which the first contact slides and at which all of them do.
+two). c / a is also given over the middle half of the face's height alone (away from its free
+ends). Also printed: the tangential compliance (dU / dQ over the first and the last stretch) and
+the load at which the first contact slides and at which all of them do. ``--reference`` adds the
+finite-element pad's stick share and c / a at the same Q / mu P (``reference``: Coulomb's law at
+every node, pad_reference.LayerModel.partial_slip and partial_slip_3d), the curve for this pad's
+own pressure profile and thickness.
 """
 
 from __future__ import annotations
