@@ -25,8 +25,7 @@ import numpy as np
 
 from benchmarks.partial_slip import contacts
 from benchmarks.spatial_convergence import RAMP_SPEED, PadRig
-from softgrasp_env.config import TissueConfig
-from softgrasp_env.presets import TISSUE_V4
+from softgrasp_env.presets import v4_tissue
 
 PRESS = 0.5e-3
 """How far the punch presses into the pad [m] before it is moved along the face."""
@@ -41,7 +40,7 @@ def shear(density: float, layers: int, half_width: float) -> dict:
     """One pad, one punch: its tangential compliance [m/N], the touching columns' |y| [m], and the
     particle layers' travel over the punch's (layer, 0 at the core -> mean fraction, over the
     middle half of the face)."""
-    tissue = TissueConfig(**{**{k: v for k, v in TISSUE_V4.items() if k != "layers"}, "layers": layers})
+    tissue = v4_tissue(layers=layers)
     rig = PadRig(density, tissue=tissue, friction=MU, punch=half_width)
     rig.move_to(PRESS)
     rig.hold()

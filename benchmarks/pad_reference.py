@@ -295,18 +295,21 @@ class LayerModel:
         t = (a - lo) / (hi - lo)
         return float((1.0 - t) * c_lo + t * c_hi)
 
-    def _strip_compliance(self, touch: np.ndarray) -> float:
-        """One pad's tangential compliance with the surface nodes ``touch`` held [m/N]."""
+    @cached_property
+    def _anti(self) -> tuple:
+        """The anti-plane system: (scalar P2 basis, G times its Laplacian, the core's DOFs, the
+        surface's DOFs by y)."""
         from skfem import Basis, ElementTriP2
         from skfem.models.poisson import laplace
 
-        if not hasattr(self, "_anti"):
-            sb = Basis(self.mesh, ElementTriP2())
-            k = self._asm(laplace, sb).tocsc() * self.pad.shear_modulus
-            base = sb.get_dofs(self.mesh.facets_satisfying(lambda x: np.isclose(x[0], 0.0))).all()
-            top = sb.get_dofs(self.mesh.facets_satisfying(lambda x: np.isclose(x[0], self.pad.thickness))).all()
-            y = sb.doflocs[1, top]
-            self._anti = (sb, k, base, top[np.argsort(y)])
+        sb = Basis(self.mesh, ElementTriP2())
+        k = self._asm(laplace, sb).tocsc() * self.pad.shear_modulus
+        base = sb.get_dofs(self.mesh.facets_satisfying(lambda x: np.isclose(x[0], 0.0))).all()
+        top = sb.get_dofs(self.mesh.facets_satisfying(lambda x: np.isclose(x[0], self.pad.thickness))).all()
+        return sb, k, base, top[np.argsort(sb.doflocs[1, top])]
+
+    def _strip_compliance(self, touch: np.ndarray) -> float:
+        """One pad's tangential compliance with the surface nodes ``touch`` held [m/N]."""
         sb, k, base, top = self._anti
         if touch.shape != top.shape:
             raise ValueError("touch must be a mask over the surface nodes")
@@ -339,7 +342,6 @@ class LayerModel:
         "U" [m] and "Q" [N/m]; and "gross" the U at which every node slides."""
         from scipy.sparse.linalg import splu
 
-        self._strip_compliance(np.ones(self.y.size, bool))  # builds the anti-plane system
         sb, k, base, top = self._anti
         if normal.shape != self.y.shape:
             raise ValueError(f"normal must give one force per surface node ({self.y.size}), got shape {normal.shape}")

@@ -17,7 +17,7 @@ import numpy as np
 
 from .accuracy import GraspPlan, run_grasp
 from .config import SimConfig, TissueConfig
-from .presets import TISSUE_V4
+from .presets import v4_tissue
 from .scene import GraspScene, SceneConfig
 
 _OLD_FLAGS = {"particle_density": "--density", "mass_density": "--tissue-density"}
@@ -61,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rigid", action="store_true", help="rigid-only fingers (no tissue)")
     parser.add_argument("--tissue", choices=["v4", "v3"], default="v4",
                         help="the tissue of the soft ids of that version: v4 the continuum energy with Coulomb's law "
-                             "per contact (presets.TISSUE_V4), v3 the thesis' shape matching with its patch law")  # fmt: skip
+                             "per contact (presets.v4_tissue), v3 the thesis' shape matching with its patch law")  # fmt: skip
     parser.add_argument("--coupling", choices=["thesis", "consistent"], default=None, help="core-tissue coupling")
     parser.add_argument("--gui", action="store_true", help="open the pybullet GUI (needs a display)")
     parser.add_argument("--hold", type=float, default=GraspPlan().hold, help="seconds to hold the lifted cylinder")
@@ -72,12 +72,7 @@ def main(argv: list[str] | None = None) -> int:
     ns = parser.parse_args(argv)
     try:
         tissue_kw = _collect(ns, TissueConfig)
-        if ns.tissue == "v4":
-            tissue = TissueConfig(**{**{k: v for k, v in TISSUE_V4.items() if k != "layers"}, **tissue_kw})
-            if "layers" not in tissue_kw:  # "auto": as thick as the spacing at the density given
-                tissue = dataclasses.replace(tissue, layers=tissue.auto_layers)
-        else:
-            tissue = TissueConfig(**tissue_kw)
+        tissue = v4_tissue(**tissue_kw) if ns.tissue == "v4" else TissueConfig(**tissue_kw)
         sim_kw = _collect(ns, SimConfig)
         if ns.coupling:
             sim_kw["coupling"] = ns.coupling

@@ -32,6 +32,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
+from .config import TissueConfig
 from .scene.config import SceneConfig
 
 TISSUE_V4: dict[str, Any] = dict(group_energy="continuum", hourglass_stiffness=1.0, friction_law="contact",
@@ -50,6 +51,16 @@ PRESETS: dict[str, dict[str, Any]] = {
 }
 """Each preset as overrides of the defaults: SceneConfig fields, with ``tissue`` and ``sim`` as
 overrides of TissueConfig and SimConfig fields."""
+
+
+def v4_tissue(**fields: Any) -> TissueConfig:
+    """The v4 soft ids' tissue (TISSUE_V4) with ``fields`` (TissueConfig fields) over it; its
+    ``layers="auto"``, unless ``layers`` is given, resolved for the density it ends up with
+    (TissueConfig.auto_layers)."""
+    spec = {**TISSUE_V4, **fields}
+    layers = spec.pop("layers")
+    tissue = TissueConfig(**spec)
+    return replace(tissue, layers=tissue.auto_layers if layers == "auto" else layers)
 
 
 def scene_config(name: str, *, base: SceneConfig | None = None) -> SceneConfig:

@@ -165,7 +165,10 @@ def test_the_v4_strips_edges_slide_before_its_centre():
 
 
 @pytest.mark.slow
-def test_the_converged_pads_stick_zone_meets_the_finite_element_reference_at_small_strain():
+@pytest.mark.parametrize("mu", [0.3, pytest.param(0.9, marks=pytest.mark.xfail(
+    strict=True, reason="at the default mu 0.9 the finest pad's stick zone closes early past 0.75 of the slip load "
+    "(0.312 / 0.125 against 0.417 / 0.265 at 0.9 / 0.95): docs/results/spatial-convergence.md"))])  # fmt: skip
+def test_the_converged_pads_stick_zone_meets_the_finite_element_reference_at_small_strain(mu):
     """Partial slip against an independent reference: the 3-D finite-element pad of the face's
     length, linear elastic (nu 0), Coulomb's law at every node, the plane-strain pressure of 3 N
     (benchmarks/pad_reference.py, partial_slip_3d). The tissue at 256,000 per m^2 with four layers
@@ -175,14 +178,14 @@ def test_the_converged_pads_stick_zone_meets_the_finite_element_reference_at_sma
     against the reference's 0.954 / 0.853 / 0.646 / 0.417 / 0.265 (+1.8 / +6.0 / +0.9 / +5.3 /
     -7.5 %). At the default mu 0.9 the layer shears ~0.4 of its thickness before gross slip and the
     share falls to 0.312 / 0.125 at 0.9 / 0.95: finite strain, which the linear reference cannot
-    follow (docs/results/spatial-convergence.md)."""
+    follow (docs/results/spatial-convergence.md): the default's case is a strict xfail."""
     pytest.importorskip("skfem")
     from benchmarks.partial_slip import ramp, reference
 
     levels = (0.25, 0.5, 0.75, 0.9, 0.95)
-    out = ramp(256_000.0, material="continuum", law="contact", layers=4, hourglass=1.0, friction=0.3,
+    out = ramp(256_000.0, material="continuum", law="contact", layers=4, hourglass=1.0, friction=mu,
                report=lambda line: None)  # fmt: skip
-    ref = reference(0.3)["3d"]
+    ref = reference(mu)["3d"]
     tissue = np.array([out["levels"][q]["share"] for q in levels])
     expected = np.array([ref[q][0] for q in levels])
     assert np.all(np.abs(tissue / expected - 1.0) < 0.1), (tissue, expected)
