@@ -353,9 +353,12 @@ def _single_body_model(
     *,
     group_partner: np.ndarray | None = None,
     layer: np.ndarray | None = None,
+    group_volume: np.ndarray | None = None,
 ) -> TissueModel:
     """The model of one body; ``partner`` is the model's particle_partner, ``group_partner`` and
-    ``layer`` (default: ``partner``, none) what build_groups puts in each group."""
+    ``layer`` (default: ``partner``, none) what build_groups puts in each group, ``group_volume``
+    (default: from the members' masses) each group's volume for the continuum energy
+    (continuum_groups)."""
     offsets, members, rest_offset = build_groups(rest_x, mass, partner if group_partner is None else group_partner,
                                                  tissue.group_size, layer=layer)  # fmt: skip
     n = rest_x.shape[0]
@@ -363,7 +366,7 @@ def _single_body_model(
     cont = None
     if tissue.group_energy == "continuum":
         cont, kappa = continuum_groups(offsets, members, rest_offset, mass, tissue.shear_modulus, tissue.mass_density,
-                                       tissue.hourglass_stiffness)  # fmt: skip
+                                       tissue.hourglass_stiffness, group_volume)  # fmt: skip
     return TissueModel(
         particle_rest_x=np.ascontiguousarray(rest_x, dtype=np.float64),
         particle_rest_q=np.ascontiguousarray(rest_q, dtype=np.float64),
@@ -416,7 +419,8 @@ zero (continuum_groups: a planar or collinear group's A_qq^+ is its pseudo-inver
 
 
 def continuum_groups(offsets: np.ndarray, members: np.ndarray, rest_offset: np.ndarray, mass: np.ndarray,
-                     modulus: float, density: float, hourglass: float = 0.0) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+                     modulus: float, density: float, hourglass: float = 0.0,
+                     volume: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """The continuum group energy's rest data (TissueConfig.group_energy "continuum";
     compliant.continuum_group): ((N, CONTINUUM_COLUMNS) [A_qq^+ (xx, xy, xz, yy, yz, zz), 2 G V,
     beta, A_qq (xx, xy, xz, yy, yz, zz)], (N,) kappa).
@@ -426,7 +430,8 @@ def continuum_groups(offsets: np.ndarray, members: np.ndarray, rest_offset: np.n
     the group, Mueller et al. 2005). For a small strain F - R is the strain eps, so E_g is
     V_g mu eps:eps, linear elasticity with mu = G and lambda = 0 (nu = 0), whatever the group's
     shape. V_g = sum_j V_j / n_j, V_j = m_j / rho a member's volume and n_j the groups it is in:
-    every particle's volume counted once over the groups.
+    every particle's volume counted once over the groups; or ``volume`` (N,) [m^3], each group's
+    own, given (a layered pad's: _layered).
 
     kappa, the largest stiffness per unit mass of the group's Hessian (the world's substep rule,
     compliant.substeps_for): with R held, d^2 E / dx_j dx_k = 2 G V (b_j . b_k) I, b_j = A_qq^-1 m_j
@@ -456,7 +461,7 @@ def continuum_groups(offsets: np.ndarray, members: np.ndarray, rest_offset: np.n
         w, v = np.linalg.eigh(aqq)
         inv = np.where(w > PINV_RTOL * w.max(), 1.0 / np.where(w > 0.0, w, 1.0), 0.0)
         ainv = (v * inv) @ v.T
-        k2 = 2.0 * modulus * float((vol[j] * share[j]).sum())
+        k2 = 2.0 * modulus * (float((vol[j] * share[j]).sum()) if volume is None else float(volume[i]))
         b = (m[:, None] * q) @ ainv
         kappa[i] = k2 * float(np.linalg.eigvalsh((b[:, :, None] * b[:, None, :] / m[:, None, None]).sum(axis=0)).max())
         beta = hourglass * 0.5 * k2 / float(np.trace(aqq))
@@ -563,10 +568,22 @@ def _layered(pts: np.ndarray, d: np.ndarray, area: np.ndarray, tissue: TissueCon
 
     - **Positions**: column c's particle of layer k at pts[c] + (k extrude / L) d[c], k = 0 .. L,
       stored at index k K + c (K columns).
-    - **Masses**: the column's prism, area x extrude x mass_density, cut into L slices of
-      extrude / L; each slice's mass is split half and half between the layers that bound it (the
-      trapezoid rule through the thickness), so the end layers carry half a slice, the inner ones a
-      whole slice, and the column's masses sum to its prism's.
+    - **Masses and volumes**: the column's prism, area x extrude x mass_density, is shared equally
+      by its L + 1 particles; each group's volume (the continuum energy's V_g) is its centre's share
+      of the prism by the trapezoid rule, half a slice (area x extrude / L) at the two end layers
+      and a whole slice inside. Why not the trapezoid's masses too: a group's fit weighs its
+      members by mass (the least-squares F, Mueller et al. 2005), and a uniform stress must be in
+      balance at every inner particle (the patch test; for particle methods, the integration
+      constraint: Chen, Wu, Yoon & You 2001). Per column, the groups' shares through the
+      thickness, sum_g V_g b_gj . d (b_gj = A_qq^-1 m_j q_j, d the normal), must be -area at the
+      core, 0 at each inner particle and +area at the surface. With half masses at the end layers
+      the group of a particle next to one leans toward its far side, the shares are about
+      -0.92 / -0.16 / 0 / +0.16 / +0.92 of the area with four layers, and a uniformly sheared pad
+      shears in an S instead (its layers travel 0 / 0.29 / 0.50 / 0.71 / 1 of the surface's
+      travel). With equal masses every group's fit through the thickness is symmetric, and the
+      trapezoid's volumes make the shares -1 / 0 / ... / 0 / +1. The column's mass and its centre
+      of mass are the trapezoid's; the mass's spread through the thickness is not (a lumped mass,
+      converging as L grows).
     - **Radii**: the attached and outer layers' as with one layer. Contacts are collected for every
       particle that comes within its support radius of a rigid shape (contacts.collect_contacts),
       so an inner particle with the surface's normal radius (3 mm, as much as the layer spacing or
@@ -589,11 +606,11 @@ def _layered(pts: np.ndarray, d: np.ndarray, area: np.ndarray, tissue: TissueCon
     h = tissue.extrude / layers
     depth = np.arange(layers + 1) * h
     rest_x = (pts[None, :, :] + depth[:, None, None] * d[None, :, :]).reshape(-1, 3)
-    # Trapezoid rule across the thickness: each slice (area x h) half to each layer bounding it.
-    m_slice = tissue.mass_density * area * h
+    # Equal masses through the thickness, the trapezoid's volumes for the groups (docstring).
+    mass = np.tile(tissue.mass_density * area * tissue.extrude / (layers + 1), layers + 1)
     weight = np.ones(layers + 1)
     weight[0] = weight[-1] = 0.5
-    mass = (weight[:, None] * m_slice[None, :]).ravel()
+    group_volume = (weight[:, None] * (area * h)[None, :]).ravel()
     tangential = tissue.radius_scale * np.sqrt(area)
     normal = np.full(layers + 1, min(tissue.normal_radius, INNER_NORMAL_RADIUS * h))
     normal[0] = normal[-1] = tissue.normal_radius
@@ -612,7 +629,7 @@ def _layered(pts: np.ndarray, d: np.ndarray, area: np.ndarray, tissue: TissueCon
     group_partner = np.stack([above, below], axis=1)
     attached = layer == 0
     return _single_body_model(rest_x, rest_q, radii, mass, partner, attached, tissue, group_partner=group_partner,
-                              layer=layer)  # fmt: skip
+                              layer=layer, group_volume=group_volume)  # fmt: skip
 
 
 def surface_particles(model: TissueModel) -> np.ndarray:

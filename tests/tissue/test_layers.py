@@ -1,7 +1,8 @@
 """Particle layers through the pad's thickness (TissueConfig.layers; tissue/builder.py,
 build_combined_body and _layered): one layer is the two-layer pad exactly; L layers give L + 1
-particle layers at depths k extrude / L with the trapezoid rule's masses, inner particles that stay
-off the cylinder, groups across the layers, and a continuum pad near the finite-element reference
+particle layers at depths k extrude / L with equal masses and the trapezoid rule's group volumes
+(a uniform stress in balance at every inner particle), inner particles that stay off the
+cylinder, groups across the layers, and a continuum pad near the finite-element reference
 (benchmarks/pad_reference.py; docs/results/spatial-convergence.md)."""
 
 from __future__ import annotations
@@ -70,10 +71,15 @@ def test_layers_sit_at_their_depths_with_the_prisms_mass(layers):
     np.testing.assert_allclose(depth, np.arange(layers + 1)[:, None] * tissue.extrude / layers + 0 * depth, atol=1e-15)
     # every column is the surface point's, straight out along the normal
     np.testing.assert_array_equal(model.particle_rest_x[:, 1:].reshape(layers + 1, k, 2), np.tile(pts[:, 1:], (layers + 1, 1, 1)))
-    # the trapezoid rule: half a slice at each end, a whole slice inside, the prism's mass in all
-    slices = model.particle_mass.reshape(layers + 1, k) / (tissue.mass_density * area * tissue.extrude / layers)
-    np.testing.assert_allclose(slices, np.r_[0.5, np.ones(layers - 1), 0.5][:, None] + 0 * slices, rtol=1e-12)
+    # the column's prism shared equally by its particles; the groups' volumes by the trapezoid rule:
+    # half a slice at each end, a whole slice inside, the pad's volume in all
+    share = model.particle_mass.reshape(layers + 1, k) / (tissue.mass_density * area * tissue.extrude)
+    np.testing.assert_allclose(share, 1.0 / (layers + 1) + 0 * share, rtol=1e-12)
     np.testing.assert_allclose(model.particle_mass.sum(), tissue.mass_density * AREA * tissue.extrude, rtol=1e-12)
+    volume = model.group_continuum[:, 6].reshape(layers + 1, k) / (2.0 * tissue.shear_modulus)
+    slices = volume / (area * tissue.extrude / layers)
+    np.testing.assert_allclose(slices, np.r_[0.5, np.ones(layers - 1), 0.5][:, None] + 0 * slices, rtol=1e-12)
+    np.testing.assert_allclose(volume.sum(), AREA * tissue.extrude, rtol=1e-12)
     # attached: the first layer only; the surface: the last; paired with each other, inner ones with none
     layer = np.repeat(np.arange(layers + 1), k)
     assert (model.particle_attached == (layer == 0)).all()
@@ -107,6 +113,31 @@ def test_groups_reach_across_one_layer_spacing(layers):
     # the groups' extent across the layer is one spacing (two for an inner layer), not the pad's thickness
     across = np.abs(model.group_rest_offset[:, 0]).reshape(n, -1).max(axis=1)
     assert across.max() <= 2 * CONTINUUM.extrude / layers * (1 + 1e-9)
+
+
+@pytest.mark.parametrize("layers", [2, 3, 4])
+@pytest.mark.parametrize("density", [16_000.0, 64_000.0])
+def test_a_uniform_stress_is_in_balance_at_every_inner_layer(layers, density):
+    """The patch test through the thickness (the integration constraint of particle methods, Chen
+    et al. 2001): under a uniform stress the continuum energy's force on particle j is
+    2 G sum_g V_g eps b_gj, so each layer's shares along the normal, sum_g V_g b_gj . d over its
+    particles, must be -1 (the core), 0 (every inner layer) and +1 (the surface) times the face's
+    area. With the trapezoid rule's masses they were -0.918 / -0.164 / 0 / +0.164 / +0.918 (four
+    layers, 64,000 per m^2), and a uniformly sheared pad shears in an S."""
+    model = pad(layers, density)
+    n, k = model.particle_count, model.particle_count // (layers + 1)
+    layer = np.arange(n) // k
+    cont = model.group_continuum
+    off, mem, q = model.group_offsets, model.group_members, model.group_rest_offset
+    share = np.zeros(layers + 1)
+    for g in range(n):
+        e = slice(off[g], off[g + 1])
+        ainv = cont[g, [[0, 1, 2], [1, 3, 4], [2, 4, 5]]]
+        b = (model.particle_mass[mem[e], None] * q[e]) @ ainv
+        np.add.at(share, layer[mem[e]], cont[g, 6] / (2.0 * CONTINUUM.shear_modulus) * b[:, 0])  # d = +x
+    want = np.zeros(layers + 1)
+    want[0], want[-1] = -1.0, 1.0
+    np.testing.assert_allclose(share / AREA, want, atol=1e-9)
 
 
 def test_the_taxels_read_the_surface_layer():
