@@ -2,7 +2,7 @@
 and stuck to it, then moved along the face: the pad's tangential compliance and how far each
 particle layer travels, against the finite-element reference with the same stuck strip.
 
-    PYTHONPATH=. python benchmarks/layer_shear.py [--densities 64000] [--layers 1,2,4] [--no-reference]
+    PYTHONPATH=. python benchmarks/layer_shear.py [--densities 64000] [--layers 1,2,4] [--no-reference] [--linear]
 
 The rig is spatial_convergence.PadRig with ``punch``: one finger's inner face of tissue (the v4
 material: the continuum energy, hourglass control 1, Coulomb per contact) pressed ``PRESS`` by a
@@ -15,6 +15,10 @@ The reference (pad_reference.tangential_compliance_3d, nu 0) holds the strip |y|
 tissue's strip is its touching particle columns, so the reference is printed at the last touching
 column's |y| and half a spacing further out (where the discrete strip's edge may sit).
 One process, one thread; about a minute at 64,000 per m^2 (with the reference).
+
+``--linear`` solves the same punches on the discrete energy itself (linear_shear: its Hessian
+about the rest state, the stuck strip held, no solver, no press): the discretisation alone, at
+layer counts the rig cannot afford (eight layers at 1,024,000 per m^2 in a minute).
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ import numpy as np
 from benchmarks.partial_slip import contacts
 from benchmarks.spatial_convergence import RAMP_SPEED, PadRig
 from softgrasp_env.presets import v4_tissue
+from softgrasp_env.tissue.builder import CoreShape, build_combined_body
 
 PRESS = 0.5e-3
 """How far the punch presses into the pad [m] before it is moved along the face."""
@@ -59,16 +64,85 @@ def shear(density: float, layers: int, half_width: float) -> dict:
             "profile": profile}  # fmt: skip
 
 
+def discrete_hessian(model):
+    """(3N, 3N) sparse, the Hessian of the tissue's discrete energy (the continuum group energy and its
+    hourglass term, builder.continuum_groups) about the rest state [N/m], from the model's own rest
+    data: what the solver's static equilibrium is, with no dynamics, contacts or iterations.
+
+    Group g, members j with b_j = A_qq^-1 m_j q_j and k = 2 G V_g (g_cont column 6): the energy
+    (k / 2) ||sym(sum_j u_j b_j^T)||^2 (G V ||F - R||^2 for a small displacement u: R takes the
+    skew part) has the blocks (k / 2) ((b_j . b_k) I + b_k b_j^T); the hourglass term
+    (beta / 2) sum_i m_i ||r_i||^2, r_i = sum_k (delta_ik - w_k - b_k . q_i) u_k (w_k = m_k / M the
+    fit centre's weights), the blocks beta (P^T diag(m) P)_jk I."""
+    import scipy.sparse as sp
+
+    off, mem, rest = model.group_offsets, model.group_members, model.group_rest_offset
+    cont = model.group_continuum
+    rows, cols, vals = [], [], []
+    eye = np.eye(3)
+    for g in range(off.shape[0] - 1):
+        e = slice(int(off[g]), int(off[g + 1]))
+        j = mem[e].astype(np.int64)
+        m = model.particle_mass[j]
+        q = rest[e]
+        ainv = cont[g, [[0, 1, 2], [1, 3, 4], [2, 4, 5]]]
+        b = (m[:, None] * q) @ ainv
+        n = j.shape[0]
+        dots = b @ b.T
+        block = 0.5 * cont[g, 6] * (np.kron(dots, eye) + np.einsum("ka,jb->jakb", b, b).reshape(3 * n, 3 * n))
+        if cont[g, 7] > 0.0:
+            p = np.eye(n) - (m / m.sum())[None, :] - q @ b.T
+            block += cont[g, 7] * np.kron(p.T @ (m[:, None] * p), eye)
+        idx = (3 * j[:, None] + np.arange(3)).ravel()
+        rows.append(np.repeat(idx, 3 * n))
+        cols.append(np.tile(idx, 3 * n))
+        vals.append(block.ravel())
+    size = 3 * model.particle_count
+    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(size, size))
+
+
+def linear_shear(density: float, layers: int, half_width: float) -> dict:
+    """The punch of ``shear`` on the discrete energy itself: the static equilibrium of
+    discrete_hessian with the core's particles held, the surface particles with |y| <= half_width
+    stuck to the punch and moved along the axis, every other particle free. No press, no contact
+    law, no solver: what the discretisation gives, layer counts the rig cannot afford included.
+    Returns what ``shear`` does (the touching columns: the stuck ones)."""
+    import scipy.sparse.linalg as spla
+
+    from softgrasp_env.scene import SceneConfig
+
+    tissue = v4_tissue(layers=layers, particle_density=density)
+    hx, hy, hz = SceneConfig().finger_half_extents
+    model = build_combined_body(CoreShape("box", half_extents=(hx, hy, hz)), tissue, faces=("+x",))
+    x = model.particle_rest_x
+    layer = np.rint((x[:, 0] - hx) / (tissue.extrude / layers)).astype(int)
+    stuck = (layer == layers) & (np.abs(x[:, 1]) <= half_width)
+    held = np.repeat((layer == 0) | stuck, 3)
+    travel = 1e-4
+    u = np.zeros(3 * model.particle_count)
+    u[3 * np.flatnonzero(stuck) + 2] = travel
+    h = discrete_hessian(model)
+    free = ~held
+    u[free] = spla.spsolve(h[free][:, free].tocsc(), -(h[free][:, held] @ u[held]))
+    force = float((h @ u)[3 * np.flatnonzero(stuck) + 2].sum())
+    uz = u[2::3] / travel
+    mid = (np.abs(x[:, 2]) < 0.5 * hz) & (np.abs(x[:, 1]) < 0.01)
+    profile = {int(k): float(uz[mid & (layer == k)].mean()) for k in np.unique(layer[mid])}
+    return {"compliance": travel / force, "columns": np.unique(np.round(np.abs(x[stuck, 1]), 4)), "profile": profile}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--densities", default="64000")
     parser.add_argument("--layers", default="1,2,4")
     parser.add_argument("--no-reference", action="store_true", help="skip the finite-element reference (scikit-fem)")
+    parser.add_argument("--linear", action="store_true", help="the discrete energy's static equilibrium, not the rig")
     args = parser.parse_args(argv)
+    run = linear_shear if args.linear else shear
     for density in (float(d) for d in args.densities.split(",")):
         for name, half in HALF_WIDTHS.items():
             for layers in (int(v) for v in args.layers.split(",")):
-                r = shear(density, layers, half)
+                r = run(density, layers, half)
                 layers_travel = " / ".join(f"{v:.3f}" for v in r["profile"].values())
                 print(f"{density:>9,.0f}/m^2, {layers} layer(s), punch: {name}: {r['compliance'] * 1e3:.4f} mm/N; "
                       f"layers travel {layers_travel} of the punch (uniform shear: evenly from 0 to 1)")  # fmt: skip
