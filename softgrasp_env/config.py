@@ -61,7 +61,9 @@ class TissueConfig:
     group_size: int = 8
     """Particles per implicit shape-matching group, centre included (thesis 5.2.1 *groupSize*), 4 to
     16. Larger groups span most of a pad (30 particles a face at the default density) and let it
-    sag and tear."""
+    sag and tear. With ``layers`` > 1 it is the others a group takes from its particle's own layer,
+    besides the particle and its column neighbours (the default 8: the two whole rings of the
+    face's grid; tissue/builder.py, _layered)."""
     mass_density: float = 1_000.0
     """Mass density of the tissue [kg/m^3] (``tissue_density`` before 0.3), 100 to 1e4; particle
     mass = density * (its share of the layer volume). Heavier tissue outweighs its shape matching

@@ -16,7 +16,7 @@ pybullet's contacts.
   Coulomb per contact, layers about as thick as the particle spacing: TISSUE_V4) at 16,000 and at
   64,000 particles per m^2 (one and two element layers). ``converged`` is the cheapest resolution
   whose rows of the spatial convergence table are within 5 % of their reference (the contact
-  strip's width: +5.1 %, quantised by the particle columns), or within 10 % where no resolution
+  strip's width: +6.5 %, quantised by the particle columns), or within 10 % where no resolution
   measured is within 5 % (the lowest friction against Coulomb's, the tangential compliance at a
   single load); ``fine`` meets the same but for the
   contact strip's width (+13 %), at about ten times ``converged``'s speed (the package's
