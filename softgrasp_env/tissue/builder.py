@@ -246,14 +246,8 @@ def build_groups(
         raise ValueError(f"layer must be (N,) with N = {n}, got shape {layer.shape}")
     cell, order, starts, dims, lo = _cell_grid(rest_x, size)
     _nearest_in_grid(rest_x, partner, layer, cell, order, starts, dims, lo, members, cap)
+    # CSR over the filled slots (every slot unless ``others`` leaves some: groups of varying size)
     filled = members >= 0
-    if filled.all():
-        offsets = np.arange(n + 1, dtype=np.int32) * size
-        m = mass[members]
-        com = (m[:, :, None] * rest_x[members]).sum(axis=1) / m.sum(axis=1)[:, None]
-        rest_offset = (rest_x[members] - com[:, None, :]).reshape(-1, 3)
-        return offsets, members.ravel().astype(np.int32), np.ascontiguousarray(rest_offset)
-    # groups of varying size: CSR over the filled slots
     offsets = np.concatenate([[0], np.cumsum(filled.sum(axis=1))]).astype(np.int32)
     safe = np.where(filled, members, 0)
     m = np.where(filled, mass[safe], 0.0)
