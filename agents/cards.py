@@ -45,7 +45,7 @@ def read_card(model_dir: Path) -> dict[str, Any]:
 
 
 CONVERGED_POINTS = 5.0
-"""Issue 22's rule: a run has converged when its evaluation success changes by less than 5 points
+"""The cards' convergence rule: a run has converged when its evaluation success changes by less than 5 points
 over the last 20 % of its budget."""
 CONVERGED_WINDOW = 0.2
 
@@ -307,7 +307,7 @@ def render_card(card: dict[str, Any]) -> str:
 
 
 def _card_extras(card: dict[str, Any]) -> list[str]:
-    """The card rows issue 22 added (cards published before it have neither)."""
+    """The card rows of the evaluation's spread and the run's convergence (older cards have neither)."""
     rows = []
     ev = card["evaluation"]
     if "wilson95" in ev:

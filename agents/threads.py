@@ -1,10 +1,10 @@
-"""Threads per process for training and evaluation (issue 20): one torch thread unless asked
+"""Threads per process for training and evaluation: one torch thread unless asked
 otherwise in the learner's process, and one thread (torch, BLAS, numba) in every env process it
 starts.
 
-Why one: on this 2-core machine, SB3's SAC with torch's default of two threads, beside a second
+Why one: on a 2-core cloud VM (no GPU), SB3's SAC with torch's default of two threads, beside a second
 training process (two seeds at a time, as the baselines were trained), sampled 7 env steps/s end
-to end, and 104 with one torch thread each, the same run (issue 20); ``benchmarks/torch_threads.py``
+to end, and 104 with one torch thread each, the same run; ``benchmarks/torch_threads.py``
 measures it again. The env's kernels are serial, so numba's threads only compete with the learner.
 A machine with cores to spare may give the learner more with ``--torch-threads N``.
 """
