@@ -201,3 +201,13 @@ def test_the_light_tissue_grip_holds_six_times_longer_than_an_episode(make_env, 
     runs = _soak(make_env(env_id, max_episode_steps=600), range(1000, 1020))
     assert len(runs) >= least_runs
     assert all(at30 > 0.0 and at5 - at30 < settle for at5, at30 in runs), runs
+
+
+@pytest.mark.slow
+def test_the_converged_pads_grip_holds_six_times_longer_than_an_episode(make_env):
+    """The same soak on the converged preset's pads (64,000 particles per m^2 in two element layers,
+    1,140 particles): 7-9 minutes an episode. Measured, seeds 1000-1002: the two the policy succeeds
+    in at 5 s (1000, 1001) held to 30 s, the cylinder 0.000 and 0.007 mm lower than at 5 s."""
+    runs = _soak(make_env("SoftGraspGrip-v4", max_episode_steps=600, preset="converged"), range(1000, 1003))
+    assert len(runs) >= 2
+    assert all(at30 > 0.0 and at5 - at30 < 0.05e-3 for at5, at30 in runs), runs
