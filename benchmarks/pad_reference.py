@@ -427,6 +427,39 @@ TANGENTIAL_LOADS = (3.0,)
 """The normal loads at which ``reference`` solves the 3-D tangential model (8 s each)."""
 
 
+def _compressed_shear(pad: Pad, indentation: float, g: float, profile: str):
+    """The bilinear form that turns linear elasticity's shear across the layer (modulus ``g``)
+    into the continuum group energy's about the pad compressed by the cylinder to ``indentation``
+    [m]: tangential_compliance_3d's ``indentation`` and ``profile``, whose docstring derives it."""
+    from skfem import BilinearForm
+
+    h, radius = pad.thickness, pad.radius
+    if profile == "thin":
+
+        @BilinearForm
+        def softened(u, v, w):
+            y = np.abs(w.x[1])
+            d = np.maximum(0.0, indentation - (radius - np.sqrt(np.maximum(radius**2 - y**2, 0.0))))
+            s = 1.0 - d / h
+            # + (G_xz - G) gamma_xz(u) gamma_xz(v), gamma = 2 eps_xz: the shear modulus across the layer
+            return (2.0 * s / (1.0 + s) - 1.0) * g * (u.grad[0, 2] + u.grad[2, 0]) * (v.grad[0, 2] + v.grad[2, 0])
+
+    elif profile == "plane_strain":
+        modulus = _shear_pair_modulus(pad, indentation)
+
+        @BilinearForm
+        def softened(u, v, w):
+            m = modulus(w.x[0], np.abs(w.x[1]))  # (2, 2, ...): 2 G sum_i s_i / (1 + s_i) v_i v_i^T
+            gu = (u.grad[0, 2] + u.grad[2, 0], u.grad[1, 2] + u.grad[2, 1])
+            gv = (v.grad[0, 2] + v.grad[2, 0], v.grad[1, 2] + v.grad[2, 1])
+            # + gamma(u)^T (G_eff - G I) gamma(v) / ... for the pair (gamma_xz, gamma_yz)
+            return sum((m[i, j] - (g if i == j else 0.0)) * gu[i] * gv[j] for i in range(2) for j in range(2))
+
+    else:
+        raise ValueError(f"profile must be 'thin' or 'plane_strain', got {profile!r}")
+    return softened
+
+
 def tangential_compliance_3d(pad: Pad, a: float, nu: float, *, element: float = TANGENTIAL_ELEMENT,
                              length: float | None = None, quadratic: bool = True,
                              indentation: float | None = None, profile: str = "thin") -> float:  # fmt: skip
@@ -454,7 +487,7 @@ def tangential_compliance_3d(pad: Pad, a: float, nu: float, *, element: float = 
     the shear pair (dw/dx, dw/dy) then has the modulus 2 G sum_i s_i / (1 + s_i) v_i v_i^T (the
     same expansion in F2's principal frame)."""
     from scipy.sparse.linalg import spsolve
-    from skfem import Basis, BilinearForm, ElementHex1, ElementHex2, ElementVector, MeshHex, asm
+    from skfem import Basis, ElementHex1, ElementHex2, ElementVector, MeshHex, asm
     from skfem.models.elasticity import lame_parameters, linear_elasticity
 
     def grid(span: float) -> np.ndarray:
@@ -471,31 +504,7 @@ def tangential_compliance_3d(pad: Pad, a: float, nu: float, *, element: float = 
     if indentation is not None:
         if nu != 0.0:
             raise ValueError(f"the compressed pad's shear is that of the continuum group energy, nu 0; got nu {nu!r}")
-        radius = pad.radius
-        if profile == "thin":
-
-            @BilinearForm
-            def softened(u, v, w):
-                y = np.abs(w.x[1])
-                d = np.maximum(0.0, indentation - (radius - np.sqrt(np.maximum(radius**2 - y**2, 0.0))))
-                s = 1.0 - d / h
-                # + (G_xz - G) gamma_xz(u) gamma_xz(v), gamma = 2 eps_xz: the shear modulus across the layer
-                return (2.0 * s / (1.0 + s) - 1.0) * mu * (u.grad[0, 2] + u.grad[2, 0]) * (v.grad[0, 2] + v.grad[2, 0])
-
-        elif profile == "plane_strain":
-            modulus = _shear_pair_modulus(pad, indentation)
-
-            @BilinearForm
-            def softened(u, v, w):
-                m = modulus(w.x[0], np.abs(w.x[1]))  # (2, 2, ...): 2 G sum_i s_i / (1 + s_i) v_i v_i^T
-                gu = (u.grad[0, 2] + u.grad[2, 0], u.grad[1, 2] + u.grad[2, 1])
-                gv = (v.grad[0, 2] + v.grad[2, 0], v.grad[1, 2] + v.grad[2, 1])
-                # + gamma(u)^T (G_eff - G I) gamma(v) / ... for the pair (gamma_xz, gamma_yz)
-                return sum((m[i, j] - (mu if i == j else 0.0)) * gu[i] * gv[j] for i in range(2) for j in range(2))
-
-        else:
-            raise ValueError(f"profile must be 'thin' or 'plane_strain', got {profile!r}")
-        k = k + asm(softened, basis)
+        k = k + asm(_compressed_shear(pad, indentation, mu, profile), basis)
     k = k.tocsr()
     core = basis.get_dofs(lambda p: np.isclose(p[0], 0.0)).all()
     strip = basis.get_dofs(lambda p: np.isclose(p[0], h) & (p[1] <= a + 1e-12))
@@ -513,7 +522,8 @@ def tangential_compliance_3d(pad: Pad, a: float, nu: float, *, element: float = 
 
 
 def partial_slip_3d(pad: Pad, y_profile: np.ndarray, pressure: np.ndarray, mu: float, *, nu: float = 0.0,
-                    element: float = TANGENTIAL_ELEMENT, across: float = 5e-4, steps: int = 120) -> dict:  # fmt: skip
+                    element: float = TANGENTIAL_ELEMENT, across: float = 5e-4, steps: int = 120,
+                    indentation: float | None = None) -> dict:  # fmt: skip
     """Partial slip of the 3-D pad of finite length under a growing axial load, Coulomb's law at every
     node of the contact strip: the reference for the tissue rig, whose face has free ends.
 
@@ -528,7 +538,9 @@ def partial_slip_3d(pad: Pad, y_profile: np.ndarray, pressure: np.ndarray, mu: f
     normal force (the pressure's consistent nodal load), else slides at that bound behind the
     cylinder (u_z <= U). The strip's axial compliance is condensed onto its nodes (one
     factorisation), and for each U on a grid up to gross slip an active-set iteration from the last
-    U's finds the stick set (exact for the discrete problem).
+    U's finds the stick set (exact for the discrete problem). ``indentation`` [m] (nu 0 only): the
+    shear across the layer is the continuum group energy's about the pad the cylinder compressed
+    that far (tangential_compliance_3d's, the thin-layer profile); None: linear elasticity.
 
     Returns arrays over the ramp: "ratio" Q / mu P, "share" the sticking nodes' share of the normal
     load, "c_over_a" the tissue's measure of the stick zone (partial_slip.ramp: the |y| within which
@@ -555,7 +567,12 @@ def partial_slip_3d(pad: Pad, y_profile: np.ndarray, pressure: np.ndarray, mu: f
     mesh = MeshHex.init_tensor(grid(h, element), ys, grid(half_h, element))
     basis = Basis(mesh, ElementVector(ElementHex2()), intorder=4)
     lam, g = lame_parameters(2.0 * pad.shear_modulus * (1.0 + nu), nu)
-    k = asm(linear_elasticity(lam, g), basis).tocsr()
+    k = asm(linear_elasticity(lam, g), basis)
+    if indentation is not None:
+        if nu != 0.0:
+            raise ValueError(f"the compressed pad's shear is that of the continuum group energy, nu 0; got nu {nu!r}")
+        k = k + asm(_compressed_shear(pad, indentation, g, "thin"), basis)
+    k = k.tocsr()
     on_strip = lambda p: np.isclose(p[0], h) & (p[1] <= a + 1e-12)  # noqa: E731
     strip = basis.get_dofs(on_strip)
     axial = strip.all("u^3")

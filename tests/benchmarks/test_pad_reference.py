@@ -215,3 +215,29 @@ def test_the_3d_references_partial_slip_has_the_anti_plane_pads_stick_zone_away_
     levels = [0.5, 0.75]
     assert np.allclose(at_ratios(full, levels, "share"), at_ratios(plane, levels, "share"), rtol=0.05)
     assert np.all(at_ratios(full, [0.5, 0.75, 0.9], "c_over_a_mid") < at_ratios(full, [0.5, 0.75, 0.9]))
+
+
+def test_the_compressed_pads_partial_slip_softens_by_the_stuck_strips_finite_strain_factor():
+    """partial_slip_3d about the pad the cylinder compressed (``indentation``: the continuum energy's
+    shear across the layer at finite strain, as tangential_compliance_3d's): the reference for the
+    tissue's tangential row with both the compression and the edges' slip. Coarse (4 mm elements,
+    1 mm across), 3 N. Read as the rig reads the tissue (the secant from 0.25 to 0.75 mm of the
+    cylinder's travel) it measured 1.444 mm/N against the linear pad's 1.265: 1.1415 x, the same
+    factor as the first step's (the strip nearly all stuck: 1.355 against 1.190, 1.1386 x); the
+    whole strip still slides at Coulomb's load."""
+    _skfem()
+    from benchmarks.pad_reference import LayerModel, default_pad, partial_slip_3d
+
+    pad = default_pad()
+    model = LayerModel(pad, 0.0)
+    delta, c = model.indentation(3.0)
+    ramps = [partial_slip_3d(pad, model.y, c["pressure"], 0.9, element=4e-3, across=1e-3, indentation=d)
+             for d in (None, delta)]  # fmt: skip
+    secant = [0.5e-3 / np.diff(np.interp([0.25e-3, 0.75e-3], r["U"], r["Q"]))[0] for r in ramps]
+    first = [r["U"][0] / r["Q"][0] for r in ramps]
+    assert secant[0] == pytest.approx(1.265e-3, rel=2e-3) and secant[1] == pytest.approx(1.444e-3, rel=2e-3)
+    assert secant[1] / secant[0] == pytest.approx(first[1] / first[0], rel=0.005)
+    for r in ramps:
+        assert all(np.diff(r["ratio"]) > 0.0) and r["ratio"][-1] == 1.0 and all(np.diff(r["share"]) <= 0.0)
+    with pytest.raises(ValueError, match="nu 0"):
+        partial_slip_3d(pad, model.y, c["pressure"], 0.9, nu=0.3, indentation=delta)
