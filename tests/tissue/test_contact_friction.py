@@ -165,23 +165,25 @@ def test_the_v4_strips_edges_slide_before_its_centre():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("mu", [0.3, pytest.param(0.9, marks=pytest.mark.xfail(
-    strict=True, reason="at the default mu 0.9 the finest pad's stick zone closes early near gross slip "
-    "(0.097 against 0.265 at 0.95): docs/results/spatial-convergence.md"))])  # fmt: skip
-def test_the_converged_pads_stick_zone_meets_the_finite_element_reference_at_small_strain(mu):
+@pytest.mark.parametrize("mu", [0.3, 0.9])
+def test_the_finest_pads_stick_zone_meets_the_finite_element_reference(mu):
     """Partial slip against an independent reference: the 3-D finite-element pad of the face's
     length, linear elastic (nu 0), Coulomb's law at every node, the plane-strain pressure of 3 N
     (benchmarks/pad_reference.py, partial_slip_3d). The tissue at 256,000 per m^2 with four layers
-    (the continuum energy, hourglass control, the contact law), mu 0.3 so that the shear at gross
-    slip stays small (about 0.14 of the layer's thickness) as the linear reference assumes. Measured
-    stick share 0.999 / 0.929 / 0.649 / 0.465 / 0.281 at Q / mu P 0.25 / 0.5 / 0.75 / 0.9 / 0.95
-    against the reference's 0.954 / 0.853 / 0.646 / 0.417 / 0.265 (+4.7 / +8.9 / +0.5 / +11.5 /
-    +6.0 %): the 10 % target but at 0.9, a miss named here and held to 12 % (the share counts
-    whole particle columns, 2 mm apart across a strip 11 mm wide). Before the layers were balanced
-    (docs/results/spatial-convergence.md) it was +1.8 / +6.0 / +0.9 / +5.3 / -7.5 %. At the
-    default mu 0.9 the layer shears ~0.4 of its thickness before gross slip and the share falls to
-    0.097 at 0.95 (0.414 at 0.9 against 0.417): finite strain, which the linear reference cannot
-    follow (docs/results/spatial-convergence.md): the default's case is a strict xfail."""
+    (the continuum energy, hourglass control, the contact law). Measured stick share at Q / mu P
+    0.25 / 0.5 / 0.75 / 0.9 / 0.95 against the reference's 0.954 / 0.853 / 0.646 / 0.417 / 0.265:
+    mu 0.3, 0.999 / 0.929 / 0.649 / 0.465 / 0.281 (+4.7 / +8.9 / +0.5 / +11.5 / +6.0 %); mu 0.9,
+    0.997 / 0.919 / 0.656 / 0.414 / 0.097 (+4.5 / +7.7 / +1.5 / -0.7 / -63 %). Held: the share within
+    12 % to 0.9 (the 10 % target but at mu 0.3's 0.9, a miss named here).
+
+    Near gross slip the share falls in steps: the stick zone lets go whole particle columns, each
+    along the whole face's height (at mu 0.9 the two pairs nearest the centre line together, from
+    0.414 to 0.125 between 0.901 and 0.933 of mu P), so a share at one load is a column's release. That end is held as a load: the
+    Q / mu P at which the tissue's share first falls to the reference's share at 0.9 and at 0.95,
+    measured 0.901 / 0.921 (mu 0.9) and 0.930 / 0.960 (mu 0.3), within 4.5 %. The share itself at
+    0.95 is within 10 % at mu 0.3 and not at mu 0.9: that case is a strict expected failure (it
+    fails the test if it starts to pass). Not finite strain: with three times the shear modulus
+    the order of the two mu reverses (docs/results/spatial-convergence.md)."""
     pytest.importorskip("skfem")
     from benchmarks.partial_slip import ramp, reference
 
@@ -191,5 +193,18 @@ def test_the_converged_pads_stick_zone_meets_the_finite_element_reference_at_sma
     ref = reference(mu)["3d"]
     tissue = np.array([out["levels"][q]["share"] for q in levels])
     expected = np.array([ref[q][0] for q in levels])
-    assert np.all(np.abs(tissue / expected - 1.0) < 0.12), (tissue, expected)
+    assert np.all(np.abs(tissue[:4] / expected[:4] - 1.0) < 0.12), (tissue, expected)
     assert 0.99 <= out["gross"] <= 1.03, out["gross"]
+    ratio = np.array([r[0] for r in out["rows"]])
+    share = np.array([r[1] for r in out["rows"]])
+    for q in (0.9, 0.95):  # the load at which the tissue's share reaches the reference's
+        reached = ratio[np.argmax(share <= ref[q][0])]
+        assert (share <= ref[q][0]).any() and abs(reached / q - 1.0) < 0.045, (q, reached)
+    within = abs(tissue[4] / expected[4] - 1.0) < 0.10
+    if mu == 0.3:
+        assert within, (tissue, expected)
+    elif within:
+        pytest.fail("the share at 0.95 of mu P now meets the reference within 10 % at mu 0.9: drop this expected failure")
+    else:
+        pytest.xfail(f"at mu 0.9 the share at 0.95 of mu P is the central columns' release ({tissue[4]:.3f} against "
+                     f"{expected[4]:.3f}): docs/results/spatial-convergence.md")
