@@ -1,5 +1,5 @@
 """Building the grasp scene at 1x, 10x and 100x the default particle density: particles, build
-time, peak memory of the build and the estimate the builder checks before it starts (issue 12:
+time, peak memory of the build and the estimate the builder checks before it starts (a former bug:
 memory used to grow with the square of the particle count; 1e7 per m^2 asked for 574 GiB).
 
     PYTHONPATH=. python benchmarks/build_scaling.py [--factors 1 10 100]

@@ -1,8 +1,8 @@
-"""The v3 carry test per band (issue 19, item 6): soft vs rigid vs rigid with torsional friction.
+"""The v3 carry test per band: soft vs rigid vs rigid with torsional friction.
 
 The scripted grasp on the reach task (SoftGrasp-v3, SoftGraspRigid-v3, SoftGraspRigidTorsion-v3),
 the sway fixed per episode by reset options on a grid: frequency from below to above the
-two-point grasp's pendulum frequency (~1.9 Hz with the cylinder's own inertia, issue 19), peak
+two-point grasp's pendulum frequency (~1.9 Hz with the cylinder's own inertia), peak
 acceleration, and direction (across the jaw, where a two-point grasp swings about the line
 through its contacts; along the closing axis; between). Each cell runs the same seeds for every
 kind; an episode counts for the carry only if the cylinder was held when the carry began, so the
@@ -13,7 +13,7 @@ table separates "lost in the carry" from "never got a grip".
     PYTHONPATH=. python benchmarks/carry_bands.py --policy rigid=runs/SoftGraspRigid-v3_sac_0   # a learned policy
 
 ``--policy KIND=SPEC`` replaces the scripted grasp of one kind by any policy ``agents.evaluate``
-loads (a train.py run or shipped baseline, an RLlib trial, ``random``): issue 22's learned soft /
+loads (a train.py run or shipped baseline, an RLlib trial, ``random``): the learned soft /
 rigid / torsional gap per band. A run is evaluated on its kind's id here (the band is set by the
 reset options), so it must have been trained on that id.
 

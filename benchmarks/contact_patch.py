@@ -1,5 +1,5 @@
 """The tissue's own contact patch on the cylinder, and the torsional lever a rigid finger would need
-to resist spin about the contact normal as that patch does (issue 19 item 4; the
+to resist spin about the contact normal as that patch does (the
 ``rigid_torsion`` finger kind takes its default from here: softgrasp_env/fingers/rigid.py).
 
     PYTHONPATH=. python benchmarks/contact_patch.py

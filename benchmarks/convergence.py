@@ -1,4 +1,4 @@
-"""Convergence in the time step and the iteration count (issue 19, item 1): every metric of
+"""Convergence in the time step and the iteration count: every metric of
 softgrasp_env/accuracy.py, and the pad's compression in the env's own grasp, at dt 1/1000 ...
 1/120 s (3 iterations) and at 2 ... 20 iterations (1/240 s), in one run.
 

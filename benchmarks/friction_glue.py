@@ -1,6 +1,6 @@
-"""A defect of the tissue's default friction, reproduced, and the contact cones that fix it (issue 21's
-and 22's notes; docs/RESULTS.md, "The grip-force task"): a pad that sticks to the cylinder holds it
-after the squeeze is gone.
+"""A defect of the tissue's default friction, reproduced, and the contact cones that fix it
+(docs/RESULTS.md, "The grip-force task"): a pad that sticks to the cylinder holds it after the squeeze is
+gone.
 
     python benchmarks/friction_glue.py                    # seed 1013, the default then the cones, ~1 min
     python benchmarks/friction_glue.py --laws cones

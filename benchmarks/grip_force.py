@@ -1,4 +1,4 @@
-"""The grip-force task (issue 21) measured: success and squeeze of the scripted policies on the
+"""The grip-force task measured: success and squeeze of the scripted policies on the
 soft fingers and the rigid peers, over the same seeds.
 
     python benchmarks/grip_force.py                       # 50 seeds, every kind and policy (~15 min)

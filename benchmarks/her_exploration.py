@@ -1,4 +1,4 @@
-"""What hindsight experience replay had to learn from on the goal id (issue 22, item 1: HER to a
+"""What hindsight experience replay had to learn from on the goal id (the target: HER to a
 success above 50 % "or the evidence why not").
 
 HER (Andrychowicz et al. 2017) relabels a stored transition with a goal the episode reached later

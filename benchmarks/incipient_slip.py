@@ -1,5 +1,4 @@
-"""How the pads shear under a tangential load up to slip, against Cattaneo-Mindlin (issue 21,
-item 4).
+"""How the pads shear under a tangential load up to slip, against Cattaneo-Mindlin.
 
     PYTHONPATH=. python benchmarks/incipient_slip.py [--rate 2.0] [--fingers tissue,rigid,rigid_torsion]
 

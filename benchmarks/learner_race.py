@@ -1,4 +1,4 @@
-"""Learners against wall-clock time (issue 20, item 3, the success half): SB3's SAC, sb3-contrib's
+"""Learners against wall-clock time (success; learners.py measures speed): SB3's SAC, sb3-contrib's
 TQC and sbx's (JAX) SAC, TQC and CrossQ, each trained on a SoftGrasp id for the same wall-clock
 budget, seeds side by side, success of the deterministic policy sampled at fixed training times.
 

@@ -1,16 +1,16 @@
-"""Learners against each other and against a trivial env (issue 20, item 3; the speed half): env
+"""Learners against each other and against a trivial env (speed; learner_race.py measures success): env
 steps/s end to end of SB3's SAC, sb3-contrib's TQC and sbx's (JAX) SAC, TQC and CrossQ on a
 SoftGrasp id and on Pendulum-v1, each in its own process on one thread, in one run.
 
     PYTHONPATH=. python benchmarks/learners.py [--env SoftGrasp-v3] [--steps 2000] [--learners sac,tqc,...]
 
 The ratio env / Pendulum says what the env and our glue cost against the learner itself (the
-issue's target: >= 0.7, the env under a third of the learner's time). Each run trains a fresh
+target: >= 0.7, the env under a third of the learner's time). Each run trains a fresh
 model for ``--steps`` env steps after ``WARMUP`` random ones (not timed), with train.py's SAC
 preset where the learner takes it (network 128 x 128, batch 256, gamma 0.98, tau 0.02, one
 gradient step per two env steps; CrossQ keeps its own network and no target network, as sbx
 defines it). Learners whose package is not installed are skipped with a line saying so
-(``pip install sb3-contrib sbx-rl``). Success against wall-clock time, the other half of the item,
+(``pip install sb3-contrib sbx-rl``). Success against wall-clock time, the other half,
 is ``benchmarks/learner_race.py``.
 """
 

@@ -1,4 +1,4 @@
-"""Every method side by side: speed against accuracy, one run, one chart (issue 9).
+"""Every method side by side: speed against accuracy, one run, one chart.
 
     PYTHONPATH=. python benchmarks/methods.py [--quick] [--no-bound]
 

@@ -1,4 +1,4 @@
-"""The physics floor and how near each env gets to it (issue 20, item 1), in one run.
+"""The physics floor and how near each env gets to it, in one run.
 
     PYTHONPATH=. python benchmarks/physics_floor.py [--seconds 3] [--repeats 3] [--ids SoftGrasp-v3,...]
 
@@ -9,7 +9,7 @@
   env's world step (1/480 s: the compliant tissue's two world steps per physics step; the tissue
   is not stepped).
 - **Envs**: env steps/s of each id, random actions, resets inside the loop.
-- **Ratios**: the issue's, env steps/s x physics steps per env step (12) / the 1/240 s floor; and
+- **Ratios**: the overall one, env steps/s x physics steps per env step (12) / the 1/240 s floor; and
   per world step, env steps/s x pybullet steps per env step / the floor at that world step (what
   is left for everything of ours when pybullet's share is fixed).
 - **Breakdown** per env step, measured with timers around the stages in the same episodes:

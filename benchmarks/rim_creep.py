@@ -1,8 +1,8 @@
 """A grip high on the cylinder, the pads partly above its rim: how far the cylinder creeps down the
-fingers while it is lifted and the palm moves about, per finger kind (issue 22, item 3: where ours
+fingers while it is lifted and the palm moves about, per finger kind (where ours
 loses).
 
-The learned soft policies of issue 22 close 26-48 mm above the cylinder's centre and, beyond the
+The learned soft policies close 26-48 mm above the cylinder's centre and, beyond the
 task's ranges (a 0.2 kg cylinder at half friction), drop what the learned torsional peer holds,
 although the scripted soft grasp holds it. This isolates the physics from the policies: the
 scripted grasp of the reach task, aimed ``height`` above the centre (the fingers are 6 cm tall,

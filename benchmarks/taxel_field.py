@@ -1,4 +1,4 @@
-"""Pictures of the pads' taxel field (issue 21, item 3): the tissue fingers holding the default
+"""Pictures of the pads' taxel field: the tissue fingers holding the default
 cylinder, then the cylinder made heavier until it slips (accuracy.shear_under_load), read on a
 fine grid at three moments - the hold, 95 % of the way to the slip load, and the first sample
 after the slip.

@@ -63,7 +63,7 @@ def main() -> None:
     base = SceneConfig()
     rows = [("rigid-only fingers", SceneConfig(fingers="rigid"))]
     rows += [(f"soft, preset {name!r}", presets.scene_config(name)) for name in presets.PRESETS]
-    # the defaults before issue 9 chose the preset: every face covered at 10,000 particles per m^2
+    # the former defaults, before a preset was chosen: every face covered at 10,000 particles per m^2
     rows.append(("soft, all faces, 10k/m^2", replace(base, fingers=TissueFingerConfig(faces="all"),
                                                          tissue=replace(base.tissue, particle_density=10_000.0))))
     print(f"{'scene':<28}{'particles':>10}{'steps/s':>12}{'/ rigid':>10}")

@@ -1,4 +1,4 @@
-"""Torch threads against training speed (issue 20, item 2): SB3's SAC with train.py's preset on
+"""Torch threads against training speed: SB3's SAC with train.py's preset on
 SoftGrasp-v3, end to end (env steps and gradient steps together), at 1 and 2 torch threads, one
 process alone and two side by side (two seeds at a time, as the baselines were trained), in one
 run.

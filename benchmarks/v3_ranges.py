@@ -1,4 +1,4 @@
-"""The v3 task's ranges against the stability map (issue 19, item 7): scripted success of the soft
+"""The v3 task's ranges against the stability map: scripted success of the soft
 fingers, the rigid twin and the torsional peer with today's ranges and with others, and whether an
 open-loop action sequence solves them.
 

@@ -1,4 +1,4 @@
-"""Env steps/s of SB3's vectorised envs on this machine: one env in-process (DummyVecEnv), then
+"""Env steps/s of SB3's vectorised envs on the machine it runs on: one env in-process (DummyVecEnv), then
 1, 2, ... up to the core count in subprocesses (SubprocVecEnv, what ``train.py --n-envs N``
 uses), then gymnasium's own ``gym.make_vec(..., vectorization_mode="async")`` the same way, in
 one run, with the speed-up over one subprocess env; with ``--rllib`` (in the RLlib venv)

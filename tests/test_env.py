@@ -416,7 +416,7 @@ def test_deepcopy_mid_episode_is_exact(env_id):
 
 
 def test_a_copy_replays_only_the_steps_since_the_last_reset():
-    """Issue 12: a copy's cost is bounded by the episode (at most the 100-step time limit), never
+    """A copy's cost is bounded by the episode (at most the 100-step time limit), never
     by the env's history: earlier episodes are not replayed."""
     env = gym.make("SoftGraspRigid-v3")
     rng = np.random.default_rng(2)
@@ -504,7 +504,7 @@ def test_human_mode_runs_the_gui_with_the_particles_shown(make_env, scripted):
 @pytest.mark.parametrize("action", [np.array([0.1 + 1j, 0, 0, 0]), np.array([0.1 + 0j, 0, 0, 0]), ["a", "b", "c", "d"],
                                     [0.1, 0.2, 0.3, None]])  # fmt: skip
 def test_an_action_that_is_not_real_numbers_is_a_type_error(action):
-    """Issue 12: a complex action used to lose its imaginary part with only numpy's warning."""
+    """A complex action used to lose its imaginary part with only numpy's warning."""
     env = gym.make("SoftGraspRigid-v3")
     env.reset(seed=0)
     with warnings.catch_warnings():

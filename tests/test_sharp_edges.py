@@ -1,4 +1,4 @@
-"""Sharp edges a new user met (issue 23), each held here: a time limit too short for the carry test
+"""Sharp edges a new user met, each held here: a time limit too short for the carry test
 warns at gym.make, the observation Box has the bounds that hold (and every observation lies in
 it), agents.evaluate names the env it ran."""
 

@@ -8,6 +8,8 @@ shows, name no repository-only path (`tests/`, `benchmarks/`, `docs/`, `scripts/
 
 Both hold: the text part, and the package part (softgrasp_env/ and the env pages generated from
 its cards; PACKAGE_TEXT_CHECKED, which made it an expected failure while it was being cleaned).
+The benchmarks (benchmarks/*.py) and the tests (tests/**/*.py, this file's own examples aside)
+name no internal ticket either: their docstrings and comments say what a thing is, or why.
 """
 
 from __future__ import annotations
@@ -21,6 +23,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 PACKAGE = ROOT / "softgrasp_env"
+BENCHMARKS = ROOT / "benchmarks"
+TESTS = ROOT / "tests"
 
 # True: softgrasp_env/ is clean and the package part has to pass (False made it an expected failure).
 PACKAGE_TEXT_CHECKED = True
@@ -72,6 +76,13 @@ def _package_sources() -> list[Path]:
     return sorted(p for p in PACKAGE.rglob("*.py") if "__pycache__" not in p.parts)
 
 
+def _repository_sources() -> list[Path]:
+    """benchmarks/*.py and tests/**/*.py, this file aside (its examples have to name a ticket)."""
+    files = sorted(BENCHMARKS.glob("*.py"))
+    files += sorted(p for p in TESTS.rglob("*.py") if "__pycache__" not in p.parts)
+    return [p for p in files if p != Path(__file__).resolve()]
+
+
 def test_the_patterns_catch_what_they_should_and_nothing_else():
     assert INTERNAL.search("as issue 22 found") and INTERNAL.search("found in Stop 33")
     assert INTERNAL.search("measured on this machine")
@@ -88,6 +99,14 @@ def test_readme_contributing_and_docs_speak_of_the_package():
     assert ROOT / "README.md" in files and DOCS / "results" / "index.md" in files
     hits = internal_text_hits(files)
     assert not hits, "internal references in user-facing text:\n" + "\n".join(hits)
+
+
+def test_benchmarks_and_tests_name_no_internal_ticket():
+    files = _repository_sources()
+    assert BENCHMARKS / "methods.py" in files and TESTS / "test_env.py" in files
+    assert Path(__file__).resolve() not in files
+    hits = internal_text_hits(files)
+    assert not hits, "internal references in the benchmarks and tests:\n" + "\n".join(hits)
 
 
 @pytest.mark.xfail(not PACKAGE_TEXT_CHECKED, strict=False,

@@ -1,5 +1,5 @@
 """Ray RLlib training (agents/rllib_train.py) on a real local Ray instance and on a two-node
-cluster on this machine; an RLlib checkpoint evaluated by agents.evaluate; an env runner killed
+cluster on one host; an RLlib checkpoint evaluated by agents.evaluate; an env runner killed
 mid-run and restarted. Runs in the RLlib venv (scripts/setup.sh --rllib; RLlib pins its own
 gymnasium), skipped where Ray is not installed:
 
@@ -116,7 +116,7 @@ RESTART_TIMEOUT = 300.0
 
 
 def test_training_joins_a_two_node_cluster_and_restarts_a_killed_env_runner(tmp_path):
-    """A two-node cluster on this machine (``ray.cluster_utils.Cluster``): a head without CPUs
+    """A two-node cluster on one host (``ray.cluster_utils.Cluster``): a head without CPUs
     (the driver) and a worker node with two, so the env runners sample on the other node than
     the one that learns. ``--address`` joins it. Then, with an Algorithm on the same cluster, one
     env runner is killed (SIGKILL) between iterations: training goes on, RLlib restarts the

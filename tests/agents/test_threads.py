@@ -1,6 +1,6 @@
-"""One torch thread per process unless asked, one thread in every env process (issue 20, item
-2): the count is checked, applied to this process and handed to the env processes it starts, and
-recorded with the run."""
+"""One torch thread per process unless asked, one thread in every env process: the count is
+checked, applied to this process and handed to the env processes it starts, and recorded with
+the run."""
 
 from __future__ import annotations
 

@@ -101,7 +101,7 @@ def test_training_log_of_a_run_trained_in_parts(tmp_path):
 @pytest.mark.parametrize("model_dir", MODELS, ids=[d.name for d in MODELS])
 def test_card_agrees_with_the_files(model_dir):
     card = cards.read_card(model_dir)
-    # issue 22's cards say their convergence, and the demonstrations a run started from
+    # the baseline cards say their convergence, and the demonstrations a run started from
     assert CARD_KEYS <= set(card) <= CARD_KEYS | {"convergence", "demonstrations"}
     meta = json.loads((model_dir / "run.json").read_text())
     assert card.get("demonstrations") == meta.get("demonstrations")
@@ -188,7 +188,7 @@ def test_learning_curves_are_drawn_from_the_shipped_runs(tmp_path):
 
 
 def test_learning_curves_by_finger_kind_have_a_panel_per_kind(tmp_path):
-    """Issue 22's layout: a panel per finger kind and version, a line per algorithm; the same
+    """The by-kind layout: a panel per finger kind and version, a line per algorithm; the same
     groups as by algorithm."""
     from benchmarks import learning_curves
 

@@ -103,7 +103,7 @@ def test_random_soak_counts_divergences_and_reports_the_tissue_deviation():
 @pytest.mark.parametrize(("env_id", "law"), [("SoftGrasp-v3", "patch"), ("SoftGrasp-v3", "contact"), ("SoftGrasp-v4", None)])
 @pytest.mark.parametrize("stream", ["uniform", "noisy-scripted"])
 def test_no_tearing_in_a_hundred_thousand_random_steps(stream, env_id, law):
-    """Issue 19, item 8: 10^5 env steps on SoftGrasp-v3, about 1,000 episodes, without one
+    """No tearing: 10^5 env steps on SoftGrasp-v3, about 1,000 episodes, without one
     divergence: uniform random actions, and the harsher noisy scripted grasp (benchmarks/
     random_soak.py: the scripted policy plus Gaussian noise, pressing on rim and ground thousands
     of times). Measured: none in either (8-9 min each); the largest tissue deviation 20.00 mm, the
@@ -235,7 +235,7 @@ def test_carry_bands_counts_the_tissue_and_the_torsional_peer_holding_in_every_b
 
 
 def test_carry_bands_takes_any_policy_per_kind():
-    """Issue 22's learned gap per band goes through --policy KIND=SPEC: random actions never lift the
+    """The learned gap per band goes through --policy KIND=SPEC: random actions never lift the
     cylinder, so no cell has a grip when the carry begins; a bad spec is named."""
     out = _run_plain("carry_bands.py", "--seeds", "1", "--kinds", "rigid", "--policy", "rigid=random")
     assert "(rigid: random)" in out, out
@@ -247,7 +247,7 @@ def test_carry_bands_takes_any_policy_per_kind():
 
 
 def test_task_regions_split_the_same_starts_for_every_kind():
-    """Issue 22, item 3's per-region table: the kinds draw the same starts from a seed (so a region
+    """The per-region table: the kinds draw the same starts from a seed (so a region
     holds the same episodes in every column), each third of a drawn quantity holds a third of the
     episodes, and the scripted soft grasp and torsional peer hold every one (cards: 100 / 100)."""
     from benchmarks import task_regions
@@ -330,8 +330,8 @@ def test_the_contact_cones_hold_no_grip_below_coulombs_least_force():
     assert 0.97 <= result["weakest_hold"] / result["least"] <= 1.3, result
 
 
-@pytest.mark.xfail(strict=True, reason="the default tissue friction (the patch law) has no per-contact bound (issue 21's "
-                   "and 22's notes, benchmarks/friction_glue.py): a pad stays glued to the cylinder once the squeeze is "
+@pytest.mark.xfail(strict=True, reason="the default tissue friction (the patch law) has no per-contact bound "
+                   "(benchmarks/friction_glue.py): a pad stays glued to the cylinder once the squeeze is "
                    "gone; the cones that fix it are not the default yet (they change the pad's compression)")
 def test_no_tissue_grip_holds_below_coulombs_least_force_by_default():
     """The same at the defaults. Fails today: held while the cores pushed 0.058 N, 0.04 x the
@@ -345,7 +345,7 @@ def test_no_tissue_grip_holds_below_coulombs_least_force_by_default():
 
 
 def test_rim_creep_centre_grips_hold_under_palm_noise_and_the_peer_holds_high():
-    """Issue 22's 'where ours loses', the part that holds: a 0.2 kg cylinder at half friction
+    """'Where ours loses', the part that holds: a 0.2 kg cylinder at half friction
     (Coulomb's margin 1.19 with the arm's 1.5 m/s^2), lifted to 11 cm with the palm shaken. The
     tissue gripping at the centre keeps it (creep measured 2.3-2.6 mm, the pads' shear included);
     the torsional peer keeps it gripped 4 cm up too (0.0-2.5 mm)."""

@@ -1,4 +1,4 @@
-"""Tactile pads (issue 21, item 1): the taxel grid, and the readings of every kind against the
+"""Tactile pads: the taxel grid, and the readings of every kind against the
 physics they come from - pybullet's contact points, the cylinder's weight, the motors' squeeze."""
 
 from __future__ import annotations
@@ -81,7 +81,7 @@ def test_a_held_cylinder_loads_the_pads_with_the_squeeze_and_its_weight(fingers)
     """Held aloft and still, each pad's pressure integrates to the motor's squeeze (3 N; measured
     within 0.1 %) and the two pads' vertical traction to the cylinder's weight (measured within
     0.07 %), for the tissue (its contacts of the last world step) and for pybullet's contact points
-    (whose friction forces are read in the right sense: issue 21's fair peer). The tissue's
+    (whose friction forces are read in the right sense: a fair peer). The tissue's
     pressure also matches its contact normal force within 6 % (3.9 % measured: on the curved
     contact the normals fan out, and the load into the face counts their x parts and friction's)."""
     env = _held(fingers)

@@ -125,7 +125,7 @@ def test_the_retired_material_keywords():
     [
         (dict(dt=0.0), "dt"),
         (dict(dt=0.1), "dt"),
-        (dict(dt=0.05), "dt"),  # tore the tissue at the second step (issue 12)
+        (dict(dt=0.05), "dt"),  # tore the tissue at the second step (a former bug)
         (dict(dt=1.0 / 40.0), "dt"),
         (dict(dt=NAN), "dt"),
         (dict(iterations=0), "iterations"),

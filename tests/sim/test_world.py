@@ -138,7 +138,7 @@ def test_world_is_deterministic():
 @pytest.mark.parametrize("fingers", ["rigid", "segmented"])
 def test_a_world_without_tissue_reads_rigid_states_when_asked(fingers):
     """Without tissue nothing needs the rigid states between physics steps: the world reads them
-    when ``colliders`` is asked (issue 20). What it reads then is exactly what the eager read after
+    when ``colliders`` is asked. What it reads then is exactly what the eager read after
     every step gave: the same numbers as a fresh read, and ``position`` (the palm, every physics
     step) the same as its row."""
     from softgrasp_env.scene.scene import PALM

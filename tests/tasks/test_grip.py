@@ -1,4 +1,4 @@
-"""The grip-force task (softgrasp_env/tasks/grip.py, issue 21) and its scripted policies
+"""The grip-force task (softgrasp_env/tasks/grip.py) and its scripted policies
 (softgrasp_env/policies/grip.py): the least force from Coulomb, the reward's squeeze term, the
 success bound, and that feeling the pads beats any force-blind grip."""
 

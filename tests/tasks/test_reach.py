@@ -136,7 +136,7 @@ def test_start_is_validated():
     ],
 )
 def test_geometry_that_cannot_start_is_refused_when_the_env_is_made(kwargs, match):
-    """Issue 12's clashes: a cylinder wider than the open fingers (0.08 diverged at step 1, 0.12 and
+    """Clashes of geometry: a cylinder wider than the open fingers (0.08 diverged at step 1, 0.12 and
     0.2 started inside the fingers), a cylinder taller than the start (the palm inside it), and
     range extremes that put a finger into the cylinder - each a ValueError naming the settings
     and the limit, at gym.make, not at some later reset."""
@@ -170,7 +170,7 @@ def test_scene_geometry_check_names_the_palm_and_allows_an_offset_along_the_face
     ],
 )
 def test_reset_options_of_the_wrong_type_name_the_option_and_leave_the_env_usable(options, error, match):
-    """Issue 12 item 5: a wrong-typed option names itself and the type it wants (it used to be
+    """A wrong-typed option names itself and the type it wants (it used to be
     "TypeError: 'float' object is not iterable"); the env still resets and steps afterwards,
     under gym.make's default checker too."""
     env = gym.make("SoftGraspEasyRigid-v3")
