@@ -523,29 +523,45 @@ def tangential_compliance_3d(pad: Pad, a: float, nu: float, *, element: float = 
 
 def partial_slip_3d(pad: Pad, y_profile: np.ndarray, pressure: np.ndarray, mu: float, *, nu: float = 0.0,
                     element: float = TANGENTIAL_ELEMENT, across: float = 5e-4, steps: int = 120,
-                    indentation: float | None = None) -> dict:  # fmt: skip
+                    indentation: float | None = None, goodman: bool = True) -> dict:  # fmt: skip
     """Partial slip of the 3-D pad of finite length under a growing axial load, Coulomb's law at every
     node of the contact strip: the reference for the tissue rig, whose face has free ends.
 
-    The pad is tangential_compliance_3d's (the quarter by its symmetry planes, 27-node hexahedra,
-    ``element`` along x and z, ``across`` across the strip, a node line at |y| = a). The contact's
-    pressure is the plane-strain one, ``pressure`` [Pa] at ``y_profile`` [m] (LayerModel.contact),
-    uniform along the face's height, and is held through the ramp (Goodman's approximation: the
-    axial shear does not change the normal pressure; exact in anti-plane shear, where the two
-    problems decouple). Every strip node (|y| <= a, a the outermost |y| with pressure) is held in x
-    (the rigid cylinder) and in y (friction across the strip: a lateral slip is not modelled); along
-    z it sticks (u_z = U, the cylinder's travel) while its axial force stays within mu times its
-    normal force (the pressure's consistent nodal load), else slides at that bound behind the
-    cylinder (u_z <= U). The strip's axial compliance is condensed onto its nodes (one
-    factorisation), and for each U on a grid up to gross slip an active-set iteration from the last
-    U's finds the stick set (exact for the discrete problem). ``indentation`` [m] (nu 0 only): the
-    shear across the layer is the continuum group energy's about the pad the cylinder compressed
-    that far (tangential_compliance_3d's, the thin-layer profile); None: linear elasticity.
+    The pad is tangential_compliance_3d's (27-node hexahedra, ``element`` along x and z, ``across``
+    across the strip, a node line at |y| = a). The contact's pressure before the pull is the
+    plane-strain one, ``pressure`` [Pa] at ``y_profile`` [m] (LayerModel.contact), uniform along the
+    face's height (exact in 3-D at nu 0: the plane-strain field leaves the free ends traction-free).
+    Every strip node (|y| <= a, a the outermost |y| with pressure) is held in y (friction across the
+    strip: a lateral slip is not modelled); along z it sticks (u_z = U, the cylinder's travel) while
+    its axial force stays within mu times its normal force, else slides at that bound behind the
+    cylinder (u_z <= U).
 
-    Returns arrays over the ramp: "ratio" Q / mu P, "share" the sticking nodes' share of the normal
-    load, "c_over_a" the tissue's measure of the stick zone (partial_slip.ramp: the |y| within which
-    the nodes carry that share, off their cumulative load, over a), "c_over_a_mid" the same over the
-    middle half of the face's height (|z| <= H / 4), "U" [m], "Q" [N] (the whole pad)."""
+    ``goodman`` True: Goodman's approximation, the axial pull does not change the normal force, each
+    node's is its share of the pressure (its consistent nodal load), and the strip nodes are held in
+    x; then the problem is symmetric about the face's mid-height and the model is a quarter by two
+    symmetry planes. False: the normal force is the solution's. A pad bonded to a core and pulled
+    along its face at its outer surface carries the couple Q h (h its thickness) to the core; part
+    of it is a couple of normal forces on the strip, which presses the strip's trailing end (the end
+    the cylinder moves away from) harder and lifts the leading one (about 0.46 h Q of couple on the
+    strip at nu 0). The model is then the half by the y symmetry plane, the strip's nodes held in x
+    (by the rigid cylinder: u_x = 0 from the pressed state) only while they push on it, else free
+    with no force (the contact opens), and Coulomb's bound moves with each node's normal force.
+    Either way the strip's stiffness is condensed onto its nodes (one factorisation), and for each U
+    on a grid to gross slip an active-set iteration from the last U's finds the stick (and contact)
+    set, exact for the discrete problem. ``indentation`` [m] (nu 0 only): the shear across the layer
+    is the continuum group energy's about the pad the cylinder compressed that far
+    (tangential_compliance_3d's, the thin-layer profile); None: linear elasticity.
+
+    Returns arrays over the ramp: "ratio" Q / mu P (P the present normal load when ``goodman`` is
+    False: the cylinder holds its place across the pad, as in the tissue rig, and the pull changes
+    P a little: under 0.2 % by gross slip at 3 N and mu 0.9), "share" the sticking nodes' share of the normal
+    load (of the present normal forces when ``goodman`` is False, as the tissue rig reads them),
+    "c_over_a" the tissue's measure of the stick zone (partial_slip.ramp: the |y| within which the
+    nodes carry that share, off their cumulative load, over a), "c_over_a_mid" the same over the
+    middle half of the face's height (|z| <= H / 4), "U" [m], "Q" [N] (the whole pad); with
+    ``goodman`` False also "trailing" the share over the trailing half of the face (z < 0; the
+    cylinder moves to +z), "leading" over the other, and "open" the count of strip nodes whose
+    contact has opened (of the half model)."""
     from scipy.sparse.linalg import splu
     from skfem import Basis, ElementHex2, ElementVector, FacetBasis, LinearForm, MeshHex, asm
     from skfem.models.elasticity import lame_parameters, linear_elasticity
@@ -564,7 +580,8 @@ def partial_slip_3d(pad: Pad, y_profile: np.ndarray, pressure: np.ndarray, mu: f
 
     h, half_h = pad.thickness, pad.height / 2
     ys = np.concatenate([grid(a, across), a + grid(pad.width / 2 - a, element)[1:]])
-    mesh = MeshHex.init_tensor(grid(h, element), ys, grid(half_h, element))
+    zs = grid(half_h, element) if goodman else np.concatenate([-grid(half_h, element)[:0:-1], grid(half_h, element)])
+    mesh = MeshHex.init_tensor(grid(h, element), ys, zs)
     basis = Basis(mesh, ElementVector(ElementHex2()), intorder=4)
     lam, g = lame_parameters(2.0 * pad.shear_modulus * (1.0 + nu), nu)
     k = asm(linear_elasticity(lam, g), basis)
@@ -575,14 +592,18 @@ def partial_slip_3d(pad: Pad, y_profile: np.ndarray, pressure: np.ndarray, mu: f
     k = k.tocsr()
     on_strip = lambda p: np.isclose(p[0], h) & (p[1] <= a + 1e-12)  # noqa: E731
     strip = basis.get_dofs(on_strip)
-    axial = strip.all("u^3")
+    axial, across_x = strip.all("u^3"), strip.all("u^1")  # the same nodes, in the same order
     core = basis.get_dofs(lambda p: np.isclose(p[0], 0.0)).all()
     mid_y = basis.get_dofs(lambda p: np.isclose(p[1], 0.0)).all("u^2")
-    mid_z = basis.get_dofs(lambda p: np.isclose(p[2], 0.0))
-    fixed = np.unique(np.concatenate([core, strip.all("u^1"), strip.all("u^2"), mid_y, mid_z.all("u^1"),
-                                      mid_z.all("u^2")]))  # fmt: skip
-    axial = np.setdiff1d(axial, fixed)
-    # the normal force on each strip node: the pressure's consistent load, read on the z component
+    held = [core, strip.all("u^2"), mid_y]
+    if goodman:
+        mid_z = basis.get_dofs(lambda p: np.isclose(p[2], 0.0))
+        held += [strip.all("u^1"), mid_z.all("u^1"), mid_z.all("u^2")]
+    fixed = np.unique(np.concatenate(held))
+    keep = ~np.isin(axial, fixed)
+    axial, across_x = axial[keep], across_x[keep]
+    # the normal force on each strip node before the pull: the pressure's consistent load (read on
+    # the z component, whose shape functions are the same)
     top = mesh.facets_satisfying(lambda x: np.isclose(x[0], h) & (x[1] <= a + 1e-12))
     fb = FacetBasis(mesh, basis.elem, facets=top, intorder=6)
     order = np.argsort(y_profile)
@@ -591,50 +612,123 @@ def partial_slip_3d(pad: Pad, y_profile: np.ndarray, pressure: np.ndarray, mu: f
     normal = np.asarray(weights[axial]).ravel()
     loc = basis.doflocs[:, axial]
     y_node, z_node = loc[1], loc[2]
-    # the strip's axial compliance: C[i, j] the axial displacement of node i per unit axial force at j
-    free = np.setdiff1d(np.arange(k.shape[0]), fixed)
-    lu = splu(k[free][:, free].tocsc())
-    pos = np.searchsorted(free, axial)
-    rhs = np.zeros((free.size, axial.size))
-    rhs[pos, np.arange(axial.size)] = 1.0
-    c = lu.solve(rhs)[pos]
-    c = 0.5 * (c + c.T)
-    limit = mu * normal
     big_p = float(normal.sum())
-    u_gross = float((c @ limit).max())  # every node at its cone: the strip's farthest lag
     on = normal > 0.0
-    stick = on.copy()
-    mid = z_node <= 0.25 * pad.height
-    rows = []
+    mid = np.abs(z_node) <= 0.25 * pad.height
 
-    def zone(sel: np.ndarray, stuck: np.ndarray) -> float:
-        lam_, y_ = normal[sel], y_node[sel]
+    def zone(sel: np.ndarray, stuck: np.ndarray, load: np.ndarray) -> float:
+        lam_, y_ = load[sel], y_node[sel]
         share = float(lam_[stuck[sel]].sum() / lam_.sum())
         o = np.argsort(y_)
         cum = np.concatenate(([0.0], np.cumsum(lam_[o]) / lam_.sum()))
         return float(np.interp(share, cum, np.concatenate(([0.0], y_[o])))) / a
 
-    for u in np.linspace(u_gross / steps, u_gross, steps)[:-1]:
-        for _ in range(4 * axial.size):
-            force = np.where(on & ~stick, limit, 0.0)
-            s = np.flatnonzero(stick)
-            if s.size:
-                force[s] = np.linalg.solve(c[np.ix_(s, s)], u - c[s] @ force)
-            settled, stick = _coulomb_update(stick, on, force, limit, c @ force, u)
-            if settled:
+    free = np.setdiff1d(np.arange(k.shape[0]), fixed)
+    if goodman:
+        # the strip's axial compliance: C[i, j] the axial displacement of node i per unit axial force at j
+        lu = splu(k[free][:, free].tocsc())
+        pos = np.searchsorted(free, axial)
+        rhs = np.zeros((free.size, axial.size))
+        rhs[pos, np.arange(axial.size)] = 1.0
+        c = lu.solve(rhs)[pos]
+        c = 0.5 * (c + c.T)
+        limit = mu * normal
+        u_gross = float((c @ limit).max())  # every node at its cone: the strip's farthest lag
+        stick = on.copy()
+        rows = []
+        for u in np.linspace(u_gross / steps, u_gross, steps)[:-1]:
+            for _ in range(4 * axial.size):
+                force = np.where(on & ~stick, limit, 0.0)
+                s = np.flatnonzero(stick)
+                if s.size:
+                    force[s] = np.linalg.solve(c[np.ix_(s, s)], u - c[s] @ force)
+                settled, stick = _coulomb_update(stick, on, force, limit, c @ force, u)
+                if settled:
+                    break
+            else:
+                raise RuntimeError("the active set did not settle")
+            q = float(force.sum())
+            rows.append((q / (mu * big_p), float(normal[stick].sum() / big_p), zone(on, stick, normal),
+                         zone(on & mid, stick, normal), u, 4.0 * q))  # fmt: skip
+            if not stick.any():
                 break
+        else:  # at u_gross every node at its cone is the solution (the last to stick is exactly there)
+            rows.append((1.0, 0.0, 0.0, 0.0, u_gross, 4.0 * mu * big_p))
+        arr = np.array(rows)
+        return {"ratio": arr[:, 0], "share": arr[:, 1], "c_over_a": arr[:, 2], "c_over_a_mid": arr[:, 3],
+                "U": arr[:, 4], "Q": arr[:, 5], "a": a}  # fmt: skip
+    return _partial_slip_unilateral(k, free, across_x, axial, normal, z_node < 0.0, mid, mu, steps,
+                                    lambda stuck, load, sel: zone(sel, stuck, load))  # fmt: skip
+
+
+def _share(load: np.ndarray, stick: np.ndarray, sel: np.ndarray) -> float:
+    """The sticking nodes' share of the normal load over the nodes ``sel``."""
+    return float(load[stick & sel].sum() / max(load[sel].sum(), 1e-300))
+
+
+def _partial_slip_unilateral(k, free: np.ndarray, across_x: np.ndarray, axial: np.ndarray, normal: np.ndarray,
+                             trailing: np.ndarray, mid: np.ndarray, mu: float, steps: int, zone) -> dict:  # fmt: skip
+    """partial_slip_3d without Goodman's approximation (``goodman`` False), on the half model.
+
+    The pad's stiffness is condensed onto the strip nodes' x and z displacements (every other free
+    dof eliminated: K_ss - K_si K_ii^-1 K_is), increments from the pressed state. Per node, with F
+    the force the cylinder exerts on the pad beyond the pressed state's (F = K_c u) and N = N0 -
+    F_x its normal force (the cylinder pushes along -x): in contact u_x = 0, open F_x = N0 (N = 0);
+    stuck u_z = U, sliding F_z = mu N. A contact opens where N < 0 and closes where an open node
+    would move into the cylinder (u_x > 0); a stuck node slides where F_z > mu N; a sliding one
+    sticks where it got ahead of the cylinder (u_z > U)."""
+    from scipy.sparse.linalg import splu
+
+    n = axial.size
+    strip = np.concatenate([across_x, axial])
+    inner = np.setdiff1d(free, strip)
+    k_is = k[inner][:, strip].toarray()
+    kc = k[strip][:, strip].toarray() - k_is.T @ splu(k[inner][:, inner].tocsc()).solve(k_is)
+    kc = 0.5 * (kc + kc.T)
+    kx, kz = kc[:n], kc[n:]  # the rows of F_x and F_z over (u_x, u_z)
+    on = normal > 0.0
+    tol = 1e-9 * float(normal.max())
+    # Goodman's gross-slip travel sets the step; the trailing end's last nodes, pressed harder as
+    # the pull grows, stick on beyond it
+    u_gross = float(np.linalg.solve(kc[n:, n:], mu * normal).max())
+    stick, closed = on.copy(), np.ones(n, dtype=bool)
+    rows = []
+    for u in u_gross / steps * np.arange(1, 10 * steps + 1):
+        for _ in range(8 * n):
+            # known: closed nodes' u_x = 0, stuck nodes' u_z = U; unknown: the rest, from the open
+            # nodes' F_x = N0 (N = 0) and the sliding nodes' F_z = mu (N0 - F_x)
+            slide = ~stick
+            unknown = np.concatenate([~closed, slide])
+            rows_ = np.concatenate([kx[~closed], kz[slide] + mu * kx[slide]])
+            rhs = np.concatenate([normal[~closed], mu * normal[slide]])
+            sol = np.zeros(2 * n)
+            sol[n:][stick] = u
+            if unknown.any():
+                sol[unknown] = np.linalg.solve(rows_[:, unknown], rhs - rows_[:, ~unknown] @ sol[~unknown])
+            fx, fz = kx @ sol, kz @ sol
+            now = normal - fx
+            opens = closed & (now < -tol)
+            closes = ~closed & (sol[:n] > 0.0)
+            over = stick & (fz > mu * np.maximum(now, 0.0) + tol)
+            ahead = slide & closed & on & (sol[n:] > u * (1.0 + 1e-12))
+            if not (opens.any() or closes.any() or over.any() or ahead.any()):
+                break
+            closed = (closed & ~opens) | closes
+            stick = ((stick & ~over) | ahead) & closed
         else:
             raise RuntimeError("the active set did not settle")
-        q = float(force.sum())
-        rows.append((q / (mu * big_p), float(normal[stick].sum() / big_p), zone(on, stick), zone(on & mid, stick),
-                     u, 4.0 * q))  # fmt: skip
+        q = float(fz.sum())
+        load = np.maximum(now, 0.0)
+        rows.append((q / (mu * float(load.sum())), _share(load, stick, on), zone(stick, load, on), zone(stick, load, on & mid), u,
+                     2.0 * q, _share(load, stick, on & trailing), _share(load, stick, on & ~trailing),
+                     float((~closed).sum())))  # fmt: skip
         if not stick.any():
             break
-    else:  # at u_gross every node at its cone is the solution (the last to stick is exactly there)
-        rows.append((1.0, 0.0, 0.0, 0.0, u_gross, 4.0 * mu * big_p))
+    else:
+        raise RuntimeError("the strip had not slid entirely at ten times Goodman's gross-slip travel")
     arr = np.array(rows)
-    return {"ratio": arr[:, 0], "share": arr[:, 1], "c_over_a": arr[:, 2], "c_over_a_mid": arr[:, 3], "U": arr[:, 4],
-            "Q": arr[:, 5], "a": a}  # fmt: skip
+    keys = ("ratio", "share", "c_over_a", "c_over_a_mid", "U", "Q", "trailing", "leading", "open")
+    return {key: arr[:, i] for i, key in enumerate(keys)}
 
 
 def at_ratios(ramp: dict, ratios, key: str = "c_over_a") -> np.ndarray:

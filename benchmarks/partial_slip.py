@@ -24,11 +24,13 @@ c / a = (1 - Q / mu P)^(1/2) for a Hertzian (elliptic) pressure on an elastic ha
 pressure on a thin elastic layer, whose shear traction in the stick zone is uniform (a layer of
 tangential springs; the pad's contact half-width is 0.9 to 1.8 times its thickness, between the
 two). c / a is also given over the middle half of the face's height alone (away from its free
-ends). Also printed: the tangential compliance (dU / dQ over the first and the last stretch) and
+ends), and the stick share over the face's trailing half (the upper one: the cylinder moves down, away
+from it) and over its leading half. Also printed: the tangential compliance (dU / dQ over the first and the last stretch) and
 the load at which the first contact slides and at which all of them do. ``--reference`` adds the
 finite-element pad's stick share and c / a at the same Q / mu P (``reference``: Coulomb's law at
 every node, pad_reference.LayerModel.partial_slip and partial_slip_3d), the curve for this pad's
-own pressure profile and thickness.
+own pressure profile and thickness; the 3-D pad also with the normal forces its pull changes (the
+pull's couple presses the face's trailing end and lifts its leading one).
 """
 
 from __future__ import annotations
@@ -126,7 +128,11 @@ def ramp(density: float, *, material: str = "shape_matching", law: str = "contac
         z = rig.state.particle_x[particles, 2]  # the core's centre is the origin
         mid = np.abs(z) <= 0.25 * rig.face_height
         c_mid = stick_zone(lam[mid], y[mid], stuck[mid])[1] if mid.any() else math.nan
-        rows.append((ratio, share, c_load, u0 - rig.axial, q, bands, c_mid))
+        # the face's two halves along the pull: the cylinder moves down, away from the upper
+        # (trailing) end, whose contacts the pull's couple presses harder (partial_slip_3d)
+        up = z > 0.0
+        halves = tuple(float(lam[stuck & h].sum() / max(lam[h].sum(), 1e-300)) for h in (up, ~up))
+        rows.append((ratio, share, c_load, u0 - rig.axial, q, bands, c_mid) + halves)
         if first_slide is None and not stuck.all():
             first_slide = ratio
         if not stuck.any():
@@ -142,24 +148,34 @@ def ramp(density: float, *, material: str = "shape_matching", law: str = "contac
     report(f"{density:>9,.0f}/m^2 ({rig.particle_count} particles, {material}, law {law}): pressed {c * 1e3:.2f} mm; "
            f"first contact slides at Q/muP {first_slide if first_slide is None else round(first_slide, 3)}, all at "
            f"{gross if gross is None else round(gross, 3)}")  # fmt: skip
-    report("   Q/muP   stick share (centre middle edges)   c/a (all, mid-height)   (1-Q/muP)^1/2   (1-Q/muP)^1/3")
+    report("   Q/muP   stick share (centre middle edges; trailing leading)   c/a (all, mid-height)   (1-Q/muP)^1/2   "
+           "(1-Q/muP)^1/3")  # fmt: skip
     out["levels"] = {}
     for level in LEVELS:
         hit = next((r for r in rows if r[0] >= level), None)
         if hit is None:
             continue
         out["levels"][level] = {"ratio": hit[0], "share": hit[1], "c_over_a": hit[2], "bands": hit[5],
-                                "c_over_a_mid": hit[6]}  # fmt: skip
-        report(f"   {hit[0]:5.3f}   {hit[1]:9.3f}   ({hit[5][0]:.2f} {hit[5][1]:.2f} {hit[5][2]:.2f})   {hit[2]:6.3f} "
+                                "c_over_a_mid": hit[6], "trailing": hit[7], "leading": hit[8]}  # fmt: skip
+        report(f"   {hit[0]:5.3f}   {hit[1]:9.3f}   ({hit[5][0]:.2f} {hit[5][1]:.2f} {hit[5][2]:.2f}; {hit[7]:.2f} "
+               f"{hit[8]:.2f})   {hit[2]:6.3f} "
                f"{hit[6]:6.3f}   {math.sqrt(max(0.0, 1 - hit[0])):11.3f}   {max(0.0, 1 - hit[0]) ** (1 / 3):11.3f}")  # fmt: skip
     return out
+
+
+COUPLED_MESH = dict(element=4e-3, across=1e-3)
+"""The coupled 3-D reference's mesh [m] (along x and z, across the strip): the coarse one. On the
+Goodman model it gives the stick share within 0.5 % of the 2 mm / 0.5 mm mesh at every level."""
 
 
 def reference(mu: float, *, load: float = PRESS, full: bool = True) -> dict:
     """The finite-element reference's partial slip at ``load`` (benchmarks/pad_reference.py, nu 0,
     Coulomb's law at every node): the anti-plane pad of infinite length ("anti_plane") and, with
-    ``full``, the 3-D pad of the face's length ("3d", 2 mm elements, 0.5 mm across the strip; about
-    4 minutes). Each maps LEVELS to (stick share, c / a). In linear elasticity neither depends on mu."""
+    ``full``, the 3-D pad of the face's length under Goodman's approximation ("3d", 2 mm elements,
+    0.5 mm across the strip; about 4 minutes) and with the normal forces the pull changes
+    ("3d_coupled": partial_slip_3d's ``goodman`` False, COUPLED_MESH; about 5 minutes). Each maps
+    LEVELS to (stick share, c / a). Under Goodman's approximation neither depends on mu; coupled,
+    the pull's couple grows with mu."""
     from benchmarks.pad_reference import LayerModel, at_ratios, default_pad, partial_slip_3d
 
     pad = default_pad()
@@ -168,6 +184,7 @@ def reference(mu: float, *, load: float = PRESS, full: bool = True) -> dict:
     ramps = {"anti_plane": model.partial_slip(c["f"], mu)}
     if full:
         ramps["3d"] = partial_slip_3d(pad, model.y, c["pressure"], mu)
+        ramps["3d_coupled"] = partial_slip_3d(pad, model.y, c["pressure"], mu, goodman=False, **COUPLED_MESH)
     return {name: dict(zip(LEVELS, zip(at_ratios(r, LEVELS, "share"), at_ratios(r, LEVELS), strict=True), strict=True))
             for name, r in ramps.items()}  # fmt: skip
 
@@ -182,7 +199,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--friction", type=float, default=None, help="mu (TissueConfig's default if not given)")
     parser.add_argument("--reference", choices=["none", "anti-plane", "3d"], default="none",
                         help="also print the finite-element reference's stick share and c/a (needs scikit-fem; "
-                             "'3d' adds the pad of finite length, about 4 minutes)")  # fmt: skip
+                             "'3d' adds the pad of finite length, Goodman's and coupled, about 10 minutes)")  # fmt: skip
     args = parser.parse_args(argv)
     densities = [float(d) for d in args.densities.split(",")]
     layers = [int(v) for v in args.layers.split(",")]
