@@ -24,9 +24,10 @@ c / a = (1 - Q / mu P)^(1/2) for a Hertzian (elliptic) pressure on an elastic ha
 pressure on a thin elastic layer, whose shear traction in the stick zone is uniform (a layer of
 tangential springs; the pad's contact half-width is 0.9 to 1.8 times its thickness, between the
 two). c / a is also given over the middle half of the face's height alone (away from its free
-ends), and the stick share over the face's trailing half (the upper one: the cylinder moves down, away
-from it) and over its leading half. Also printed: the tangential compliance (dU / dQ over the first and the last stretch) and
-the load at which the first contact slides and at which all of them do. ``--reference`` adds the
+ends), and the stick share over the face's trailing half (the upper one: the cylinder moves down,
+away from it) and over its leading half. Also printed: the tangential compliance (dU / dQ over the
+first and the last stretch) and the load at which the first contact slides and at which all of
+them do. ``--reference`` adds the
 finite-element pad's stick share and c / a at the same Q / mu P (``reference``: Coulomb's law at
 every node, pad_reference.LayerModel.partial_slip and partial_slip_3d), the curve for this pad's
 own pressure profile and thickness; the 3-D pad also with the normal forces its pull changes (the
