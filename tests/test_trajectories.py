@@ -2,11 +2,13 @@
 scripted policy) and the settings reached through kwargs replay bit-identically against the
 trajectories 0.5.0 recorded (tests/trajectories.py says what each case runs), on a machine whose
 instruction set and libraries match the recording's. Elsewhere the same cases replay their first
-PREFIX_STEPS steps within PREFIX_RTOL: a library's sin or exp may take another code path on
-other vector units and round in the last bit, and a grasp amplifies that (measured: the v4
-recording, made without AVX-512, replayed with it is bit-identical for most cases, while the
-random-action easy and grip cases first differ in the last float32 bit at steps 9 and 6, reach 1e-5
-relative at steps 19 and 7 and 1e-4 at 23 and 12)."""
+PREFIX_STEPS steps within PREFIX_RTOL: another machine may round in the last bit, and a grasp
+amplifies that. Measured: the v4 recording, made without AVX-512, replayed with it, is
+bit-identical or within 1e-12 over whole runs for 11 of its 13 cases; the random-action easy and
+grip cases first differ in the last float32 bit at steps 9 and 6, and over the first 8 steps reach
+1.8e-11 and 9.6e-5 relative (the grip's taxels); at steps 23 and 12 they pass 1e-4. (Neither
+numba's code generation nor numpy's dispatch is the cause: forced to AVX2 both, the differences
+are the same.) A 1 % change of the v4 hourglass stiffness fails 2 of the 13 within the prefix."""
 
 from __future__ import annotations
 
@@ -16,10 +18,11 @@ import pytest
 import softgrasp_env  # noqa: F401  (registers the ids)
 from tests.trajectories import SETS, fingerprint, record
 
-PREFIX_STEPS = 10
-"""Steps replayed on a machine unlike the recording's (half a second of the lift task)."""
-PREFIX_RTOL = 1e-4
-"""Their tolerance: |got - recorded| <= PREFIX_RTOL max(|recorded|, 1), flags exactly equal."""
+PREFIX_STEPS = 8
+"""Steps replayed on a machine unlike the recording's (0.4 s of the lift task)."""
+PREFIX_RTOL = 1e-3
+"""Their tolerance: |got - recorded| <= PREFIX_RTOL max(|recorded|, 1), flags exactly equal (ten
+times the largest difference measured, the grip's taxels)."""
 
 _GOLDEN = {set_name: dict(np.load(path).items()) for set_name, (_, path) in SETS.items()}
 _CASES = [(set_name, *case) for set_name, (cases, _) in SETS.items() for case in cases]
