@@ -49,7 +49,7 @@ from .anchors import (
     project_anchors,
     snap_attached,
 )
-from .compliant import compliant_sweep
+from .compliant import bodies_independent, compliant_sweep, compliant_sweep_bodies
 from .contacts import (
     clear_multipliers,
     collect_contacts,
@@ -190,14 +190,21 @@ def _view1(buf, layout, k):
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
            rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
-           rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont):  # fmt: skip
+           rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont, threaded):  # fmt: skip
     """One shape-matching sweep over every body's groups, and after the last one each group's
     spin of the step turned back. ``continuum``: some groups have the continuum group energy
-    (compliant.continuum_group)."""
-    compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
-                    rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid,
-                    rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp,
-                    continuum, g_cont)  # fmt: skip
+    (compliant.continuum_group); ``threaded``: the bodies on threads (compliant_sweep_bodies, the
+    same result)."""
+    if threaded:
+        compliant_sweep_bodies(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame,
+                               attached, fixed, rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass,
+                               body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
+                               rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont)  # fmt: skip
+    else:
+        compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached,
+                        fixed, rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape,
+                        shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang,
+                        coupling_imp, continuum, g_cont)  # fmt: skip
     if it == iterations - 1:
         # internal forces exert no torque: each group's spin of the step, turned back
         balance_torques(g_off, g_mem, g_frame, attached, fixed, inertia, x, xp, qp, q_pred, spin_kick)
@@ -214,7 +221,7 @@ def _step(
     # the model's arrays and every scratch array of the step, packed (see TissueSolver._pack and _view)
     f_pack, i_pack, b_pack, layout,
     # parameters
-    dt, iterations, rot_iters, gx, gy, gz, damping, coupling, margin, continuum, counts,
+    dt, iterations, rot_iters, gx, gy, gz, damping, coupling, margin, continuum, counts, threaded,
 ):  # fmt: skip
     """One tissue step. Returns 0, or 1 if a contact buffer was too small (``counts`` then holds
     the sizes needed and the state is untouched, so the caller can grow the buffers and retry)."""
@@ -288,7 +295,7 @@ def _step(
                           imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
         _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
                rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass,
-               rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont)  # fmt: skip
+               rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont, threaded)  # fmt: skip
         project_shape_contacts(nc, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass,
                                shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
                                rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose)  # fmt: skip
@@ -368,6 +375,9 @@ class TissueSolver:
                 raise ValueError(f"TissueModel array {name!r} has shape {a.shape}, expected {self._scratch[name].shape}")
             self._scratch[name][...] = a
         self._rigid_buffers_for = -1
+        self._threads = sim.solver_threads()  # checked here: a bad count fails at construction
+        self._threaded = False
+        self._threaded_for: np.ndarray | None = None
 
     def _pack(self, resized: tuple[str, ...]) -> None:
         """(Re)build the packed scratch buffers for ``self._sizes``. Arrays sized by an entry of
@@ -433,7 +443,7 @@ class TissueSolver:
             self._rig_x, self._rig_q, self._imp_lin, self._imp_ang, self._coupling_imp,
             *self._packed,
             sim.dt, sim.iterations, sim.rotation_iterations, 0.0, 0.0, -sim.gravity, self.damping, coupling,
-            sim.contact_margin, self.model.continuum, self._counts,
+            sim.contact_margin, self.model.continuum, self._counts, self._threaded,
         )  # fmt: skip
         self._args_for = sim
 
@@ -446,6 +456,22 @@ class TissueSolver:
             self._rigid_buffers(col.rigid_inv_mass.shape[0])
         if col.shape_kind.shape[0] != self._sizes["shapes"]:
             self._shape_buffer(col.shape_kind.shape[0])
+        if col.shape_rigid is not self._threaded_for or self._args_for is not self.sim:
+            # the pads on threads only where no two share a core (compliant_sweep_bodies)
+            self._threads = self.sim.solver_threads()
+            self._threaded = self._threads > 1 and bodies_independent(self.model, col.shape_rigid)
+            self._threaded_for = col.shape_rigid
+            self._args_for = None
+        if self._threaded:
+            before = nb.get_num_threads()
+            nb.set_num_threads(self._threads)
+            try:
+                return self._step(state, col)
+            finally:
+                nb.set_num_threads(before)
+        return self._step(state, col)
+
+    def _step(self, state: TissueState, col: Colliders) -> StepOutput:
         while True:
             if self._args_for is not self.sim:
                 self._fixed_args()

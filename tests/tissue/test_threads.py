@@ -1,0 +1,88 @@
+"""The tissue solver on threads (SimConfig.threads, SOFTGRASP_THREADS): each finger's pad swept on a
+thread of its own gives the same result to the bit as one thread, and bad settings fail clearly."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numba
+import numpy as np
+import pytest
+
+import softgrasp_env  # noqa: F401  (registers the ids)
+from softgrasp_env.config import THREADS_ENV, SimConfig
+from softgrasp_env.tissue.compliant import bodies_independent
+
+needs_two = pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="numba has one thread here")
+
+
+def _run(env_id, threads, coupling, steps, **kwargs):
+    env = gym.make(env_id, sim=SimConfig(threads=threads, coupling=coupling), **kwargs)
+    try:
+        obs, _ = env.reset(seed=5)
+        rng = np.random.default_rng(5)
+        rows = [obs]
+        for _ in range(steps):
+            obs, reward, terminated, truncated, _ = env.step(rng.uniform(-1.0, 1.0, size=4).astype(np.float32))
+            rows.append(np.append(obs, reward))
+            if terminated or truncated:
+                obs, _ = env.reset()
+        world = env.unwrapped.scene.world
+        assert world.solver._threaded == (threads > 1)  # the threaded sweep did run
+        return np.concatenate(rows), world.state.particle_x.copy(), world.state.particle_v.copy()
+    finally:
+        env.close()
+
+
+@needs_two
+@pytest.mark.parametrize("coupling", ["thesis", "consistent"])
+def test_two_threads_give_one_threads_result_to_the_bit(coupling):
+    """SoftGraspEasy-v4 at 16,000 per m^2 (the fine preset's density) with random actions: the
+    observations, rewards and every particle's position and velocity after 25 steps, on 1 and 2
+    threads. Under the consistent coupling each core slides inside its own pad's sweep."""
+    one = _run("SoftGraspEasy-v4", 1, coupling, 25, particle_density=16_000.0)
+    two = _run("SoftGraspEasy-v4", 2, coupling, 25, particle_density=16_000.0)
+    for a, b in zip(one, two, strict=True):
+        assert a.tobytes() == b.tobytes()
+
+
+def test_the_thread_count_is_checked(monkeypatch):
+    with pytest.raises(ValueError, match="threads"):
+        SimConfig(threads=0)
+    with pytest.raises(ValueError, match="threads"):
+        SimConfig(threads=2.5)
+    monkeypatch.setenv(THREADS_ENV, "two")
+    with pytest.raises(ValueError, match=f"{THREADS_ENV} must be an integer"):
+        SimConfig().solver_threads()
+    monkeypatch.setenv(THREADS_ENV, "0")
+    with pytest.raises(ValueError, match=f"{THREADS_ENV} must be an integer"):
+        SimConfig().solver_threads()
+    monkeypatch.setenv(THREADS_ENV, str(numba.config.NUMBA_NUM_THREADS + 1))
+    with pytest.raises(ValueError, match="NUMBA_NUM_THREADS"):
+        SimConfig().solver_threads()
+    monkeypatch.setenv(THREADS_ENV, "1")
+    assert SimConfig().solver_threads() == 1
+    assert SimConfig(threads=1).solver_threads() == 1  # the keyword wins over the variable
+    monkeypatch.delenv(THREADS_ENV)
+    assert SimConfig().solver_threads() == 1  # one thread by default
+
+
+@needs_two
+def test_the_variable_sets_the_threads_of_an_env(monkeypatch):
+    monkeypatch.setenv(THREADS_ENV, "2")
+    env = gym.make("SoftGraspEasy-v4")
+    try:
+        env.reset(seed=0)
+        env.step(env.action_space.sample())
+        assert env.unwrapped.scene.world.solver._threaded
+    finally:
+        env.close()
+
+
+def test_pads_that_share_a_core_or_have_none_stay_on_one_thread():
+    class Model:
+        body_core_shape = np.array([0, 1])
+
+    assert bodies_independent(Model, np.array([0, 1]))
+    assert not bodies_independent(Model, np.array([3, 3]))  # both cores on one rigid slot
+    Model.body_core_shape = np.array([-1, 1])
+    assert not bodies_independent(Model, np.array([0, 1]))  # a pad without a core
