@@ -67,15 +67,19 @@ def test_the_thread_count_is_checked(monkeypatch):
 
 
 @needs_two
-def test_the_variable_sets_the_threads_of_an_env(monkeypatch):
-    monkeypatch.setenv(THREADS_ENV, "2")
-    env = gym.make("SoftGraspEasy-v4")
+@pytest.mark.parametrize("how", ["variable", "keyword"])
+def test_the_variable_and_the_keyword_set_the_threads_of_an_env(monkeypatch, how):
+    if how == "variable":
+        monkeypatch.setenv(THREADS_ENV, "2")
+    env = gym.make("SoftGraspEasy-v4", **({"threads": 2} if how == "keyword" else {}))
     try:
         env.reset(seed=0)
         env.step(env.action_space.sample())
         assert env.unwrapped.scene.world.solver._threaded
     finally:
         env.close()
+    with pytest.raises(ValueError, match="threads"):
+        gym.make("SoftGraspEasy-v4", threads=0)
 
 
 def test_pads_that_share_a_core_or_have_none_stay_on_one_thread():
