@@ -22,7 +22,7 @@ make_venv() {  # make_venv DIR EXTRAS
     "$1/bin/python" -m pip install -q -e ".[$2]"
 }
 make_venv .venv "train,plots,video,offline,reference,test"
-# numba compiles the solver's kernels on first use (about half a minute) and caches them on disk:
+# numba compiles the solver's kernels on first use (about a minute) and caches them on disk:
 # do it now, so that the first demo, test or training run starts at once.
 .venv/bin/python -m softgrasp_env.compile
 if [ "$rllib" = 1 ]; then

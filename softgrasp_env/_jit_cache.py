@@ -56,14 +56,14 @@ def invalidate_stale_kernels() -> bool:
 
 # --- a first run that talks ----------------------------------------------------------------------
 #
-# numba compiles the solver's kernels on their first call after an install or an edit (about half a
-# minute on 2 cores, nearly all of it the tissue step) and caches them on disk. Without a word
+# numba compiles the solver's kernels on their first call after an install or an edit (about a
+# minute, nearly all of it the tissue step) and caches them on disk. Without a word
 # that looks like a hang, so a listener on numba's compile events says when a compile starts and
 # how long it took. numba fires "numba:compile" only on a cache miss: a warm start says nothing.
 #
 # Where the words go: the logger "softgrasp_env" when the application has set up logging (its
 # handlers and levels decide), else one line on stderr, as Python's own last-resort handler would
-# do for a warning: a person at a terminal waiting half a minute should see why without setting
+# do for a warning: a person at a terminal waiting a minute should see why without setting
 # anything up, and stdout stays the program's (agents.evaluate prints its results there).
 # `logging.getLogger("softgrasp_env").setLevel(logging.WARNING)` silences it either way.
 # gymnasium's logger would not do: it is for warnings (warnings.warn, once per call site), and a
@@ -72,7 +72,7 @@ def invalidate_stale_kernels() -> bool:
 LOG = logging.getLogger("softgrasp_env")
 _OURS = __name__.rsplit(".", 1)[0] + "."  # "softgrasp_env."
 START_MESSAGE = ("numba is compiling the solver's kernels: the first run after an install or an update takes "
-                 "about half a minute (cached on disk for later runs; `python -m softgrasp_env.compile` does it ahead)")  # fmt: skip
+                 "about a minute (cached on disk for later runs; `python -m softgrasp_env.compile` does it ahead)")  # fmt: skip
 """Said once per process, when the first of the package's kernels starts compiling."""
 REPORT_ALONE = 1.0
 """A kernel compiled outside :func:`reporting` is reported by itself if it took this long [s]."""

@@ -4,7 +4,7 @@
     python -m softgrasp_env.compile            # or: softgrasp-compile
     python -m softgrasp_env.compile --report   # every kernel compiled, its time and signature
 
-Run it once after ``pip install`` (the repository's setup script does). A cold cache takes about half a
+Run it once after ``pip install`` (the repository's setup script does). A cold cache takes about a
 minute on 2 cores; a warm one a fraction of a second. ``NUMBA_CACHE_DIR`` moves numba's cache (by
 default it sits beside the package's sources, in ``__pycache__``). ``--report`` lists what was
 compiled in this run only: with a warm cache, nothing (clear the cache or point ``NUMBA_CACHE_DIR``

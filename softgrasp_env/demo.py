@@ -83,7 +83,7 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as exc:
         parser.error(str(exc))
     plan = GraspPlan(hold=ns.hold)
-    print("building the scene (the first run on a machine compiles the solver: about half a minute)...", flush=True)
+    print("building the scene (the first run on a machine compiles the solver: about a minute)...", flush=True)
     tic = time.perf_counter()
     scene = GraspScene(cfg, gui=ns.gui)
     try:

@@ -293,7 +293,7 @@ class SoftGraspEnv(gym.Env):
         self._actions: list[np.ndarray] = []
         self._episode_over, self._divergence = False, None
         # A cold numba cache compiles here, with a line before and after, not silently in the
-        # first reset and step (half a minute); a warm one costs a scene build, once per process.
+        # first reset and step (about a minute); a warm one costs a scene build, once per process.
         ensure_compiled(plan.scene)
 
     def _make_task(self, plan: EnvPlan):
