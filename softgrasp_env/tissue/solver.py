@@ -44,6 +44,7 @@ from ..config import COMPLIANT_DAMPING, SimConfig
 from .anchors import (
     COUPLING_CONSISTENT,
     COUPLING_THESIS,
+    limit_and_anchor_bodies,
     limit_deviation,
     mark_fixed,
     project_anchors,
@@ -312,11 +313,16 @@ def _step(
         friction_pairs(npairs, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, x, xp, inv_mass, p_body,
                        body_friction)  # fmt: skip
         # the strain limit, after friction: what a snagged particle's friction gives way to
-        limit_deviation(rest_x, inv_mass, attached, p_body, body_core_shape, body_max_deviation, shape_rigid, xp,
+        if threaded:
+            limit_and_anchor_bodies(coupling == COUPLING_CONSISTENT, body_off, rest_x, inv_mass, attached, p_body,
+                                    body_core_shape, body_max_deviation, shape_rigid, xp, rig_x, rig_q, rig_inv_mass,
+                                    rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
+        else:
+            limit_deviation(rest_x, inv_mass, attached, p_body, body_core_shape, body_max_deviation, shape_rigid, xp,
                             rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
-        if coupling == COUPLING_CONSISTENT:
-            project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q,
-                            rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
+            if coupling == COUPLING_CONSISTENT:
+                project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q,
+                                rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
     # --- coupling to the cores (thesis 5.1.3): error -> impulse, snap back
     snap_attached(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x, rig_q,
                   imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
