@@ -125,8 +125,15 @@ def snap_attached(
     core becomes the impulse p = m_i e / dt at that spot (PBD 2007 sec. 4.2); then the particle is
     set onto the spot with the core's orientation. The tissue loses exactly the momentum the core
     gains, whichever coupling ran during the iterations."""
-    n = xp.shape[0]
-    for i in range(n):
+    snap_attached_of(0, xp.shape[0], model_rest_x, model_rest_q, mass, attached, p_body, body_core_shape, shape_rigid,
+                     xp, qp, rig_x, rig_q, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def snap_attached_of(lo, hi, model_rest_x, model_rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp,
+                     rig_x, rig_q, imp_lin, imp_ang, coupling_imp, dt):  # fmt: skip
+    """snap_attached over particles lo .. hi - 1."""
+    for i in range(lo, hi):
         if not attached[i]:
             continue
         r = _core_of_body(p_body[i], body_core_shape, shape_rigid)

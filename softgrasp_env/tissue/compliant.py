@@ -126,26 +126,12 @@ def compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_m
                    continuum, g_cont)  # fmt: skip
 
 
-@nb.njit(cache=True, parallel=True, error_model="numpy", fastmath={"contract"})
-def compliant_sweep_bodies(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, frame,
-                           attached, fixed, rest_q, rest_moment, xs, xp, qp, group_q, moment, g_u, g_raw, mass,
-                           body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
-                           rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont):  # fmt: skip
-    """compliant_sweep with the bodies on threads. A body's groups touch only its own particles,
-    their group data and its own core's rigid slot (the impulses it delivers, and its slide under
-    the consistent coupling), so where no two bodies share a core (bodies_independent) the bodies
-    do not interact inside the sweep and each is swept exactly as compliant_sweep sweeps it: the
-    same result to the bit, on any number of threads."""
-    for b in nb.prange(body_off.shape[0] - 1):
-        sweep_body(b, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, frame, attached, fixed,
-                   rest_q, rest_moment, xs, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid,
-                   rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp,
-                   continuum, g_cont)  # fmt: skip
-
-
 def bodies_independent(model: TissueModel, shape_rigid: np.ndarray) -> bool:
     """True if every tissue body has a core of its own (a rigid slot no other body's core is on):
-    the condition for compliant_sweep_bodies. ``shape_rigid``: the colliders' shape -> rigid slot."""
+    then a body's groups and its particles' core constraints touch only its own particles, group
+    data and core, the bodies do not interact inside those passes, and they can run on threads
+    with the result of one (solver._bodies_pass). ``shape_rigid``: the colliders' shape -> rigid
+    slot."""
     cores = [int(shape_rigid[s]) if s >= 0 else -1 for s in model.body_core_shape]
     return all(c >= 0 for c in cores) and len(set(cores)) == len(cores)
 

@@ -49,8 +49,9 @@ from .anchors import (
     mark_fixed,
     project_anchors,
     snap_attached,
+    snap_attached_of,
 )
-from .compliant import bodies_independent, compliant_sweep, compliant_sweep_bodies
+from .compliant import bodies_independent, compliant_sweep, sweep_body
 from .contacts import (
     clear_multipliers,
     collect_contacts,
@@ -63,7 +64,7 @@ from .friction import friction_pairs, friction_patches, friction_velocity_pass, 
 from .integrate import predict_particles, update_velocities
 from .model import CONTINUUM_COLUMNS, TissueModel
 from .rigid import Colliders, predict_rigid
-from .shape_matching import balance_torques, group_frames, group_pack, rest_moments
+from .shape_matching import balance_torques, balance_torques_of, group_frames, group_pack, rest_moments
 from .state import TissueState
 
 
@@ -191,24 +192,41 @@ def _view1(buf, layout, k):
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
            rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
-           rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont, threaded):  # fmt: skip
+           rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont):  # fmt: skip
     """One shape-matching sweep over every body's groups, and after the last one each group's
     spin of the step turned back. ``continuum``: some groups have the continuum group energy
-    (compliant.continuum_group); ``threaded``: the bodies on threads (compliant_sweep_bodies, the
-    same result)."""
-    if threaded:
-        compliant_sweep_bodies(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame,
-                               attached, fixed, rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass,
-                               body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
-                               rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont)  # fmt: skip
-    else:
-        compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached,
-                        fixed, rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape,
-                        shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang,
-                        coupling_imp, continuum, g_cont)  # fmt: skip
+    (compliant.continuum_group)."""
+    compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
+                    rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid,
+                    rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp,
+                    continuum, g_cont)  # fmt: skip
     if it == iterations - 1:
-        # internal forces exert no torque: each group's spin of the step, turned back
+        # internal forces exert no torque: each group's spin of the step turned back
         balance_torques(g_off, g_mem, g_frame, attached, fixed, inertia, x, xp, qp, q_pred, spin_kick)
+
+
+@nb.njit(cache=True, parallel=True, error_model="numpy", fastmath={"contract"})
+def _bodies_pass(snap, last, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached,
+                 fixed, rest_x, rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw,
+                 mass, p_body, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
+                 rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont):  # fmt: skip
+    """An iteration's passes that stay inside each body, the bodies on threads: the thesis
+    coupling's snap of the attached particles (``snap``), the sweep over the body's groups, and
+    after the last sweep (``last``) the groups' torque balance. Where no two bodies share a core
+    (compliant.bodies_independent) each touches only its body's particles, groups and core, so
+    this is the serial order's result to the bit (snap_attached, then _sweep, over all bodies),
+    on any number of threads."""
+    for b in nb.prange(body_off.shape[0] - 1):
+        lo, hi = body_off[b], body_off[b + 1]
+        if snap:
+            snap_attached_of(lo, hi, rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp,
+                             rig_x, rig_q, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+        sweep_body(b, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
+                   rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid,
+                   rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp,
+                   continuum, g_cont)  # fmt: skip
+        if last:
+            balance_torques_of(lo, hi, g_off, g_mem, g_frame, attached, fixed, inertia, x, xp, qp, q_pred, spin_kick)
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -288,15 +306,23 @@ def _step(
     g_u[...] = 0.0
     # --- Gauss-Seidel iterations
     for it in range(iterations):
-        if coupling == COUPLING_THESIS:
-            # attached particles onto their cores' predicted spots before the groups take them as
-            # held there: first their prediction error, then whatever a contact moved them by, the
-            # core taking it as an impulse (the thesis coupling's snap, 5.1.3, each iteration)
-            snap_attached(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x, rig_q,
-                          imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
-        _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
-               rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass,
-               rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont, threaded)  # fmt: skip
+        if threaded:
+            _bodies_pass(coupling == COUPLING_THESIS, it == iterations - 1, iterations, rot_iters, body_off, group_kappa,
+                         dt, g_off, g_mem, g_pack, g_frame, attached, fixed, rest_x, rest_q, rest_moment, inertia, x, xp,
+                         qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass, p_body, body_core_shape, shape_rigid,
+                         rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp,
+                         continuum, g_cont)  # fmt: skip
+        else:
+            if coupling == COUPLING_THESIS:
+                # attached particles onto their cores' predicted spots before the groups take them as
+                # held there: first their prediction error, then whatever a contact moved them by, the
+                # core taking it as an impulse (the thesis coupling's snap, 5.1.3, each iteration)
+                snap_attached(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x,
+                              rig_q, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+            _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached,
+                   fixed, rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass,
+                   body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
+                   imp_lin, imp_ang, coupling_imp, continuum, g_cont)  # fmt: skip
         project_shape_contacts(nc, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass,
                                shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
                                rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose)  # fmt: skip
@@ -463,7 +489,7 @@ class TissueSolver:
         if col.shape_kind.shape[0] != self._sizes["shapes"]:
             self._shape_buffer(col.shape_kind.shape[0])
         if col.shape_rigid is not self._threaded_for or self._args_for is not self.sim:
-            # the pads on threads only where no two share a core (compliant_sweep_bodies)
+            # the pads on threads only where no two share a core (_bodies_pass)
             self._threads = self.sim.solver_threads()
             self._threaded = self._threads > 1 and bodies_independent(self.model, col.shape_rigid)
             self._threaded_for = col.shape_rigid
