@@ -133,7 +133,9 @@ def bodies_independent(model: TissueModel, shape_rigid: np.ndarray) -> bool:
     with the result of one (solver._bodies_pass). ``shape_rigid``: the colliders' shape -> rigid
     slot."""
     cores = [int(shape_rigid[s]) if s >= 0 else -1 for s in model.body_core_shape]
-    return all(c >= 0 for c in cores) and len(set(cores)) == len(cores)
+    off = model.body_particle_offsets
+    covered = len(off) > 1 and off[0] == 0 and off[-1] == model.particle_count  # every particle in a body
+    return covered and all(c >= 0 for c in cores) and len(set(cores)) == len(cores)
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})

@@ -116,7 +116,13 @@ def group_frames(g_off, g_mem, mass, xs, frame):
     (they do not change over the iterations): frame[i] = [cs (3), I^-1 (6: xx, xy, xz, yy, yz,
     zz), M], the group's centre of mass at the start, the inverse of its inertia about it (0 if
     singular: a degenerate group gets no balance) and its mass."""
-    for i in range(g_off.shape[0] - 1):
+    group_frames_of(0, g_off.shape[0] - 1, g_off, g_mem, mass, xs, frame)
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def group_frames_of(lo, hi, g_off, g_mem, mass, xs, frame):
+    """group_frames over groups lo .. hi - 1."""
+    for i in range(lo, hi):
         # unsigned indices: no negative-index wraparound per access
         i = np.uint64(i)
         start = np.uint64(g_off[i])

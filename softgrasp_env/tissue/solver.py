@@ -61,10 +61,10 @@ from .contacts import (
     project_shape_contacts,
 )
 from .friction import friction_pairs, friction_patches, friction_velocity_pass, load_anchors, store_anchors
-from .integrate import predict_particles, update_velocities
+from .integrate import predict_body, predict_particles, update_velocities, update_velocities_of
 from .model import CONTINUUM_COLUMNS, TissueModel
 from .rigid import Colliders, predict_rigid
-from .shape_matching import balance_torques, balance_torques_of, group_frames, group_pack, rest_moments
+from .shape_matching import balance_torques, balance_torques_of, group_frames, group_frames_of, group_pack, rest_moments
 from .state import TissueState
 
 
@@ -229,6 +229,29 @@ def _bodies_pass(snap, last, iterations, rot_iters, body_off, group_kappa, dt, g
             balance_torques_of(lo, hi, g_off, g_mem, g_frame, attached, fixed, inertia, x, xp, qp, q_pred, spin_kick)
 
 
+@nb.njit(cache=True, parallel=True, error_model="numpy", fastmath={"contract"})
+def _bodies_start(x, v, q, omega, group_q, mass, inertia, body_off, rest_moment, gx, gy, gz, damping, dt, xp, qp, q_pred,
+                  vd, wd, moment, g_off, g_mem, g_frame):  # fmt: skip
+    """predict_particles and group_frames, the bodies on threads (each reads and writes its own
+    particles and groups only: the serial result to the bit)."""
+    for b in nb.prange(body_off.shape[0] - 1):
+        predict_body(b, x, v, q, omega, group_q, mass, inertia, body_off, rest_moment, gx, gy, gz, damping, dt, xp, qp,
+                     q_pred, vd, wd, moment)  # fmt: skip
+        group_frames_of(body_off[b], body_off[b + 1], g_off, g_mem, mass, x, g_frame)
+
+
+@nb.njit(cache=True, parallel=True, error_model="numpy", fastmath={"contract"})
+def _bodies_end(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, x, v, q, omega, xp, qp, wd, inertia,
+                spin_kick, rig_x, rig_q, imp_lin, imp_ang, coupling_imp, body_off, dt):  # fmt: skip
+    """The step's last snap of the attached particles and the velocities from positions, the bodies
+    on threads (each body's own particles and core: the serial result to the bit)."""
+    for b in nb.prange(body_off.shape[0] - 1):
+        lo, hi = body_off[b], body_off[b + 1]
+        snap_attached_of(lo, hi, rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x,
+                         rig_q, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+        update_velocities_of(lo, hi, x, v, q, omega, xp, qp, wd, inertia, spin_kick, attached, dt)
+
+
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _step(
     # state (updated in place on success)
@@ -282,9 +305,13 @@ def _step(
     # --- predict particles (PBD Alg. 1 lines 5-11; Mueller & Chentanez 2011 sec. 3):
     #     v += g dt; damping of the deviation from each body's rigid motion; x* = x + v dt;
     #     q* = [w_hat sin(|w| dt / 2), cos(|w| dt / 2)] q
-    predict_particles(x, v, q, omega, group_q, mass, inertia, body_off, rest_moment, gx, gy, gz, damping, dt, xp, qp,
-                      q_pred, vd, wd, moment)  # fmt: skip
-    group_frames(g_off, g_mem, mass, x, g_frame)  # the groups' start-of-step torque balance data
+    if threaded:
+        _bodies_start(x, v, q, omega, group_q, mass, inertia, body_off, rest_moment, gx, gy, gz, damping, dt, xp, qp,
+                      q_pred, vd, wd, moment, g_off, g_mem, g_frame)  # fmt: skip
+    else:
+        predict_particles(x, v, q, omega, group_q, mass, inertia, body_off, rest_moment, gx, gy, gz, damping, dt, xp,
+                          qp, q_pred, vd, wd, moment)  # fmt: skip
+        group_frames(g_off, g_mem, mass, x, g_frame)  # the groups' start-of-step torque balance data
     # --- contact candidates, against predicted rigid poses
     nc = collect_contacts(xp, x, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid,
                           shape_local_x, shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner,
@@ -349,12 +376,16 @@ def _step(
             if coupling == COUPLING_CONSISTENT:
                 project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q,
                                 rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
-    # --- coupling to the cores (thesis 5.1.3): error -> impulse, snap back
-    snap_attached(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x, rig_q,
-                  imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
-    # --- velocities from positions (PBD Alg. 1 lines 18-21); angular velocity from q* q^-1 on the
-    #     short arc (Mueller & Chentanez 2011 sec. 3)
-    update_velocities(x, v, q, omega, xp, qp, wd, inertia, spin_kick, attached, dt)
+    # --- coupling to the cores (thesis 5.1.3): error -> impulse, snap back; then velocities from
+    #     positions (PBD Alg. 1 lines 18-21); angular velocity from q* q^-1 on the short arc
+    #     (Mueller & Chentanez 2011 sec. 3)
+    if threaded:
+        _bodies_end(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, x, v, q, omega, xp, qp, wd,
+                    inertia, spin_kick, rig_x, rig_q, imp_lin, imp_ang, coupling_imp, body_off, dt)  # fmt: skip
+    else:
+        snap_attached(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x, rig_q,
+                      imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+        update_velocities(x, v, q, omega, xp, qp, wd, inertia, spin_kick, attached, dt)
     # --- the velocity half of kinetic friction; anchors kept for the next step
     friction_velocity_pass(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_normal, c_rn, x, v, inv_mass,
                            shape_rigid, rig_x0, rig_q0, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,

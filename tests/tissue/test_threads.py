@@ -85,8 +85,13 @@ def test_the_variable_and_the_keyword_set_the_threads_of_an_env(monkeypatch, how
 def test_pads_that_share_a_core_or_have_none_stay_on_one_thread():
     class Model:
         body_core_shape = np.array([0, 1])
+        body_particle_offsets = np.array([0, 4, 9])
+        particle_count = 9
 
     assert bodies_independent(Model, np.array([0, 1]))
     assert not bodies_independent(Model, np.array([3, 3]))  # both cores on one rigid slot
+    Model.particle_count = 10
+    assert not bodies_independent(Model, np.array([0, 1]))  # a particle outside every body
+    Model.particle_count = 9
     Model.body_core_shape = np.array([-1, 1])
     assert not bodies_independent(Model, np.array([0, 1]))  # a pad without a core
