@@ -230,7 +230,8 @@ class SimConfig:
     is the same to the bit as on one thread). None: the environment variable SOFTGRASP_THREADS, or
     1 without it, so that processes run side by side (vector envs, RLlib workers) do not
     oversubscribe the cores. At most numba's thread count (NUMBA_NUM_THREADS, the cores by
-    default)."""
+    default). The first threaded step starts numba's thread pool, which fixes NUMBA_NUM_THREADS
+    for the process: numba refuses a different value afterwards."""
 
     def __post_init__(self) -> None:
         o = "SimConfig"

@@ -3,6 +3,11 @@ thread of its own gives the same result to the bit as one thread, and bad settin
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import gymnasium as gym
 import numba
 import numpy as np
@@ -15,22 +20,57 @@ from softgrasp_env.tissue.compliant import bodies_independent
 needs_two = pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="numba has one thread here")
 
 
-def _run(env_id, threads, coupling, steps, **kwargs):
-    env = gym.make(env_id, sim=SimConfig(threads=threads, coupling=coupling), **kwargs)
-    try:
-        obs, _ = env.reset(seed=5)
-        rng = np.random.default_rng(5)
-        rows = [obs]
-        for _ in range(steps):
-            obs, reward, terminated, truncated, _ = env.step(rng.uniform(-1.0, 1.0, size=4).astype(np.float32))
-            rows.append(np.append(obs, reward))
-            if terminated or truncated:
-                obs, _ = env.reset()
-        world = env.unwrapped.scene.world
-        assert world.solver._threaded == (threads > 1)  # the threaded sweep did run
-        return np.concatenate(rows), world.state.particle_x.copy(), world.state.particle_v.copy()
-    finally:
-        env.close()
+# Every run with more than one thread goes to a fresh process: a thread pool fixes numba's
+# NUMBA_NUM_THREADS for the process that starts it (numba refuses a different value afterwards),
+# and other tests here set that variable for the env processes they start (agents.threads).
+_CHILD = """
+import sys
+import gymnasium as gym
+import numpy as np
+import softgrasp_env
+from softgrasp_env.config import SimConfig
+
+def run(threads, coupling, steps, **kwargs):
+    env = gym.make("SoftGraspEasy-v4", sim=SimConfig(threads=threads, coupling=coupling), **kwargs)
+    obs, _ = env.reset(seed=5)
+    rng = np.random.default_rng(5)
+    rows = [obs]
+    for _ in range(steps):
+        obs, reward, terminated, truncated, _ = env.step(rng.uniform(-1.0, 1.0, size=4).astype(np.float32))
+        rows.append(np.append(obs, reward))
+        if terminated or truncated:
+            obs, _ = env.reset()
+    world = env.unwrapped.scene.world
+    assert world.solver._threaded == (threads > 1), "the threaded passes did not run"
+    out = (np.concatenate(rows), world.state.particle_x.copy(), world.state.particle_v.copy())
+    env.close()
+    return out
+
+what = sys.argv[1]
+if what == "same":
+    one = run(1, sys.argv[2], 25, particle_density=16_000.0)
+    two = run(2, sys.argv[2], 25, particle_density=16_000.0)
+    assert all(a.tobytes() == b.tobytes() for a, b in zip(one, two)), "1 and 2 threads differ"
+else:
+    kwargs = {"threads": 2} if what == "keyword" else {}
+    env = gym.make("SoftGraspEasy-v4", **kwargs)
+    env.reset(seed=0)
+    env.step(env.action_space.sample())
+    assert env.unwrapped.scene.world.solver._threaded, "the threaded passes did not run"
+    env.close()
+print("ok")
+"""
+
+
+def _child(*args, env=None):
+    """Run _CHILD with ``args`` in a fresh interpreter; fails the test with its output if it fails."""
+    root = Path(__file__).resolve().parents[2]
+    environ = {k: v for k, v in os.environ.items() if k not in ("NUMBA_NUM_THREADS", THREADS_ENV)}
+    environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(root), environ.get("PYTHONPATH")]))
+    environ.update(env or {})
+    done = subprocess.run([sys.executable, "-c", _CHILD, *args], env=environ, capture_output=True, text=True,
+                          timeout=1200)  # fmt: skip
+    assert done.returncode == 0 and done.stdout.strip().endswith("ok"), done.stdout[-2000:] + done.stderr[-4000:]
 
 
 @needs_two
@@ -39,10 +79,7 @@ def test_two_threads_give_one_threads_result_to_the_bit(coupling):
     """SoftGraspEasy-v4 at 16,000 per m^2 (the fine preset's density) with random actions: the
     observations, rewards and every particle's position and velocity after 25 steps, on 1 and 2
     threads. Under the consistent coupling each core slides inside its own pad's sweep."""
-    one = _run("SoftGraspEasy-v4", 1, coupling, 25, particle_density=16_000.0)
-    two = _run("SoftGraspEasy-v4", 2, coupling, 25, particle_density=16_000.0)
-    for a, b in zip(one, two, strict=True):
-        assert a.tobytes() == b.tobytes()
+    _child("same", coupling)
 
 
 def test_the_thread_count_is_checked(monkeypatch):
@@ -68,16 +105,8 @@ def test_the_thread_count_is_checked(monkeypatch):
 
 @needs_two
 @pytest.mark.parametrize("how", ["variable", "keyword"])
-def test_the_variable_and_the_keyword_set_the_threads_of_an_env(monkeypatch, how):
-    if how == "variable":
-        monkeypatch.setenv(THREADS_ENV, "2")
-    env = gym.make("SoftGraspEasy-v4", **({"threads": 2} if how == "keyword" else {}))
-    try:
-        env.reset(seed=0)
-        env.step(env.action_space.sample())
-        assert env.unwrapped.scene.world.solver._threaded
-    finally:
-        env.close()
+def test_the_variable_and_the_keyword_set_the_threads_of_an_env(how):
+    _child(how, env={THREADS_ENV: "2"} if how == "variable" else None)
     with pytest.raises(ValueError, match="threads"):
         gym.make("SoftGraspEasy-v4", threads=0)
 
