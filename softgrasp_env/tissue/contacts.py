@@ -146,8 +146,9 @@ def collect_pairs(xp, x0, radii, body_off, margin, pair_i, pair_j):
     the lower body and j of the higher within their reaches plus the margin. Only the particles in
     the overlap of the bodies' bounding boxes (grown by the reaches) can pair; the higher body's are
     binned on a uniform grid of cells at least one pair's reach wide, so each particle of the lower
-    body tests only the 27 cells about it: cost linear in the particles, where testing every pair
-    in the overlap grew as its square (the fingers closed face to face). Rows are ordered by i, then
+    body tests only the 27 cells about it: cost linear in the particles and the pairs found, where
+    testing every pair in the overlap grew as its square (the fingers closed face to face). The
+    scratch arrays are allocated per call, and only when the bodies' boxes overlap. Rows are ordered by i, then
     j (the order the Gauss-Seidel pass projects them in, as the exhaustive search gave it). Returns
     the count (or the number needed, if larger than the buffers)."""
     nb_ = body_off.shape[0] - 1
