@@ -3,7 +3,7 @@ steps per physics step, env steps/s, the tissue kernel's time per call and per p
 iteration, and the exponent of each in the particle count (a least-squares fit of the logs).
 
     PYTHONPATH=. python benchmarks/scaling.py [--densities 4000,16000,64000,256000] [--steps 20]
-        [--repeats 2]
+        [--repeats 2] [--threads 1]
 
 SoftGraspEasy-v4 (the v4 tissue, layers 'auto': 1 / 1 / 2 / 4 at the four densities), random
 actions (seed 0), resets inside the loop. The kernel's time is the solver's step timed around each
@@ -24,8 +24,8 @@ import numpy as np
 import softgrasp_env  # noqa: F401  (registers the ids)
 
 
-def measure(density: float, steps: int) -> dict:
-    env = gym.make("SoftGraspEasy-v4", particle_density=density)
+def measure(density: float, steps: int, threads: int) -> dict:
+    env = gym.make("SoftGraspEasy-v4", particle_density=density, threads=threads)
     try:
         env.reset(seed=0)
         world = env.unwrapped.scene.world
@@ -64,15 +64,16 @@ def main() -> None:
     parser.add_argument("--densities", default="4000,16000,64000,256000")
     parser.add_argument("--steps", type=int, default=20)
     parser.add_argument("--repeats", type=int, default=2)
+    parser.add_argument("--threads", type=int, default=1)
     args = parser.parse_args()
     rows = []
-    print(f"one thread; best of {args.repeats}")
+    print(f"threads {args.threads}; best of {args.repeats}")
     print(f"{'density':>9} {'particles':>9} {'world steps':>11} {'env steps/s':>11} {'kernel us':>10} "
           f"{'us/particle/iter':>16} {'kernel share':>12}")  # fmt: skip
     for d in (float(x) for x in args.densities.split(",")):
         best = None
         for _ in range(args.repeats):
-            r = measure(d, args.steps)
+            r = measure(d, args.steps, args.threads)
             if best is None or r["rate"] > best["rate"]:
                 best = r
         rows.append(best)

@@ -148,6 +148,9 @@ KEYWORDS: tuple[Keyword, ...] = (
         "A whole TissueConfig to start from (None: the preset's)"),
     _kw("sim", "physics", "SimConfig", None,
         "A whole SimConfig (dt, iterations, coupling; None: the preset's)"),
+    _kw("threads", "physics", "int", None,
+        "Threads of the tissue solver, 1 to 64: each finger's pad swept on its own thread, the same result to the "
+        "bit; None: the sim's, else the SOFTGRASP_THREADS environment variable, else 1"),
     # cylinder
     _kw("cylinder_radius", "cylinder", "float", 0.03,
         "Cylinder radius [m]"),
@@ -281,7 +284,8 @@ class PhysicsConfig:
            tissue_contact_cone: bool | None = None, friction_law: str | None = None,
            shear_modulus: float | None = None, group_energy: str | None = None,
            hourglass_stiffness: float | None = None, layers: int | str | None = None,
-           tissue: TissueConfig | None = None, sim: SimConfig | None = None) -> PhysicsConfig:  # fmt: skip
+           tissue: TissueConfig | None = None, sim: SimConfig | None = None,
+           threads: int | None = None) -> PhysicsConfig:  # fmt: skip
         """The configs the keywords mean: the kind's config with its own keywords folded in, the
         preset's tissue and solver (or the whole ones given) with the tissue keywords over them.
         ``layers="auto"`` (given, or the preset's when neither ``layers`` nor ``tissue`` is given)
@@ -319,6 +323,8 @@ class PhysicsConfig:
             tissue = replace(tissue, layers=tissue.auto_layers)
         sim = sim if sim is not None else base.sim
         check_type("sim", sim, SimConfig)
+        if threads is not None:
+            sim = replace(sim, threads=threads)  # validated by SimConfig
         return cls(fingers, tissue, sim)
 
 
@@ -613,7 +619,7 @@ class EnvArguments:
                                                          "particle_density", "friction_static", "friction_kinetic",
                                                          "tissue_contact_cone", "friction_law", "shear_modulus",
                                                          "group_energy", "hourglass_stiffness", "layers",
-                                                         "tissue", "sim")})  # fmt: skip
+                                                         "tissue", "sim", "threads")})  # fmt: skip
         lift = LiftConfig(v["start"], v["reward_type"], v["success_height"], v["reach_weight"], v["max_tilt"],
                           _tuple(v["approach_range"]))  # fmt: skip
         defaults = STARTS[lift.start].defaults  # None: the start's

@@ -9,6 +9,7 @@ in softgrasp_env/scene/config.py, each finger kind's in its module under softgra
 from __future__ import annotations
 
 import math
+import os
 import warnings
 from dataclasses import dataclass, field, fields, replace
 from typing import Literal
@@ -183,6 +184,10 @@ class TissueConfig:
         return max(1, round(self.extrude / self.spacing))
 
 
+THREADS_ENV = "SOFTGRASP_THREADS"
+"""The environment variable that sets the tissue solver's threads where SimConfig.threads is None."""
+
+
 @dataclass(frozen=True)
 class SimConfig:
     """Time stepping and solver settings shared by tissue and pybullet."""
@@ -219,6 +224,15 @@ class SimConfig:
     free bodies is now kept exactly in goal mode (tissue/momentum.py)."""
     contact_margin: float = 0.002
     """Extra distance [m] within which contact candidates are collected per step."""
+    threads: int | None = None
+    """Threads of the tissue solver [-], 1 to 64: with more than one, the fingers' pads are swept on
+    threads of their own (each finger's groups touch only its own particles and core, so the result
+    is the same to the bit as on one thread). None: the environment variable SOFTGRASP_THREADS, or
+    1 without it, so that processes run side by side (vector envs, RLlib workers) do not
+    oversubscribe the cores. At most numba's thread count (NUMBA_NUM_THREADS, the cores by
+    default). The first threaded step starts numba's thread pool, which fixes NUMBA_NUM_THREADS
+    for the process: numba refuses a different value afterwards. A one-thread step loads no
+    parallel code and starts no pool."""
 
     def __post_init__(self) -> None:
         o = "SimConfig"
@@ -238,6 +252,31 @@ class SimConfig:
         if self.orientation != "goal":
             raise ValueError(f"SimConfig.orientation must be 'goal', got {self.orientation!r}")
         check_range("contact_margin", self.contact_margin, 0.0, 0.1, owner=o)
+        if self.threads is not None:
+            check_int("threads", self.threads, 1, 64, owner=o)
+
+    def solver_threads(self) -> int:
+        """The tissue solver's thread count: ``threads``, else SOFTGRASP_THREADS, else 1. Raises
+        ValueError if the variable is not an integer from 1 to 64, or if the count exceeds numba's
+        (NUMBA_NUM_THREADS)."""
+        n = self.threads
+        if n is None:
+            raw = os.environ.get(THREADS_ENV, "").strip()
+            if not raw:
+                return 1
+            try:
+                n = int(raw)
+            except ValueError:
+                raise ValueError(f"{THREADS_ENV} must be an integer from 1 to 64, got {raw!r}") from None
+            if not 1 <= n <= 64:
+                raise ValueError(f"{THREADS_ENV} must be an integer from 1 to 64, got {raw!r}")
+        if n > 1:
+            import numba
+
+            if n > numba.config.NUMBA_NUM_THREADS:
+                raise ValueError(f"the tissue solver is set to {n} threads, but numba has "
+                                 f"{numba.config.NUMBA_NUM_THREADS} (NUMBA_NUM_THREADS, the cores by default)")  # fmt: skip
+        return n
 
 
 def _retired_material(kwargs: dict) -> dict:

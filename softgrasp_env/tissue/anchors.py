@@ -65,8 +65,15 @@ def project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_r
                     rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt):  # fmt: skip
     """One Gauss-Seidel pass of the consistent coupling over every attached particle (see
     _project_anchor)."""
-    n = xp.shape[0]
-    for i in range(n):
+    project_anchors_of(0, xp.shape[0], rest_x, inv_mass, attached, p_body, body_core_shape, shape_rigid, xp, rig_x,
+                       rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def project_anchors_of(lo, hi, rest_x, inv_mass, attached, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q,
+                       rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt):  # fmt: skip
+    """project_anchors over particles lo .. hi - 1."""
+    for i in range(lo, hi):
         if attached[i]:
             r = _core_of_body(p_body[i], body_core_shape, shape_rigid)
             if r >= 0:
@@ -87,8 +94,16 @@ def limit_deviation(rest_x, inv_mass, attached, p_body, body_core_shape, body_ma
     it drags it, and Coulomb friction (mu 0.9) holds it however hard the finger pulls (a
     self-locking wedge); real tissue wraps around the rim and is pulled along the face. Without it
     the tissue tore in long random-action runs."""
-    n = xp.shape[0]
-    for i in range(n):
+    limit_deviation_of(0, xp.shape[0], rest_x, inv_mass, attached, p_body, body_core_shape, body_max_deviation,
+                       shape_rigid, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang,
+                       dt)  # fmt: skip
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def limit_deviation_of(lo, hi, rest_x, inv_mass, attached, p_body, body_core_shape, body_max_deviation, shape_rigid, xp,
+                       rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt):  # fmt: skip
+    """limit_deviation over particles lo .. hi - 1."""
+    for i in range(lo, hi):
         if attached[i]:
             continue
         b = p_body[i]
@@ -110,8 +125,15 @@ def snap_attached(
     core becomes the impulse p = m_i e / dt at that spot (PBD 2007 sec. 4.2); then the particle is
     set onto the spot with the core's orientation. The tissue loses exactly the momentum the core
     gains, whichever coupling ran during the iterations."""
-    n = xp.shape[0]
-    for i in range(n):
+    snap_attached_of(0, xp.shape[0], model_rest_x, model_rest_q, mass, attached, p_body, body_core_shape, shape_rigid,
+                     xp, qp, rig_x, rig_q, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def snap_attached_of(lo, hi, model_rest_x, model_rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp,
+                     rig_x, rig_q, imp_lin, imp_ang, coupling_imp, dt):  # fmt: skip
+    """snap_attached over particles lo .. hi - 1."""
+    for i in range(lo, hi):
         if not attached[i]:
             continue
         r = _core_of_body(p_body[i], body_core_shape, shape_rigid)
@@ -153,3 +175,20 @@ def mark_fixed(attached, p_body, body_core_shape, fixed):
     for i in range(attached.shape[0]):
         b = p_body[i]
         fixed[i] = attached[i] and body_core_shape[b] >= 0
+
+
+@nb.njit(cache=True, parallel=True, error_model="numpy", fastmath={"contract"})
+def limit_and_anchor_bodies(consistent, body_off, rest_x, inv_mass, attached, p_body, body_core_shape,
+                            body_max_deviation, shape_rigid, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
+                            rig_move, imp_lin, imp_ang, dt):  # fmt: skip
+    """limit_deviation and then (``consistent``) project_anchors, the bodies on threads: a particle's
+    projections touch only it and its own body's core, so where no two bodies share a core
+    (compliant.bodies_independent) this is the two passes over all particles, to the bit."""
+    for b in nb.prange(body_off.shape[0] - 1):
+        limit_deviation_of(body_off[b], body_off[b + 1], rest_x, inv_mass, attached, p_body, body_core_shape,
+                           body_max_deviation, shape_rigid, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
+                           rig_move, imp_lin, imp_ang, dt)  # fmt: skip
+        if consistent:
+            project_anchors_of(body_off[b], body_off[b + 1], rest_x, inv_mass, attached, p_body, body_core_shape,
+                               shape_rigid, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
+                               imp_lin, imp_ang, dt)  # fmt: skip

@@ -117,30 +117,55 @@ def compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_m
                     attached, fixed, rest_q, rest_moment, xs, xp, qp, group_q, moment, g_u, g_raw, mass,
                     body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
                     imp_lin, imp_ang, coupling_imp, continuum, g_cont):  # fmt: skip
-    """One Gauss-Seidel sweep over the groups of every body: project_group, or continuum_group for
-    a group with the continuum energy (``continuum`` and g_cont[i, 6] > 0; kappa then the group's
-    largest stiffness per unit mass). A group's centre turns toward quat(R) q_bar by s / (1 + s) a
-    step (the same implicit spring on its orientation, Mueller & Chentanez 2011 sec. 4.3's goal),
-    spread over the iterations."""
+    """One Gauss-Seidel sweep over the groups of every body, one body after the other
+    (sweep_body)."""
     for b in range(body_off.shape[0] - 1):
-        cs = body_core_shape[b]
-        core = shape_rigid[cs] if cs >= 0 else -1
-        m_att = 0.0
-        for k in range(body_off[b], body_off[b + 1]):
-            if fixed[k]:
-                m_att += mass[k]
-        for i in range(body_off[b], body_off[b + 1]):
-            s = group_kappa[i] * dt * dt
-            if continuum and g_cont[i, 6] > 0.0:
-                qr = continuum_group(i, core, body_off[b], body_off[b + 1], m_att, rot_iters, g_cont, g_off, g_mem,
-                                     g_pack, frame, xs, xp, group_q, fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass,
-                                     rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
-            else:
-                qr = project_group(i, s, core, body_off[b], body_off[b + 1], m_att, rot_iters, g_off, g_mem, g_pack,
-                                   frame, xs, xp, group_q, moment, fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass,
-                                   rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
-            if not attached[i]:
-                _turn_centre(i, qr, 1.0 - (1.0 / (1.0 + s)) ** (1.0 / iterations), rest_q, qp, rest_moment, moment)
+        sweep_body(b, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, frame, attached, fixed,
+                   rest_q, rest_moment, xs, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid,
+                   rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp,
+                   continuum, g_cont)  # fmt: skip
+
+
+def bodies_independent(model: TissueModel, shape_rigid: np.ndarray) -> bool:
+    """True if every tissue body has a core of its own (a rigid slot no other body's core is on):
+    then a body's groups and its particles' core constraints touch only its own particles, group
+    data and core, the bodies do not interact inside those passes, and they can run on threads
+    with the result of one (solver._bodies_pass). ``shape_rigid``: the colliders' shape -> rigid
+    slot."""
+    cores = [int(shape_rigid[s]) if s >= 0 else -1 for s in model.body_core_shape]
+    off = model.body_particle_offsets
+    covered = len(off) > 1 and off[0] == 0 and off[-1] == model.particle_count  # every particle in a body
+    return covered and all(c >= 0 for c in cores) and len(set(cores)) == len(cores)
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def sweep_body(b, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, frame, attached, fixed,
+               rest_q, rest_moment, xs, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid, rig_x,
+               rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, continuum,
+               g_cont):  # fmt: skip
+    """One Gauss-Seidel sweep over body b's groups: project_group, or continuum_group for a group
+    with the continuum energy (``continuum`` and g_cont[i, 6] > 0; kappa then the group's largest
+    stiffness per unit mass). A group's centre turns toward quat(R) q_bar by s / (1 + s) a step (the
+    same implicit spring on its orientation, Mueller & Chentanez 2011 sec. 4.3's goal), spread over
+    the iterations."""
+    cs = body_core_shape[b]
+    core = shape_rigid[cs] if cs >= 0 else -1
+    m_att = 0.0
+    for k in range(body_off[b], body_off[b + 1]):
+        if fixed[k]:
+            m_att += mass[k]
+    for i in range(body_off[b], body_off[b + 1]):
+        s = group_kappa[i] * dt * dt
+        if continuum and g_cont[i, 6] > 0.0:
+            qr = continuum_group(i, core, body_off[b], body_off[b + 1], m_att, rot_iters, g_cont, g_off, g_mem,
+                                 g_pack, frame, xs, xp, group_q, fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass,
+                                 rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+        else:
+            qr = project_group(i, s, core, body_off[b], body_off[b + 1], m_att, rot_iters, g_off, g_mem, g_pack,
+                               frame, xs, xp, group_q, moment, fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass,
+                               rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+        if not attached[i]:
+            _turn_centre(i, qr, 1.0 - (1.0 / (1.0 + s)) ** (1.0 / iterations), rest_q, qp, rest_moment, moment)
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})

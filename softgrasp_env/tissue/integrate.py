@@ -37,61 +37,67 @@ def _damped_velocities(x, v, q, omega, mass, inertia, body_off, c, vd, wd):
     w_i). Rigid motion, so momentum and angular momentum, are kept exactly: a falling or spinning
     body is not slowed, unlike damping the absolute velocity."""
     for b in range(body_off.shape[0] - 1):
-        s = body_off[b]
-        e = body_off[b + 1]
-        if c == 0.0:
-            for i in range(s, e):
-                for a in range(3):
-                    vd[i, a] = v[i, a]
-                    wd[i, a] = omega[i, a]
-            continue
-        msum = 0.0
-        cx = cy = cz = 0.0
-        px = py = pz = 0.0
+        _damped_body(b, x, v, q, omega, mass, inertia, body_off, c, vd, wd)
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def _damped_body(b, x, v, q, omega, mass, inertia, body_off, c, vd, wd):
+    """_damped_velocities of body b."""
+    s = body_off[b]
+    e = body_off[b + 1]
+    if c == 0.0:
         for i in range(s, e):
-            m = mass[i]
-            msum += m
-            cx += m * x[i, 0]
-            cy += m * x[i, 1]
-            cz += m * x[i, 2]
-            px += m * v[i, 0]
-            py += m * v[i, 1]
-            pz += m * v[i, 2]
-        cx /= msum
-        cy /= msum
-        cz /= msum
-        vx = px / msum
-        vy = py / msum
-        vz = pz / msum
-        lx = ly = lz = 0.0
-        i00 = i01 = i02 = i11 = i12 = i22 = 0.0
-        for i in range(s, e):
-            m = mass[i]
-            rx = x[i, 0] - cx
-            ry = x[i, 1] - cy
-            rz = x[i, 2] - cz
-            j00, j01, j02, j11, j12, j22 = _world_inertia(i, q, inertia)
-            wx, wy, wz = omega[i, 0], omega[i, 1], omega[i, 2]
-            lx += m * (ry * v[i, 2] - rz * v[i, 1]) + j00 * wx + j01 * wy + j02 * wz
-            ly += m * (rz * v[i, 0] - rx * v[i, 2]) + j01 * wx + j11 * wy + j12 * wz
-            lz += m * (rx * v[i, 1] - ry * v[i, 0]) + j02 * wx + j12 * wy + j22 * wz
-            i00 += m * (ry * ry + rz * rz) + j00
-            i11 += m * (rx * rx + rz * rz) + j11
-            i22 += m * (rx * rx + ry * ry) + j22
-            i01 += j01 - m * rx * ry
-            i02 += j02 - m * rx * rz
-            i12 += j12 - m * ry * rz
-        wx, wy, wz = solve_sym3(i00, i01, i02, i11, i12, i22, lx, ly, lz)
-        for i in range(s, e):
-            rx = x[i, 0] - cx
-            ry = x[i, 1] - cy
-            rz = x[i, 2] - cz
-            vd[i, 0] = v[i, 0] + c * (vx + wy * rz - wz * ry - v[i, 0])
-            vd[i, 1] = v[i, 1] + c * (vy + wz * rx - wx * rz - v[i, 1])
-            vd[i, 2] = v[i, 2] + c * (vz + wx * ry - wy * rx - v[i, 2])
-            wd[i, 0] = omega[i, 0] + c * (wx - omega[i, 0])
-            wd[i, 1] = omega[i, 1] + c * (wy - omega[i, 1])
-            wd[i, 2] = omega[i, 2] + c * (wz - omega[i, 2])
+            for a in range(3):
+                vd[i, a] = v[i, a]
+                wd[i, a] = omega[i, a]
+        return
+    msum = 0.0
+    cx = cy = cz = 0.0
+    px = py = pz = 0.0
+    for i in range(s, e):
+        m = mass[i]
+        msum += m
+        cx += m * x[i, 0]
+        cy += m * x[i, 1]
+        cz += m * x[i, 2]
+        px += m * v[i, 0]
+        py += m * v[i, 1]
+        pz += m * v[i, 2]
+    cx /= msum
+    cy /= msum
+    cz /= msum
+    vx = px / msum
+    vy = py / msum
+    vz = pz / msum
+    lx = ly = lz = 0.0
+    i00 = i01 = i02 = i11 = i12 = i22 = 0.0
+    for i in range(s, e):
+        m = mass[i]
+        rx = x[i, 0] - cx
+        ry = x[i, 1] - cy
+        rz = x[i, 2] - cz
+        j00, j01, j02, j11, j12, j22 = _world_inertia(i, q, inertia)
+        wx, wy, wz = omega[i, 0], omega[i, 1], omega[i, 2]
+        lx += m * (ry * v[i, 2] - rz * v[i, 1]) + j00 * wx + j01 * wy + j02 * wz
+        ly += m * (rz * v[i, 0] - rx * v[i, 2]) + j01 * wx + j11 * wy + j12 * wz
+        lz += m * (rx * v[i, 1] - ry * v[i, 0]) + j02 * wx + j12 * wy + j22 * wz
+        i00 += m * (ry * ry + rz * rz) + j00
+        i11 += m * (rx * rx + rz * rz) + j11
+        i22 += m * (rx * rx + ry * ry) + j22
+        i01 += j01 - m * rx * ry
+        i02 += j02 - m * rx * rz
+        i12 += j12 - m * ry * rz
+    wx, wy, wz = solve_sym3(i00, i01, i02, i11, i12, i22, lx, ly, lz)
+    for i in range(s, e):
+        rx = x[i, 0] - cx
+        ry = x[i, 1] - cy
+        rz = x[i, 2] - cz
+        vd[i, 0] = v[i, 0] + c * (vx + wy * rz - wz * ry - v[i, 0])
+        vd[i, 1] = v[i, 1] + c * (vy + wz * rx - wx * rz - v[i, 1])
+        vd[i, 2] = v[i, 2] + c * (vz + wx * ry - wy * rx - v[i, 2])
+        wd[i, 0] = omega[i, 0] + c * (wx - omega[i, 0])
+        wd[i, 1] = omega[i, 1] + c * (wy - omega[i, 1])
+        wd[i, 2] = omega[i, 2] + c * (wz - omega[i, 2])
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -102,10 +108,25 @@ def predict_particles(x, v, q, omega, group_q, mass, inertia, body_off, rest_mom
     x* = x + v dt; q* = [w_hat sin(|w| dt / 2), cos(|w| dt / 2)] q. Refreshes the cached particle
     moments and carries each group's warm-start rotation along; q_pred keeps the predicted
     orientations (what the group solve's turns are measured from)."""
-    n = x.shape[0]
     fd = math.exp(-damping * dt)
     _damped_velocities(x, v, q, omega, mass, inertia, body_off, 1.0 - fd, vd, wd)
-    for i in range(n):
+    predict_particles_of(0, x.shape[0], x, q, group_q, rest_moment, gx, gy, gz, dt, xp, qp, q_pred, vd, wd, moment)
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def predict_body(b, x, v, q, omega, group_q, mass, inertia, body_off, rest_moment, gx, gy, gz, damping, dt, xp, qp,
+                 q_pred, vd, wd, moment):  # fmt: skip
+    """predict_particles of body b alone (its particles are body_off[b] .. body_off[b + 1] - 1)."""
+    fd = math.exp(-damping * dt)
+    _damped_body(b, x, v, q, omega, mass, inertia, body_off, 1.0 - fd, vd, wd)
+    predict_particles_of(body_off[b], body_off[b + 1], x, q, group_q, rest_moment, gx, gy, gz, dt, xp, qp, q_pred, vd,
+                         wd, moment)  # fmt: skip
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def predict_particles_of(lo, hi, x, q, group_q, rest_moment, gx, gy, gz, dt, xp, qp, q_pred, vd, wd, moment):
+    """predict_particles' prediction of particles lo .. hi - 1 from their damped velocities vd, wd."""
+    for i in range(lo, hi):
         for a in range(3):
             g = gx if a == 0 else (gy if a == 1 else gz)
             xp[i, a] = x[i, a] + (vd[i, a] + g * dt) * dt
@@ -131,9 +152,14 @@ def update_velocities(x, v, q, omega, xp, qp, wd, inertia, spin_kick, attached, 
     (The paper's w = axis angle(q* q^-1) / dt agrees to first order; it is l that shape matching's
     torque balance conserves, so it is l that is carried.) Then x = x*, q = q*. Attached particles
     take their core's velocities after pybullet's step (coupling.sync_attached): theirs are left."""
-    n = x.shape[0]
+    update_velocities_of(0, x.shape[0], x, v, q, omega, xp, qp, wd, inertia, spin_kick, attached, dt)
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def update_velocities_of(lo, hi, x, v, q, omega, xp, qp, wd, inertia, spin_kick, attached, dt):
+    """update_velocities of particles lo .. hi - 1."""
     inv_dt = 1.0 / dt
-    for i in range(n):
+    for i in range(lo, hi):
         for a in range(3):
             v[i, a] = (xp[i, a] - x[i, a]) * inv_dt
             x[i, a] = xp[i, a]

@@ -116,7 +116,13 @@ def group_frames(g_off, g_mem, mass, xs, frame):
     (they do not change over the iterations): frame[i] = [cs (3), I^-1 (6: xx, xy, xz, yy, yz,
     zz), M], the group's centre of mass at the start, the inverse of its inertia about it (0 if
     singular: a degenerate group gets no balance) and its mass."""
-    for i in range(g_off.shape[0] - 1):
+    group_frames_of(0, g_off.shape[0] - 1, g_off, g_mem, mass, xs, frame)
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def group_frames_of(lo, hi, g_off, g_mem, mass, xs, frame):
+    """group_frames over groups lo .. hi - 1."""
+    for i in range(lo, hi):
         # unsigned indices: no negative-index wraparound per access
         i = np.uint64(i)
         start = np.uint64(g_off[i])
@@ -234,7 +240,14 @@ def balance_torques(g_off, g_mem, frame, attached, fixed, inertia, xs, xp, qp, q
     turn by the step's summed spin is the sum of the turns of each iteration: the lever arms r_j do
     not change over the step. A group with a member held by its core (``fixed``) is left: the core
     takes its torque through that member."""
-    for i in range(g_off.shape[0] - 1):
+    balance_torques_of(0, g_off.shape[0] - 1, g_off, g_mem, frame, attached, fixed, inertia, xs, xp, qp, q_pred,
+                       spin_kick)  # fmt: skip
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+def balance_torques_of(lo, hi, g_off, g_mem, frame, attached, fixed, inertia, xs, xp, qp, q_pred, spin_kick):
+    """balance_torques over groups lo .. hi - 1."""
+    for i in range(lo, hi):
         i = np.uint64(i)  # unsigned indices: no negative-index wraparound per access
         held = False
         for e in range(np.uint64(g_off[i]), np.uint64(g_off[i + 1])):

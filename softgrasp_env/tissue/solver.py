@@ -44,12 +44,14 @@ from ..config import COMPLIANT_DAMPING, SimConfig
 from .anchors import (
     COUPLING_CONSISTENT,
     COUPLING_THESIS,
+    limit_and_anchor_bodies,
     limit_deviation,
     mark_fixed,
     project_anchors,
     snap_attached,
+    snap_attached_of,
 )
-from .compliant import compliant_sweep
+from .compliant import bodies_independent, compliant_sweep, sweep_body
 from .contacts import (
     clear_multipliers,
     collect_contacts,
@@ -59,10 +61,10 @@ from .contacts import (
     project_shape_contacts,
 )
 from .friction import friction_pairs, friction_patches, friction_velocity_pass, load_anchors, store_anchors
-from .integrate import predict_particles, update_velocities
+from .integrate import predict_body, predict_particles, update_velocities, update_velocities_of
 from .model import CONTINUUM_COLUMNS, TissueModel
 from .rigid import Colliders, predict_rigid
-from .shape_matching import balance_torques, group_frames, group_pack, rest_moments
+from .shape_matching import balance_torques, balance_torques_of, group_frames, group_frames_of, group_pack, rest_moments
 from .state import TissueState
 
 
@@ -199,8 +201,55 @@ def _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g
                     rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp,
                     continuum, g_cont)  # fmt: skip
     if it == iterations - 1:
-        # internal forces exert no torque: each group's spin of the step, turned back
+        # internal forces exert no torque: each group's spin of the step turned back
         balance_torques(g_off, g_mem, g_frame, attached, fixed, inertia, x, xp, qp, q_pred, spin_kick)
+
+
+@nb.njit(cache=True, parallel=True, error_model="numpy", fastmath={"contract"})
+def _bodies_pass(snap, last, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached,
+                 fixed, rest_x, rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw,
+                 mass, p_body, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
+                 rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont):  # fmt: skip
+    """An iteration's passes that stay inside each body, the bodies on threads: the thesis
+    coupling's snap of the attached particles (``snap``), the sweep over the body's groups, and
+    after the last sweep (``last``) the groups' torque balance. Where no two bodies share a core
+    (compliant.bodies_independent) each touches only its body's particles, groups and core, so
+    this is the serial order's result to the bit (snap_attached, then _sweep, over all bodies),
+    on any number of threads."""
+    for b in nb.prange(body_off.shape[0] - 1):
+        lo, hi = body_off[b], body_off[b + 1]
+        if snap:
+            snap_attached_of(lo, hi, rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp,
+                             rig_x, rig_q, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+        sweep_body(b, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
+                   rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid,
+                   rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp,
+                   continuum, g_cont)  # fmt: skip
+        if last:
+            balance_torques_of(lo, hi, g_off, g_mem, g_frame, attached, fixed, inertia, x, xp, qp, q_pred, spin_kick)
+
+
+@nb.njit(cache=True, parallel=True, error_model="numpy", fastmath={"contract"})
+def _bodies_start(x, v, q, omega, group_q, mass, inertia, body_off, rest_moment, gx, gy, gz, damping, dt, xp, qp, q_pred,
+                  vd, wd, moment, g_off, g_mem, g_frame):  # fmt: skip
+    """predict_particles and group_frames, the bodies on threads (each reads and writes its own
+    particles and groups only: the serial result to the bit)."""
+    for b in nb.prange(body_off.shape[0] - 1):
+        predict_body(b, x, v, q, omega, group_q, mass, inertia, body_off, rest_moment, gx, gy, gz, damping, dt, xp, qp,
+                     q_pred, vd, wd, moment)  # fmt: skip
+        group_frames_of(body_off[b], body_off[b + 1], g_off, g_mem, mass, x, g_frame)
+
+
+@nb.njit(cache=True, parallel=True, error_model="numpy", fastmath={"contract"})
+def _bodies_end(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, x, v, q, omega, xp, qp, wd, inertia,
+                spin_kick, rig_x, rig_q, imp_lin, imp_ang, coupling_imp, body_off, dt):  # fmt: skip
+    """The step's last snap of the attached particles and the velocities from positions, the bodies
+    on threads (each body's own particles and core: the serial result to the bit)."""
+    for b in nb.prange(body_off.shape[0] - 1):
+        lo, hi = body_off[b], body_off[b + 1]
+        snap_attached_of(lo, hi, rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x,
+                         rig_q, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+        update_velocities_of(lo, hi, x, v, q, omega, xp, qp, wd, inertia, spin_kick, attached, dt)
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -214,10 +263,17 @@ def _step(
     # the model's arrays and every scratch array of the step, packed (see TissueSolver._pack and _view)
     f_pack, i_pack, b_pack, layout,
     # parameters
-    dt, iterations, rot_iters, gx, gy, gz, damping, coupling, margin, continuum, counts,
+    dt, iterations, rot_iters, gx, gy, gz, damping, coupling, margin, continuum, counts, threads,
 ):  # fmt: skip
     """One tissue step. Returns 0, or 1 if a contact buffer was too small (``counts`` then holds
-    the sizes needed and the state is untouched, so the caller can grow the buffers and retry)."""
+    the sizes needed and the state is untouched, so the caller can grow the buffers and retry).
+
+    ``threads`` is None for the serial passes, or True for the pads' passes on numba's threads
+    (_bodies_start, _bodies_pass, limit_and_anchor_bodies, _bodies_end). The test is on None
+    because numba prunes such a branch when it compiles: the None overload holds no parallel code,
+    so a one-thread process never loads it. Loading parallel code starts numba's thread pool, and
+    once started the pool refuses any change of NUMBA_NUM_THREADS, which training sets for its env
+    processes."""
     # The model's and the scratch arrays arrive packed in three flat buffers: numba unboxes every
     # array argument on each call (~0.1 us apiece), and ~45 separate arrays cost ~5 us a step.
     rest_x, rest_q = _view(f_pack, layout, _REST_X), _view(f_pack, layout, _REST_Q)
@@ -256,9 +312,13 @@ def _step(
     # --- predict particles (PBD Alg. 1 lines 5-11; Mueller & Chentanez 2011 sec. 3):
     #     v += g dt; damping of the deviation from each body's rigid motion; x* = x + v dt;
     #     q* = [w_hat sin(|w| dt / 2), cos(|w| dt / 2)] q
-    predict_particles(x, v, q, omega, group_q, mass, inertia, body_off, rest_moment, gx, gy, gz, damping, dt, xp, qp,
-                      q_pred, vd, wd, moment)  # fmt: skip
-    group_frames(g_off, g_mem, mass, x, g_frame)  # the groups' start-of-step torque balance data
+    if threads is not None:
+        _bodies_start(x, v, q, omega, group_q, mass, inertia, body_off, rest_moment, gx, gy, gz, damping, dt, xp, qp,
+                      q_pred, vd, wd, moment, g_off, g_mem, g_frame)  # fmt: skip
+    else:
+        predict_particles(x, v, q, omega, group_q, mass, inertia, body_off, rest_moment, gx, gy, gz, damping, dt, xp,
+                          qp, q_pred, vd, wd, moment)  # fmt: skip
+        group_frames(g_off, g_mem, mass, x, g_frame)  # the groups' start-of-step torque balance data
     # --- contact candidates, against predicted rigid poses
     nc = collect_contacts(xp, x, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid,
                           shape_local_x, shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner,
@@ -280,15 +340,23 @@ def _step(
     g_u[...] = 0.0
     # --- Gauss-Seidel iterations
     for it in range(iterations):
-        if coupling == COUPLING_THESIS:
-            # attached particles onto their cores' predicted spots before the groups take them as
-            # held there: first their prediction error, then whatever a contact moved them by, the
-            # core taking it as an impulse (the thesis coupling's snap, 5.1.3, each iteration)
-            snap_attached(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x, rig_q,
-                          imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
-        _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
-               rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass,
-               rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont)  # fmt: skip
+        if threads is not None:
+            _bodies_pass(coupling == COUPLING_THESIS, it == iterations - 1, iterations, rot_iters, body_off, group_kappa,
+                         dt, g_off, g_mem, g_pack, g_frame, attached, fixed, rest_x, rest_q, rest_moment, inertia, x, xp,
+                         qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass, p_body, body_core_shape, shape_rigid,
+                         rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp,
+                         continuum, g_cont)  # fmt: skip
+        else:
+            if coupling == COUPLING_THESIS:
+                # attached particles onto their cores' predicted spots before the groups take them as
+                # held there: first their prediction error, then whatever a contact moved them by, the
+                # core taking it as an impulse (the thesis coupling's snap, 5.1.3, each iteration)
+                snap_attached(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x,
+                              rig_q, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+            _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached,
+                   fixed, rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass,
+                   body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
+                   imp_lin, imp_ang, coupling_imp, continuum, g_cont)  # fmt: skip
         project_shape_contacts(nc, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass,
                                shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
                                rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose)  # fmt: skip
@@ -305,17 +373,26 @@ def _step(
         friction_pairs(npairs, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, x, xp, inv_mass, p_body,
                        body_friction)  # fmt: skip
         # the strain limit, after friction: what a snagged particle's friction gives way to
-        limit_deviation(rest_x, inv_mass, attached, p_body, body_core_shape, body_max_deviation, shape_rigid, xp,
+        if threads is not None:
+            limit_and_anchor_bodies(coupling == COUPLING_CONSISTENT, body_off, rest_x, inv_mass, attached, p_body,
+                                    body_core_shape, body_max_deviation, shape_rigid, xp, rig_x, rig_q, rig_inv_mass,
+                                    rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
+        else:
+            limit_deviation(rest_x, inv_mass, attached, p_body, body_core_shape, body_max_deviation, shape_rigid, xp,
                             rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
-        if coupling == COUPLING_CONSISTENT:
-            project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q,
-                            rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
-    # --- coupling to the cores (thesis 5.1.3): error -> impulse, snap back
-    snap_attached(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x, rig_q,
-                  imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
-    # --- velocities from positions (PBD Alg. 1 lines 18-21); angular velocity from q* q^-1 on the
-    #     short arc (Mueller & Chentanez 2011 sec. 3)
-    update_velocities(x, v, q, omega, xp, qp, wd, inertia, spin_kick, attached, dt)
+            if coupling == COUPLING_CONSISTENT:
+                project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q,
+                                rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
+    # --- coupling to the cores (thesis 5.1.3): error -> impulse, snap back; then velocities from
+    #     positions (PBD Alg. 1 lines 18-21); angular velocity from q* q^-1 on the short arc
+    #     (Mueller & Chentanez 2011 sec. 3)
+    if threads is not None:
+        _bodies_end(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, x, v, q, omega, xp, qp, wd,
+                    inertia, spin_kick, rig_x, rig_q, imp_lin, imp_ang, coupling_imp, body_off, dt)  # fmt: skip
+    else:
+        snap_attached(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x, rig_q,
+                      imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+        update_velocities(x, v, q, omega, xp, qp, wd, inertia, spin_kick, attached, dt)
     # --- the velocity half of kinetic friction; anchors kept for the next step
     friction_velocity_pass(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_normal, c_rn, x, v, inv_mass,
                            shape_rigid, rig_x0, rig_q0, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
@@ -368,6 +445,9 @@ class TissueSolver:
                 raise ValueError(f"TissueModel array {name!r} has shape {a.shape}, expected {self._scratch[name].shape}")
             self._scratch[name][...] = a
         self._rigid_buffers_for = -1
+        self._threads = sim.solver_threads()  # checked here: a bad count fails at construction
+        self._threaded = False
+        self._threaded_for: np.ndarray | None = None
 
     def _pack(self, resized: tuple[str, ...]) -> None:
         """(Re)build the packed scratch buffers for ``self._sizes``. Arrays sized by an entry of
@@ -433,7 +513,7 @@ class TissueSolver:
             self._rig_x, self._rig_q, self._imp_lin, self._imp_ang, self._coupling_imp,
             *self._packed,
             sim.dt, sim.iterations, sim.rotation_iterations, 0.0, 0.0, -sim.gravity, self.damping, coupling,
-            sim.contact_margin, self.model.continuum, self._counts,
+            sim.contact_margin, self.model.continuum, self._counts, True if self._threaded else None,
         )  # fmt: skip
         self._args_for = sim
 
@@ -446,6 +526,22 @@ class TissueSolver:
             self._rigid_buffers(col.rigid_inv_mass.shape[0])
         if col.shape_kind.shape[0] != self._sizes["shapes"]:
             self._shape_buffer(col.shape_kind.shape[0])
+        if col.shape_rigid is not self._threaded_for or self._args_for is not self.sim:
+            # the pads on threads only where no two share a core (_bodies_pass)
+            self._threads = self.sim.solver_threads()
+            self._threaded = self._threads > 1 and bodies_independent(self.model, col.shape_rigid)
+            self._threaded_for = col.shape_rigid
+            self._args_for = None
+        if self._threaded:
+            before = nb.get_num_threads()
+            nb.set_num_threads(self._threads)
+            try:
+                return self._step(state, col)
+            finally:
+                nb.set_num_threads(before)
+        return self._step(state, col)
+
+    def _step(self, state: TissueState, col: Colliders) -> StepOutput:
         while True:
             if self._args_for is not self.sim:
                 self._fixed_args()
