@@ -21,7 +21,7 @@ import time
 import numba as nb
 import numpy as np
 
-from softgrasp_env.tissue.contacts import collect_pairs
+from softgrasp_env.tissue.contacts import collect_pairs, pair_scratch_sizes
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -125,11 +125,13 @@ def main() -> None:
         cap = 64 * len(x)
         pi, pj = np.empty(cap, np.int32), np.empty(cap, np.int32)
         qi, qj = np.empty(cap, np.int32), np.empty(cap, np.int32)
-        n = collect_pairs(x, x0, radii, off, margin, pi, pj)
+        ni, nf = pair_scratch_sizes(len(x), len(off) - 1)
+        grid, boxes = np.empty(ni, np.int32), np.empty(nf)
+        n = collect_pairs(x, x0, radii, off, margin, pi, pj, grid, boxes)
         m = exhaustive_pairs(x, x0, radii, off, margin, qi, qj)
         if n != m or not (np.array_equal(pi[:n], qi[:n]) and np.array_equal(pj[:n], qj[:n])):
             raise SystemExit(f"the two searches disagree at {d:.0f} per m^2: {n} against {m} pairs")
-        t_grid = time_call(collect_pairs, (x, x0, radii, off, margin, pi, pj), args.repeats)
+        t_grid = time_call(collect_pairs, (x, x0, radii, off, margin, pi, pj, grid, boxes), args.repeats)
         t_all = time_call(exhaustive_pairs, (x, x0, radii, off, margin, qi, qj), args.repeats)
         rows.append((len(x), t_grid))
         print(f"{d:9.0f} {layers:6d} {len(x):9d} {n:6d} {t_grid * 1e6:9.1f} {t_all * 1e6:13.1f} {t_all / t_grid:6.1f}")

@@ -140,24 +140,35 @@ def _radius_and_move(xp, x0, radii, i):
 _MAX_CELLS_PER_PARTICLE = 4
 
 
+def pair_scratch_sizes(particles: int, bodies: int) -> tuple[int, int]:
+    """(int32 entries, float64 entries) of the scratch collect_pairs needs for ``particles``
+    particles in ``bodies`` bodies: per overlap, four lists of at most one entry per particle and
+    a cell table of at most _MAX_CELLS_PER_PARTICLE + 27 cells per particle, twice; per body its
+    box and reach."""
+    return (4 + 2 * _MAX_CELLS_PER_PARTICLE) * particles + 2 * 28, 7 * bodies
+
+
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
-def collect_pairs(xp, x0, radii, body_off, margin, pair_i, pair_j):
+def collect_pairs(xp, x0, radii, body_off, margin, pair_i, pair_j, grid, boxes):
     """Candidate particle pairs between different tissue bodies (the two fingers can touch): i of
     the lower body and j of the higher within their reaches plus the margin. Only the particles in
     the overlap of the bodies' bounding boxes (grown by the reaches) can pair; the higher body's are
     binned on a uniform grid of cells at least one pair's reach wide, so each particle of the lower
     body tests only the 27 cells about it: cost linear in the particles and the pairs found, where
-    testing every pair in the overlap grew as its square (the fingers closed face to face). The
-    scratch arrays are allocated per call, and only when the bodies' boxes overlap. Rows are ordered by i, then
-    j (the order the Gauss-Seidel pass projects them in, as the exhaustive search gave it). Returns
-    the count (or the number needed, if larger than the buffers)."""
+    testing every pair in the overlap grew as its square (the fingers closed face to face). Rows
+    are ordered by i, then j (the order the Gauss-Seidel pass projects them in, as the exhaustive
+    search gave it). ``grid`` (int32) and ``boxes`` (float64) are scratch of the sizes
+    pair_scratch_sizes gives: nothing is allocated per call. Returns the count (or the number
+    needed, if larger than the buffers)."""
     nb_ = body_off.shape[0] - 1
+    n = xp.shape[0]
     cap = pair_i.shape[0]
     count = 0
-    lo = np.empty((nb_, 3))
-    hi = np.empty((nb_, 3))
-    reach = np.zeros(nb_)
+    lo = boxes[0 : 3 * nb_].reshape((nb_, 3))
+    hi = boxes[3 * nb_ : 6 * nb_].reshape((nb_, 3))
+    reach = boxes[6 * nb_ : 7 * nb_]
     for b in range(nb_):
+        reach[b] = 0.0
         for a in range(3):
             lo[b, a] = np.inf
             hi[b, a] = -np.inf
@@ -167,27 +178,29 @@ def collect_pairs(xp, x0, radii, body_off, margin, pair_i, pair_j):
             for a in range(3):
                 lo[b, a] = min(lo[b, a], xp[i, a])
                 hi[b, a] = max(hi[b, a], xp[i, a])
-    olo = np.empty(3)
-    ohi = np.empty(3)
-    dims = np.empty(3, np.int64)
+    # the lists, each at most one entry per particle, then the cell table's two columns
+    inside = grid[0:n]
+    cell_of = grid[n : 2 * n]
+    binned = grid[2 * n : 3 * n]
+    found = grid[3 * n : 4 * n]
+    cells = grid[4 * n :]
+    half = cells.shape[0] // 2
     for b1 in range(nb_):
         for b2 in range(b1 + 1, nb_):
             pad = reach[b1] + reach[b2] + margin
-            empty = False
-            for a in range(3):
-                olo[a] = max(lo[b1, a], lo[b2, a]) - pad
-                ohi[a] = min(hi[b1, a], hi[b2, a]) + pad
-                if olo[a] > ohi[a]:
-                    empty = True
-            if empty:
+            ox0 = max(lo[b1, 0], lo[b2, 0]) - pad
+            oy0 = max(lo[b1, 1], lo[b2, 1]) - pad
+            oz0 = max(lo[b1, 2], lo[b2, 2]) - pad
+            ox1 = min(hi[b1, 0], hi[b2, 0]) + pad
+            oy1 = min(hi[b1, 1], hi[b2, 1]) + pad
+            oz1 = min(hi[b1, 2], hi[b2, 2]) + pad
+            if ox0 > ox1 or oy0 > oy1 or oz0 > oz1:
                 continue
             # b2's particles inside the overlap box (any pair has both ends in it: a j outside it is
             # farther than pad from every particle of b1, and pad bounds every pair's reach)
-            n2 = body_off[b2 + 1] - body_off[b2]
-            inside = np.empty(n2, np.int64)
             m = 0
             for j in range(body_off[b2], body_off[b2 + 1]):
-                if olo[0] <= xp[j, 0] <= ohi[0] and olo[1] <= xp[j, 1] <= ohi[1] and olo[2] <= xp[j, 2] <= ohi[2]:
+                if ox0 <= xp[j, 0] <= ox1 and oy0 <= xp[j, 1] <= oy1 and oz0 <= xp[j, 2] <= oz1:
                     inside[m] = j
                     m += 1
             if m == 0:
@@ -196,45 +209,44 @@ def collect_pairs(xp, x0, radii, body_off, margin, pair_i, pair_j):
             # partners two cells apart), grown until there are few enough of them
             h = pad * (1.0 + 1e-9)
             while True:
-                total = 1
-                for a in range(3):
-                    dims[a] = max(1, int((ohi[a] - olo[a]) / h) + 1)
-                    total *= dims[a]
+                dx = max(1, int((ox1 - ox0) / h) + 1)
+                dy = max(1, int((oy1 - oy0) / h) + 1)
+                dz = max(1, int((oz1 - oz0) / h) + 1)
+                total = dx * dy * dz
                 if total <= _MAX_CELLS_PER_PARTICLE * m + 27:
                     break
                 h *= 2.0
             # counting sort of the inside particles by cell; stable, so each cell lists its
             # particles in increasing index
-            cell_of = np.empty(m, np.int64)
-            start = np.zeros(total + 1, np.int64)
+            start = cells[0 : total + 1]
+            fill = cells[half : half + total]
+            start[:] = 0
             for k in range(m):
                 j = inside[k]
-                cx = min(dims[0] - 1, int((xp[j, 0] - olo[0]) / h))
-                cy = min(dims[1] - 1, int((xp[j, 1] - olo[1]) / h))
-                cz = min(dims[2] - 1, int((xp[j, 2] - olo[2]) / h))
-                c = (cx * dims[1] + cy) * dims[2] + cz
+                cx = min(dx - 1, int((xp[j, 0] - ox0) / h))
+                cy = min(dy - 1, int((xp[j, 1] - oy0) / h))
+                cz = min(dz - 1, int((xp[j, 2] - oz0) / h))
+                c = (cx * dy + cy) * dz + cz
                 cell_of[k] = c
                 start[c + 1] += 1
             for c in range(total):
                 start[c + 1] += start[c]
-            binned = np.empty(m, np.int64)
-            fill = start[:total].copy()
+            fill[:] = start[:total]
             for k in range(m):
                 binned[fill[cell_of[k]]] = inside[k]
                 fill[cell_of[k]] += 1
-            found = np.empty(m, np.int64)
             for i in range(body_off[b1], body_off[b1 + 1]):
-                if not (olo[0] <= xp[i, 0] <= ohi[0] and olo[1] <= xp[i, 1] <= ohi[1] and olo[2] <= xp[i, 2] <= ohi[2]):
+                if not (ox0 <= xp[i, 0] <= ox1 and oy0 <= xp[i, 1] <= oy1 and oz0 <= xp[i, 2] <= oz1):
                     continue
                 ri, mi = _radius_and_move(xp, x0, radii, i)
-                cx = min(dims[0] - 1, int((xp[i, 0] - olo[0]) / h))
-                cy = min(dims[1] - 1, int((xp[i, 1] - olo[1]) / h))
-                cz = min(dims[2] - 1, int((xp[i, 2] - olo[2]) / h))
+                cx = min(dx - 1, int((xp[i, 0] - ox0) / h))
+                cy = min(dy - 1, int((xp[i, 1] - oy0) / h))
+                cz = min(dz - 1, int((xp[i, 2] - oz0) / h))
                 nf = 0
-                for gx in range(max(0, cx - 1), min(dims[0], cx + 2)):
-                    for gy in range(max(0, cy - 1), min(dims[1], cy + 2)):
-                        for gz in range(max(0, cz - 1), min(dims[2], cz + 2)):
-                            c = (gx * dims[1] + gy) * dims[2] + gz
+                for gx in range(max(0, cx - 1), min(dx, cx + 2)):
+                    for gy in range(max(0, cy - 1), min(dy, cy + 2)):
+                        for gz in range(max(0, cz - 1), min(dz, cz + 2)):
+                            c = (gx * dy + gy) * dz + gz
                             for k in range(start[c], start[c + 1]):
                                 j = binned[k]
                                 d2 = (xp[i, 0] - xp[j, 0]) ** 2 + (xp[i, 1] - xp[j, 1]) ** 2 + (xp[i, 2] - xp[j, 2]) ** 2

@@ -57,6 +57,7 @@ from .contacts import (
     collect_contacts,
     collect_pairs,
     max_penetration,
+    pair_scratch_sizes,
     project_pairs,
     project_shape_contacts,
 )
@@ -132,9 +133,11 @@ _F_SCRATCH = (
     ("pair_lambda", "pairs", 0), ("pair_lambda_t", "pairs", 0), ("pair_normal", "pairs", 3),
     ("shape_pose", "shapes", 8), ("patch", "patches", 18),
     ("g_u", "members", 3), ("g_raw", "members", 3), ("c_friction_vel", "contacts", 3),
+    ("pair_boxes", "pair_boxes", 0),
 )  # fmt: skip
 _I_SCRATCH = (("c_particle", "contacts", 0), ("c_shape", "contacts", 0), ("c_patch", "contacts", 0),
-              ("pair_i", "pairs", 0), ("pair_j", "pairs", 0), ("patch_body", "patches", 0))  # fmt: skip  (int32)
+              ("pair_i", "pairs", 0), ("pair_j", "pairs", 0), ("patch_body", "patches", 0),
+              ("pair_grid", "pair_grid", 0))  # fmt: skip  (int32)
 _B_SCRATCH = (("c_inner", "contacts", 0), ("patch_slide", "patches", 0), ("patch_change", "patches", 0),
               ("c_slip", "contacts", 0),
               ("fixed", "n", 0))  # fmt: skip  (bool)
@@ -154,10 +157,10 @@ _PACK = _F_PACK + _I_PACK + _B_PACK
 # their rows in `layout` (numba reads module-level ints as compile-time constants)
 (_XP, _QP, _Q_PRED, _VD, _WD, _MOMENT, _SPIN_KICK, _G_FRAME, _C_LAMBDA, _C_NORMAL, _C_RN, _C_FRICTION,
  _C_FRICTION_GOAL, _C_ANCHOR, _C_POINT, _PAIR_LAMBDA, _PAIR_LAMBDA_T, _PAIR_NORMAL, _SHAPE_POSE, _PATCH,
- _G_U, _G_RAW, _C_FRICTION_VEL,
+ _G_U, _G_RAW, _C_FRICTION_VEL, _PAIR_BOXES,
  _REST_X, _REST_Q, _REST_MOMENT, _INERTIA, _RADII, _MASS, _INV_MASS, _G_PACK, _BODY_FRICTION,
  _GROUP_KAPPA, _BODY_MAX_DEVIATION, _G_CONT,
- _C_PARTICLE, _C_SHAPE, _C_PATCH, _PAIR_I, _PAIR_J, _PATCH_BODY,
+ _C_PARTICLE, _C_SHAPE, _C_PATCH, _PAIR_I, _PAIR_J, _PATCH_BODY, _PAIR_GRID,
  _P_BODY, _G_OFF, _G_MEM, _BODY_OFF, _BODY_CORE_SHAPE,
  _C_INNER, _PATCH_SLIDE, _PATCH_CHANGE, _C_SLIP, _FIXED,
  _ATTACHED, _BODY_CONTACT_CONE, _BODY_CONTACT_LAW) = range(len(_PACK))  # fmt: skip
@@ -167,6 +170,7 @@ assert _PACK[_BODY_MAX_DEVIATION][0] == "body_max_deviation" and _PACK[_G_CONT][
 assert _PACK[_PAIR_J][0] == "pair_j" and _PACK[_FIXED][0] == "fixed" and _PACK[_G_FRAME][0] == "g_frame"
 assert _PACK[_BODY_CONTACT_CONE][0] == "body_contact_cone" and _PACK[_BODY_CONTACT_LAW][0] == "body_contact_law"
 assert _PACK[_PATCH_BODY][0] == "patch_body" and _PACK[_C_FRICTION_VEL][0] == "c_friction_vel"
+assert _PACK[_PAIR_BOXES][0] == "pair_boxes" and _PACK[_PAIR_GRID][0] == "pair_grid"
 
 
 @nb.njit(cache=True, inline="always")
@@ -303,6 +307,7 @@ def _step(
     c_friction_vel = _view(f_pack, layout, _C_FRICTION_VEL)
     c_particle, c_shape, c_patch = _view1(i_pack, layout, _C_PARTICLE), _view1(i_pack, layout, _C_SHAPE), _view1(i_pack, layout, _C_PATCH)
     pair_i, pair_j = _view1(i_pack, layout, _PAIR_I), _view1(i_pack, layout, _PAIR_J)
+    pair_grid, pair_boxes = _view1(i_pack, layout, _PAIR_GRID), _view1(f_pack, layout, _PAIR_BOXES)
     c_inner, patch_slide = _view1(b_pack, layout, _C_INNER), _view1(b_pack, layout, _PATCH_SLIDE)
     patch_change, fixed = _view1(b_pack, layout, _PATCH_CHANGE), _view1(b_pack, layout, _FIXED)
     c_slip = _view1(b_pack, layout, _C_SLIP)
@@ -323,7 +328,7 @@ def _step(
     nc = collect_contacts(xp, x, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid,
                           shape_local_x, shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner,
                           shape_pose)  # fmt: skip
-    npairs = collect_pairs(xp, x, radii, body_off, margin, pair_i, pair_j)
+    npairs = collect_pairs(xp, x, radii, body_off, margin, pair_i, pair_j, pair_grid, pair_boxes)
     counts[0] = nc
     counts[1] = npairs
     if nc > c_particle.shape[0] or npairs > pair_i.shape[0]:
@@ -437,6 +442,7 @@ class TissueSolver:
         self._sizes = {"n": n, "contacts": 4 * n + 16, "pairs": 4 * n + 16, "shapes": 0, "patches": 0,
                        "members": model.group_members.shape[0], "groups": model.group_offsets.shape[0],
                        "bodies": model.body_count, "body_offsets": model.body_particle_offsets.shape[0]}  # fmt: skip
+        self._sizes["pair_grid"], self._sizes["pair_boxes"] = pair_scratch_sizes(n, model.body_count)
         self._scratch: dict[str, np.ndarray] = {}
         self._args_for: tuple | None = None
         self._pack(tuple(self._sizes))

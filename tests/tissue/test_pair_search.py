@@ -7,7 +7,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from softgrasp_env.tissue.contacts import collect_pairs
+from softgrasp_env.tissue.contacts import collect_pairs as _collect_pairs
+from softgrasp_env.tissue.contacts import pair_scratch_sizes
+
+
+def collect_pairs(xp, x0, radii, off, margin, pi, pj):
+    """collect_pairs with its scratch as the solver hands it over: reused, never cleared. It is
+    filled with garbage first, so a search that read a stale entry would go wrong here."""
+    ni, nf = pair_scratch_sizes(len(xp), len(off) - 1)
+    grid, boxes = np.full(ni, -7, np.int32), np.full(nf, np.nan)
+    return _collect_pairs(xp, x0, radii, off, margin, pi, pj, grid, boxes)
 
 
 def _all_pairs(xp, x0, radii, body_off, margin):
