@@ -3,12 +3,15 @@
 
     python -m softgrasp_env.compile            # or: softgrasp-compile
     python -m softgrasp_env.compile --report   # every kernel compiled, its time and signature
+    python -m softgrasp_env.compile --threads 2  # also the tissue step on threads (SimConfig.threads)
 
 Run it once after ``pip install`` (the repository's setup script does). A cold cache takes about a
 minute on 2 cores; a warm one a fraction of a second. ``NUMBA_CACHE_DIR`` moves numba's cache (by
 default it sits beside the package's sources, in ``__pycache__``). ``--report`` lists what was
 compiled in this run only: with a warm cache, nothing (clear the cache or point ``NUMBA_CACHE_DIR``
-at an empty folder to measure a cold one).
+at an empty folder to measure a cold one). The tissue step on threads is a kernel of its own,
+compiled only with ``--threads`` (or at the first step of an env made with ``threads`` above 1):
+a one-thread process never loads it.
 """
 
 from __future__ import annotations
@@ -25,16 +28,19 @@ KINDS = ("tissue", "rigid")
 segmented and FEM fingers need only the rigid kind's scatter kernel)."""
 
 
-def warm(kinds: tuple[str, ...] = KINDS) -> list[Compiled]:
+def warm(kinds: tuple[str, ...] = KINDS, threads: int = 1) -> list[Compiled]:
     """Build a scene of each finger kind and step it once, and measure the tissue's penetration:
-    every kernel the envs and the accuracy checks run is compiled or loaded. Returns what was
-    compiled (cache misses)."""
+    every kernel the envs and the accuracy checks run is compiled or loaded; with ``threads``
+    above 1 the tissue's step is the one on threads. Returns what was compiled (cache misses)."""
+    from .config import SimConfig
     from .scene import GraspScene, SceneConfig
 
+    sim = SimConfig(threads=threads)
+    sim.solver_threads()  # a count above numba's fails here, naming it
     install_reporter()
     with reporting() as done:
         for kind in kinds:
-            scene = GraspScene(SceneConfig(fingers=kind))
+            scene = GraspScene(SceneConfig(fingers=kind, sim=sim))
             try:
                 scene.world.step()
                 scene.world.penetration()
@@ -65,9 +71,14 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m softgrasp_env.compile", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     parser.add_argument("--report", action="store_true", help="list every kernel compiled, with its time")
+    parser.add_argument("--threads", type=int, default=1,
+                        help="also compile the tissue step on this many threads (SimConfig.threads; default 1)")  # fmt: skip
     ns = parser.parse_args(argv)
     tic = time.perf_counter()
-    done = warm()
+    try:
+        done = warm(KINDS) if ns.threads == 1 else warm(KINDS) + warm(("tissue",), ns.threads)
+    except ValueError as e:  # a bad thread count, named
+        parser.error(str(e))
     seconds = time.perf_counter() - tic
     if not any(c.depth == 0 for c in done):
         print(f"the solver's kernels are compiled (loaded from numba's cache in {seconds:.1f} s)")

@@ -116,5 +116,25 @@ def test_the_compile_command_warms_every_kind_and_says_so(capsys, monkeypatch):
     assert any(line.split()[:2] == ["0.20", "2"] for line in lines)  # two signatures of one kernel
 
 
+def test_the_compile_command_checks_its_thread_count(capsys):
+    with pytest.raises(SystemExit) as e:
+        sg_compile.main(["--threads", "0"])
+    assert e.value.code == 2 and "SimConfig.threads must be in [1, 64], got 0" in capsys.readouterr().err
+
+
+def test_the_compile_command_compiles_the_step_on_threads():
+    """In a fresh process: the threaded step starts numba's thread pool, which must not happen in a
+    test worker that later sets NUMBA_NUM_THREADS (the training tests do)."""
+    import subprocess
+    import sys
+
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("numba has one thread here")
+    code = ("import numba; from numba.np.ufunc import parallel; from softgrasp_env import compile as c; "
+            "assert c.main(['--threads', '2']) == 0; assert parallel._is_initialized, 'no threaded step ran'")  # fmt: skip
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=900)
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+
+
 def test_compile_module_is_a_module_not_the_builtin():
     assert isinstance(sg_compile, types.ModuleType) and callable(sg_compile.warm)
