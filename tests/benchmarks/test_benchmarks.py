@@ -413,3 +413,31 @@ def test_convergence_table_rejects_bad_layers():
                            "--densities", "4000,16000,64000"], cwd=ROOT, capture_output=True, text=True, timeout=300,
                           env={"PYTHONPATH": str(ROOT), "PATH": ""})  # fmt: skip
     assert proc.returncode == 2 and "2 counts for 3 densities" in proc.stderr
+
+
+def test_gpu_inputs_colour_the_groups_so_no_two_in_a_colour_share_a_particle():
+    """The GPU page's inputs at the default resolution: one group per particle, the group solves per
+    env step from the iterations and world steps, and a colouring under which a colour's groups
+    could run at once (no shared member)."""
+    import gymnasium as gym
+    import numpy as np
+
+    from benchmarks.gpu_inputs import PHYSICS_STEPS_PER_ENV_STEP, greedy_colours, preset_inputs
+
+    r = preset_inputs("default")
+    env = gym.make("SoftGraspEasy-v4")
+    try:
+        env.reset(seed=0)
+        world = env.unwrapped.scene.world
+        m = world.model
+        assert r["groups"] == r["particles"] == m.particle_count
+        assert r["solves/env step"] == r["groups"] * world.sim.iterations * world.substeps * PHYSICS_STEPS_PER_ENV_STEP
+        assert world.sim.dt * PHYSICS_STEPS_PER_ENV_STEP == pytest.approx(1.0 / env.unwrapped.control_frequency)
+        colour = greedy_colours(m.group_offsets, m.group_members)
+        for c in range(colour.max() + 1):
+            groups = np.flatnonzero(colour == c)
+            members = np.concatenate([m.group_members[m.group_offsets[g] : m.group_offsets[g + 1]] for g in groups])
+            assert len(np.unique(members)) == len(members), f"colour {c} has groups sharing a particle"
+        assert r["colours"] == colour.max() + 1 and sum(r["per colour"]) > 0
+    finally:
+        env.close()
