@@ -8,6 +8,8 @@ where the tissue has torn before (the snag over the rim, ~1 in 10^4-2*10^4 steps
 
     PYTHONPATH=. python benchmarks/random_soak.py                       # 10^5 steps per stream
     PYTHONPATH=. python benchmarks/random_soak.py --steps 20000 --env SoftGraspRigidTorsion-v3
+    PYTHONPATH=. python benchmarks/random_soak.py --env SoftGrasp-v4 --preset converged --threads 2 \
+        --steps 10000 --seed 3          # one chunk of a long soak: seeds give disjoint episodes
 
 Prints, per stream: steps, episodes, divergences (with the seed, step and the reason), the
 largest tissue deviation from its core seen (the tear detector's quantity), steps/s.
@@ -68,8 +70,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--coupling", default=None, help="the tissue's coupling (default: the preset's)")
     parser.add_argument("--friction-law", default=None, choices=["patch", "contact"],
                         help="the tissue's friction law (default: the preset's, patch)")
+    parser.add_argument("--preset", default=None, help="the tissue's resolution preset, e.g. converged")
+    parser.add_argument("--threads", type=int, default=None, help="the tissue solver's threads (SimConfig.threads)")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="episodes are seeded from seed * 10^6 on: chunks with different seeds never repeat one")
     ns = parser.parse_args(argv)
     kwargs = {} if ns.friction_law is None else {"friction_law": ns.friction_law}
+    if ns.preset is not None:
+        kwargs["preset"] = ns.preset
+    if ns.threads is not None:
+        kwargs["threads"] = ns.threads
     if ns.coupling:
         from dataclasses import replace
 
@@ -78,10 +88,11 @@ def main(argv: list[str] | None = None) -> int:
         kwargs["sim"] = replace(presets.scene_config("default").sim, coupling=ns.coupling)
     failed = 0
     for stream in ns.streams.split(","):
-        r = soak(ns.env, ns.steps, stream, **kwargs)
-        print(f"{ns.env} {stream}: {r['steps']} steps, {r['episodes']} episodes, {len(r['divergences'])} divergences, "
-              f"largest tissue deviation {r['max_deviation'] * 1e3:.2f} mm, {r['steps_per_s']:.0f} env steps/s "
-              "(1 process)", flush=True)  # fmt: skip
+        r = soak(ns.env, ns.steps, stream, seed=ns.seed, **kwargs)
+        print(f"{ns.env} {stream} (seed {ns.seed}{', ' + ns.preset if ns.preset else ''}): {r['steps']} steps, "
+              f"{r['episodes']} episodes, {len(r['divergences'])} divergences, largest tissue deviation "
+              f"{r['max_deviation'] * 1e3:.2f} mm, {r['steps_per_s']:.1f} env steps/s (1 process, "
+              f"{ns.threads or 1} solver thread(s))", flush=True)  # fmt: skip
         for seed, step, reason in r["divergences"]:
             print(f"    episode seed {seed}, step {step}: {reason}")
         failed += len(r["divergences"])

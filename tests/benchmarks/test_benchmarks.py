@@ -99,6 +99,17 @@ def test_random_soak_counts_divergences_and_reports_the_tissue_deviation():
     assert 0.0 < r["max_deviation"] < 0.03
 
 
+def test_random_soak_runs_a_seeded_chunk_on_a_preset(capsys):
+    """The command line of a chunk of a long soak: the preset and the seed reach the env and the
+    episodes (seed * 10^6 on), and the line says so."""
+    from benchmarks.random_soak import main
+
+    assert main(["--env", "SoftGraspEasy-v4", "--preset", "fine", "--seed", "2", "--steps", "15",
+                 "--streams", "uniform"]) == 0  # fmt: skip
+    out = capsys.readouterr().out
+    assert "SoftGraspEasy-v4 uniform (seed 2, fine): 15 steps" in out and "0 divergences" in out, out
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize(("env_id", "law"), [("SoftGrasp-v3", "patch"), ("SoftGrasp-v3", "contact"), ("SoftGrasp-v4", None)])
 @pytest.mark.parametrize("stream", ["uniform", "noisy-scripted"])
