@@ -205,8 +205,8 @@ class SoftGraspEnv(gym.Env):
 
     ``threads=2`` runs each pad on a thread of its own, with the same result to the bit: x1.4-1.8
     env steps/s at ``converged`` on two free cores, by machine. No run tore: 10^5 env steps of
-    uniform random actions and 10^5 of the noisy scripted grasp at the default, and 10^4 noisy
-    scripted ones at ``converged`` (the package's documentation: Finger kinds, the tissue's settings).
+    uniform random actions and 10^5 of the noisy scripted grasp at the default, and 10^4 of each
+    at ``converged`` (the package's documentation: Finger kinds, the tissue's settings).
 
     ## Grip-force task
     The grip ids (``SoftGraspGrip-v4``, ``SoftGraspGrip-v3``, ``SoftGraspGripRigid-v3``, ``SoftGraspGripRigidTorsion-v3``)
