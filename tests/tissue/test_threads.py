@@ -58,8 +58,9 @@ if what == "pool":
     os.environ["NUMBA_NUM_THREADS"] = "1"
     numba.njit(lambda a: a + 1)(1)
 elif what == "same":
-    one = run(1, sys.argv[2], 25, particle_density=16_000.0)
-    two = run(2, sys.argv[2], 25, particle_density=16_000.0)
+    density, steps = float(sys.argv[3]), int(sys.argv[4])
+    one = run(1, sys.argv[2], steps, particle_density=density)
+    two = run(2, sys.argv[2], steps, particle_density=density)
     assert all(a.tobytes() == b.tobytes() for a, b in zip(one, two)), "1 and 2 threads differ"
 else:
     kwargs = {"threads": 2} if what == "keyword" else {}
@@ -85,11 +86,13 @@ def _child(*args, env=None):
 
 @needs_two
 @pytest.mark.parametrize("coupling", ["thesis", "consistent"])
-def test_two_threads_give_one_threads_result_to_the_bit(coupling):
-    """SoftGraspEasy-v4 at 16,000 per m^2 (the fine preset's density) with random actions: the
-    observations, rewards and every particle's position and velocity after 25 steps, on 1 and 2
-    threads. Under the consistent coupling each core slides inside its own pad's sweep."""
-    _child("same", coupling)
+@pytest.mark.parametrize(("density", "steps"), [(4_000, 130), (16_000, 25)])
+def test_two_threads_give_one_threads_result_to_the_bit(coupling, density, steps):
+    """SoftGraspEasy-v4 with random actions at the default density for 130 steps (past the
+    100-step episode, so across a reset) and at 16,000 per m^2 (the fine preset's) for 25: the
+    observations, rewards and every particle's position and velocity, on 1 and 2 threads. Under
+    the consistent coupling each core slides inside its own pad's sweep."""
+    _child("same", coupling, str(density), str(steps))
 
 
 def test_one_thread_never_loads_parallel_code():
