@@ -34,6 +34,7 @@ them. Nothing here imports pybullet or gymnasium.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -454,6 +455,7 @@ class TissueSolver:
         self._threads = sim.solver_threads()  # checked here: a bad count fails at construction
         self._threaded = False
         self._threaded_for: np.ndarray | None = None
+        self._warned_serial = False
 
     def _pack(self, resized: tuple[str, ...]) -> None:
         """(Re)build the packed scratch buffers for ``self._sizes``. Arrays sized by an entry of
@@ -536,6 +538,13 @@ class TissueSolver:
             # the pads on threads only where no two share a core (_bodies_pass)
             self._threads = self.sim.solver_threads()
             self._threaded = self._threads > 1 and bodies_independent(self.model, col.shape_rigid)
+            if self._threads > 1 and not self._threaded and not self._warned_serial:
+                # asked for, not given: say so once rather than run serial in silence
+                warnings.warn(
+                    f"tissue solver: {self._threads} threads asked for, running on one: the parallel passes "
+                    "split the work by pad, and here a pad has no core of its own (pads sharing a core, a pad "
+                    "without one, or particles outside every pad)", RuntimeWarning, stacklevel=2)  # fmt: skip
+                self._warned_serial = True
             self._threaded_for = col.shape_rigid
             self._args_for = None
         if self._threaded:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import gymnasium as gym
@@ -25,6 +26,7 @@ needs_two = pytest.mark.skipif(numba.config.NUMBA_NUM_THREADS < 2, reason="numba
 # and other tests here set that variable for the env processes they start (agents.threads).
 _CHILD = """
 import sys
+import warnings
 import gymnasium as gym
 import numpy as np
 import softgrasp_env
@@ -144,3 +146,19 @@ def test_pads_that_share_a_core_or_have_none_stay_on_one_thread():
     Model.particle_count = 9
     Model.body_core_shape = np.array([-1, 1])
     assert not bodies_independent(Model, np.array([0, 1]))  # a pad without a core
+
+
+@needs_two
+def test_threads_that_cannot_be_given_are_named_in_a_warning():
+    """A free block has no core: its passes cannot be split by pad, so threads=2 runs on one thread
+    (the serial overload: no pool started here) and says so once."""
+    from softgrasp_env.accuracy import _Pad
+    from softgrasp_env.config import TissueConfig
+
+    with pytest.warns(RuntimeWarning, match="2 threads asked for, running on one"):
+        pad = _Pad(0.0, TissueConfig(), SimConfig(threads=2))
+        pad.step()
+    assert not pad.solver._threaded
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # once per solver, not every step
+        pad.step()
