@@ -71,6 +71,9 @@ from softgrasp_env.config import FRICTION_LAWS, GROUP_ENERGIES, TissueConfig
 OUT = Path(__file__).resolve().parent / "out"
 DENSITIES = (4_000.0, 16_000.0, 64_000.0, 256_000.0)
 ROWS = ("rig", "band", "slip", "env", "lever", "rim")
+SPLIT_ROWS = {"hold": "env", "friction": "env"}
+"""Rows that run one half of another: ``hold`` the env row's hold bound, ``friction`` its lowest
+friction (two processes can then take the two bisections side by side)."""
 BAND_LOADS = (2.0, 2.5, 3.0, 3.5, 4.0)
 """The normal loads of the tangential band [N]."""
 LEVER_FORCES = (1.0, 6.0)
@@ -78,8 +81,11 @@ LEVER_FORCES = (1.0, 6.0)
 
 
 def measure(density: float, rows, *, material: str, law: str, layers: int, seeds: int, hourglass: float = 0.0,
+            hold_bracket: tuple[float, float] = (0.05, 1.5), friction_bracket: tuple[float, float] = (0.05, 1.0),
             report=print) -> dict:  # fmt: skip
-    """Every row in ``rows`` at one density; keys as in the CSV."""
+    """Every row in ``rows`` at one density; keys as in the CSV. The brackets are where the env
+    row's bisections start (kg; friction scale), widened inside 0.05-1.5 kg / 0.05-1 if they do not
+    straddle."""
     tissue = TissueConfig(group_energy=material, friction_law=law, layers=layers, particle_density=density,
                           hourglass_stiffness=hourglass)  # fmt: skip
     out: dict[str, float] = {"density": density, "layers": layers}
@@ -105,16 +111,18 @@ def measure(density: float, rows, *, material: str, law: str, layers: int, seeds
         r = ramp(density, material=material, law=law, layers=layers, hourglass=hourglass, report=lambda *a: None)
         out["first_slide"] = math.nan if r["first_slide"] is None else r["first_slide"]
         out["gross_slide"] = math.nan if r["gross"] is None else r["gross"]
-    if "env" in rows:
-        from benchmarks.grasp_checks import hold_bound, lowest_friction
+    if "env" in rows or "hold" in rows:
+        from benchmarks.grasp_checks import hold_bound
 
-        kind = {"fingers": "tissue"}
-        h = hold_bound(kind, "v3", tissue=tissue)
+        h = hold_bound({"fingers": "tissue"}, "v3", tissue=tissue, bracket=hold_bracket, report=report)
         out["hold_bound"] = math.nan if h is None else h["mass"]
         out["hold_ratio"] = math.nan if h is None else h["mass"] / h["coulomb"]
         out["hold_ratio_press"] = math.nan if h is None else h["mass"] / h["coulomb_press"]
         out["hold_ratio_cylinder"] = math.nan if h is None else h["mass"] / h["coulomb_cylinder"]
-        f = lowest_friction(kind, "v3", tissue=tissue)
+    if "env" in rows or "friction" in rows:
+        from benchmarks.grasp_checks import lowest_friction
+
+        f = lowest_friction({"fingers": "tissue"}, "v3", tissue=tissue, bracket=friction_bracket, report=report)
         out["lowest_friction"] = math.nan if f is None else f["scale"]
         out["friction_ratio"] = math.nan if f is None else f["scale"] / f["coulomb"]
         out["friction_ratio_cylinder"] = math.nan if f is None else f["scale"] / f["coulomb_cylinder"]
@@ -233,14 +241,27 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--layers", default="1", help="one count, one per density (comma-separated) or 'auto'")
     parser.add_argument("--hourglass", type=float, default=0.0, help="TissueConfig.hourglass_stiffness")
     parser.add_argument("--densities", default=",".join(f"{d:.0f}" for d in DENSITIES))
-    parser.add_argument("--rows", default=",".join(ROWS), help=f"comma-separated, of {', '.join(ROWS)}")
+    parser.add_argument("--rows", default=",".join(ROWS),
+                        help=f"comma-separated, of {', '.join(ROWS + tuple(SPLIT_ROWS))}")  # fmt: skip
+    parser.add_argument("--hold-bracket", default="0.05,1.5", help="kg: where the hold bound's bisection starts")
+    parser.add_argument("--friction-bracket", default="0.05,1", help="where the lowest friction's bisection starts")
     parser.add_argument("--seeds", type=int, default=3, help="episodes of the rim row (seeds 1000, ...)")
     parser.add_argument("--out", type=Path, default=OUT)
     ns = parser.parse_args(argv)
     rows = ns.rows.split(",")
-    bad = [r for r in rows if r not in ROWS]
+    bad = [r for r in rows if r not in ROWS + tuple(SPLIT_ROWS)]
     if bad:
-        parser.error(f"--rows: {bad} not among {ROWS}")
+        parser.error(f"--rows: {bad} not among {ROWS + tuple(SPLIT_ROWS)}")
+    brackets = {}
+    for name, text, (lo_limit, hi_limit) in (("hold", ns.hold_bracket, (0.05, 1.5)),
+                                             ("friction", ns.friction_bracket, (0.05, 1.0))):  # fmt: skip
+        try:
+            lo, hi = (float(v) for v in text.split(","))
+        except ValueError:
+            parser.error(f"--{name}-bracket must be two comma-separated numbers, got {text!r}")
+        if not lo_limit <= lo < hi <= hi_limit:
+            parser.error(f"--{name}-bracket must be increasing inside {lo_limit:g}-{hi_limit:g}, got {text!r}")
+        brackets[name] = (lo, hi)
     try:
         densities = [float(d) for d in ns.densities.split(",")]
     except ValueError:
@@ -264,7 +285,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"material {ns.material}, hourglass {ns.hourglass:g}, friction law {ns.law}, layers {ns.layers} "
           f"({', '.join(map(str, layers))}); dt 1/240 s, 3 iterations; 1 process, 1 thread", flush=True)  # fmt: skip
     refs = references(rows)
-    results = [measure(d, rows, material=ns.material, law=ns.law, layers=n, seeds=ns.seeds, hourglass=ns.hourglass)
+    results = [measure(d, rows, material=ns.material, law=ns.law, layers=n, seeds=ns.seeds, hourglass=ns.hourglass,
+                       hold_bracket=brackets["hold"], friction_bracket=brackets["friction"])
                for d, n in zip(densities, layers, strict=True)]  # fmt: skip
     print()
     table = []
@@ -291,6 +313,8 @@ def main(argv: list[str] | None = None) -> int:
     ns.out.mkdir(parents=True, exist_ok=True)
     suffix = (f"_{ns.material}_{ns.law}" + ("" if ns.hourglass == 0 else f"_h{ns.hourglass:g}")
               + ("" if ns.layers == "1" else f"_L{ns.layers.replace(',', '-')}"))  # fmt: skip
+    if set(rows) <= set(SPLIT_ROWS):  # one half of the env row: its own file, so the halves can run side by side
+        suffix += "_" + "-".join(rows)
     path = ns.out / f"convergence_table{suffix}.csv"
     with open(path, "w", newline="") as f:
         w = csv.writer(f)

@@ -161,18 +161,32 @@ def arm_from_rest(version: str, dt: float) -> float:
         env.close()
 
 
-def bisect(held, lo: float, hi: float, *, rel_tol: float = 0.02) -> float:
-    """The boundary between held (lo) and not held (hi), geometric bisection."""
-    if not held(lo) or held(hi):
-        return math.nan
+def bisect(held, lo: float, hi: float, *, rel_tol: float = 0.02, limits: tuple[float, float] | None = None) -> float:
+    """The boundary between held (lo) and not held (hi), geometric bisection. With ``limits`` a
+    bracket that does not straddle the boundary is widened by 1.25 x per try, never past the
+    limits (a tight bracket saves episodes where a coarser level says where the boundary lies);
+    NaN if even the limits do not straddle it."""
+    lo_limit, hi_limit = limits if limits is not None else (lo, hi)
+    if not lo_limit <= lo < hi <= hi_limit:
+        raise ValueError(f"bracket ({lo}, {hi}) must be increasing and inside the limits {limits}")
+    while not held(lo):
+        if lo <= lo_limit:
+            return math.nan
+        lo, hi = max(lo / 1.25, lo_limit), lo
+    while held(hi):
+        if hi >= hi_limit:
+            return math.nan
+        lo, hi = hi, min(hi * 1.25, hi_limit)
     while hi / lo > 1.0 + rel_tol:
         mid = math.sqrt(lo * hi)
         lo, hi = (mid, hi) if held(mid) else (lo, mid)
     return math.sqrt(lo * hi)
 
 
-def hold_bound(kind: dict, version: str, *, force: float = 3.0, mu: float = 0.9, **kwargs) -> dict | None:
-    """The heaviest cylinder the scripted env episode holds (bisection over 0.05-1.5 kg, held with at
+def hold_bound(kind: dict, version: str, *, force: float = 3.0, mu: float = 0.9,
+               bracket: tuple[float, float] = (0.05, 1.5), report=None, **kwargs) -> dict | None:  # fmt: skip
+    """The heaviest cylinder the scripted env episode holds (bisection over 0.05-1.5 kg, from
+    ``bracket`` [kg] if given, widened inside that range if it does not straddle; held with at
     most NO_SLIP in the hand) and Coulomb's bound 2 mu F / (g + a) with the palm's and the
     cylinder's peak acceleration a at that mass; for the tissue also mu sum N / (g + a), with the
     contacts' normal forces summed (``press``: Coulomb per contact bounds the friction by mu times
@@ -182,9 +196,12 @@ def hold_bound(kind: dict, version: str, *, force: float = 3.0, mu: float = 0.9,
 
     def holds(m):
         r = scripted_episode(kind, version, options={"cylinder_mass": m}, **kwargs)
-        return r["held"] and r["in_hand"] < NO_SLIP
+        ok = r["held"] and r["in_hand"] < NO_SLIP
+        if report is not None:
+            report(f"  mass {m:.4f} kg: {'held' if ok else 'not held'} (in hand {r['in_hand'] * 1e3:.2f} mm)")
+        return ok
 
-    m = bisect(holds, 0.05, 1.5)
+    m = bisect(holds, *bracket, limits=(0.05, 1.5))
     if math.isnan(m):
         return None
     r = scripted_episode(kind, version, options={"cylinder_mass": m / 1.01}, **kwargs)
@@ -195,18 +212,22 @@ def hold_bound(kind: dict, version: str, *, force: float = 3.0, mu: float = 0.9,
 
 
 def lowest_friction(kind: dict, version: str, *, force: float = 3.0, mu: float = 0.9, mass: float = 0.1,
-                    **kwargs) -> dict | None:  # fmt: skip
+                    bracket: tuple[float, float] = (0.05, 1.0), report=None, **kwargs) -> dict | None:  # fmt: skip
     """The lowest friction scale at which the scripted env episode lifts ``mass`` (bisection over
-    0.05-1 x the default, held with at most NO_SLIP in the hand) and Coulomb's m (g + a) / (2 mu F)
+    0.05-1 x the default, from ``bracket`` if given, widened inside that range if it does not
+    straddle; held with at most NO_SLIP in the hand) and Coulomb's m (g + a) / (2 mu F)
     with the palm's and the cylinder's peak acceleration at that scale. None if none in the range
     lifts. ``kwargs`` go to gym.make."""
     g = 9.81
 
     def slips(s):
         r = scripted_episode(kind, version, options={"friction_scale": s}, **kwargs)
-        return not (r["held"] and r["in_hand"] < NO_SLIP)
+        ok = r["held"] and r["in_hand"] < NO_SLIP
+        if report is not None:
+            report(f"  friction scale {s:.4f}: {'lifts' if ok else 'slips'} (in hand {r['in_hand'] * 1e3:.2f} mm)")
+        return not ok
 
-    f = bisect(slips, 0.05, 1.0)
+    f = bisect(slips, *bracket, limits=(0.05, 1.0))
     if math.isnan(f):
         return None
     r = scripted_episode(kind, version, options={"friction_scale": f * 1.01}, **kwargs)

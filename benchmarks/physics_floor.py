@@ -1,13 +1,13 @@
 """The physics floor and how near each env gets to it, in one run.
 
-    PYTHONPATH=. python benchmarks/physics_floor.py [--seconds 3] [--repeats 3] [--ids SoftGrasp-v3,...]
+    PYTHONPATH=. python benchmarks/physics_floor.py [--seconds 3] [--repeats 3] [--ids SoftGrasp-v4,...]
 
 - **Floor**: pybullet alone stepping the scene's rigid bodies - the ground, the free cylinder, the
   palm on its arm constraint and the two prismatic finger cores squeezing the cylinder - nothing
   of ours around it: the env's own scene after the scripted grasp has closed, then only
   ``stepSimulation`` in a loop. Measured at 1/240 s (the rigid kinds' world step) and at the soft
-  env's world step (1/480 s: the compliant tissue's two world steps per physics step; the tissue
-  is not stepped).
+  env's world step (1/240 s over the compliant tissue's world steps per physics step, 6 for
+  SoftGrasp-v4's pads; the tissue is not stepped).
 - **Envs**: env steps/s of each id, random actions, resets inside the loop.
 - **Ratios**: the overall one, env steps/s x physics steps per env step (12) / the 1/240 s floor; and
   per world step, env steps/s x pybullet steps per env step / the floor at that world step (what
@@ -34,7 +34,7 @@ import softgrasp_env
 from softgrasp_env.policies import ScriptedGraspPolicy
 from softgrasp_env.tissue import solver as solver_module
 
-IDS = ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3")
+IDS = ("SoftGrasp-v4", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3")
 
 
 def _grasped(env_id: str):
@@ -150,7 +150,8 @@ def main(argv: list[str] | None = None) -> int:
     rates: dict[str, float] = defaultdict(float)
     stages: dict[str, dict[str, float]] = {}
     pb_steps: dict[str, int] = {}
-    floor_ids = {"SoftGraspRigid-v3": None, "SoftGrasp-v3": None}
+    # the floor at 1/240 s and at each soft id's world step (the tissue's world steps per physics step)
+    floor_ids = dict.fromkeys(["SoftGraspRigid-v3"] + [i for i in ids if "Rigid" not in i])
     for r in range(ns.repeats):
         for fid in floor_ids:
             rate, h = floor(fid, ns.seconds)

@@ -135,16 +135,16 @@ def test_physics_floor_prints_the_floor_the_ratios_and_a_breakdown_that_adds_up(
     import re
 
     out = _run_plain("physics_floor.py", "--seconds", "0.3", "--repeats", "1", "--ids",
-                     "SoftGrasp-v3,SoftGraspRigid-v3")  # fmt: skip
-    floors = [float(f.replace(",", "")) for f in re.findall(r"world step 1/(?:240|480) s: ([\d,]+) pybullet", out)]
+                     "SoftGrasp-v4,SoftGraspRigid-v3")  # fmt: skip
+    floors = [float(f.replace(",", "")) for f in re.findall(r"world step 1/(?:240|1440) s: ([\d,]+) pybullet", out)]
     assert len(floors) == 2 and min(floors) > 0, out
     table, breakdown = out.split("where an env step goes")
     rows = {line.split()[0]: line.split()[1:] for line in table.splitlines() if line.startswith("SoftGrasp")}
-    soft_rate, soft_ratio, soft_pb = (float(x) for x in rows["SoftGrasp-v3"][:3])
+    soft_rate, soft_ratio, soft_pb = (float(x) for x in rows["SoftGrasp-v4"][:3])
     assert soft_rate > 0 and soft_ratio > 0, out
-    assert soft_pb == 24 and float(rows["SoftGraspRigid-v3"][2]) == 12, out  # 2 world steps per physics step
+    assert soft_pb == 72 and float(rows["SoftGraspRigid-v3"][2]) == 12, out  # 6 world steps per physics step
     # the breakdown's second rows: pybullet, kernel, solver call, hand-over, env, total [us]
-    soft = [float(x) for x in breakdown.split("SoftGrasp-v3")[1].split()[:6]]
+    soft = [float(x) for x in breakdown.split("SoftGrasp-v4")[1].split()[:6]]
     assert soft[1] > 0 and soft[0] > 0 and abs(sum(soft[:5]) - soft[5]) <= 3, out  # rounding of 5 figures
     rigid = [float(x) for x in breakdown.split("SoftGraspRigid-v3")[1].split()[:6]]
     assert rigid[1] == 0 and rigid[2] == 0, out  # no tissue
@@ -424,6 +424,42 @@ def test_convergence_table_rejects_bad_layers():
                            "--densities", "4000,16000,64000"], cwd=ROOT, capture_output=True, text=True, timeout=300,
                           env={"PYTHONPATH": str(ROOT), "PATH": ""})  # fmt: skip
     assert proc.returncode == 2 and "2 counts for 3 densities" in proc.stderr
+
+
+def test_the_bounds_bisection_widens_a_bracket_that_misses_and_never_leaves_its_limits():
+    """A tight bracket saves a fine level's hour-long episodes; one that misses the boundary is
+    widened (1.25 x per try) inside the limits, and gives the boundary the full range gives."""
+    import math
+
+    from benchmarks.grasp_checks import bisect
+
+    calls = []
+
+    def held(m):
+        calls.append(m)
+        return m < 0.3
+
+    full = bisect(held, 0.05, 1.5)
+    assert abs(full / 0.3 - 1.0) < 0.02
+    for lo, hi in ((0.29, 0.31), (0.5, 0.6), (0.1, 0.2), (0.05, 0.06)):
+        calls.clear()
+        m = bisect(held, lo, hi, limits=(0.05, 1.5))
+        assert abs(m / 0.3 - 1.0) < 0.02, (lo, hi, m)
+        assert all(0.05 <= c <= 1.5 for c in calls)
+    calls.clear()
+    bisect(held, 0.29, 0.31, limits=(0.05, 1.5))
+    assert len(calls) < 6  # a bracket that straddles: its ends and a few halvings
+    assert math.isnan(bisect(lambda m: True, 0.5, 0.6, limits=(0.05, 1.5)))  # holds everything
+    assert math.isnan(bisect(lambda m: False, 0.5, 0.6, limits=(0.05, 1.5)))  # holds nothing
+    with pytest.raises(ValueError, match="bracket"):
+        bisect(held, 0.6, 0.5, limits=(0.05, 1.5))
+
+
+def test_convergence_table_rejects_a_bracket_outside_its_range():
+    proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "convergence_table.py"), "--rows", "hold",
+                           "--hold-bracket", "0.5,2"], cwd=ROOT, capture_output=True, text=True, timeout=300,
+                          env={"PYTHONPATH": str(ROOT), "PATH": ""})  # fmt: skip
+    assert proc.returncode == 2 and "--hold-bracket must be increasing inside 0.05-1.5" in proc.stderr
 
 
 def test_gpu_inputs_colour_the_groups_so_no_two_in_a_colour_share_a_particle():
