@@ -5,9 +5,11 @@
 Methods (all in the same scene, the same scripted grasp, seed-free: the scene is deterministic):
 - rigid blocks (``fingers="rigid"``), and whatever other finger kinds softgrasp_env.fingers.FINGERS offers;
 - ours, oriented-particle tissue, ``coupling="thesis"`` and ``"consistent"``, swept one knob at a
-  time around the default over iterations, time step (substeps: dt / k), particle density, group
-  size and the faces covered (``tissue_faces="all"``: every face, not only where contact can
-  happen), plus the presets (softgrasp_env/presets.py).
+  time around the default over iterations, time step (substeps: dt / k), particle density (to
+  16 x the default, 64,000 per m^2 in two layers: the v4 tissue is the same material at every
+  density), group size and the faces covered (``tissue_faces="all"``: every face, not only where
+  contact can happen), plus the presets (softgrasp_env/presets.py). The tissue is the soft v4
+  ids' (``--tissue v3``: the v3 ids').
 
 For each: whole-world physics steps/s (the stepping alone), and errors measured the same way for
 every method (softgrasp_env/accuracy.py): deepest penetration over every step, in-hand motion of
@@ -35,6 +37,7 @@ from softgrasp_env.fingers import FINGERS, FemConfig, TissueFingerConfig
 from softgrasp_env.scene import GraspScene, SceneConfig
 
 OUT = Path(__file__).resolve().parent / "out"
+TISSUES = ("v4", "v3")
 PLAN = GraspPlan()
 BOUND_PLAN = GraspPlan(lift=4.0, hold=3.0)
 NO_BOUND = ("fem",)
@@ -86,13 +89,28 @@ def measure(cfg: SceneConfig, *, bound: bool, reference: np.ndarray | None) -> d
     return row
 
 
-def settings(quick: bool, tiny: bool = False) -> list[tuple[str, str, SceneConfig]]:
+def base_scene(tissue: str = "v4") -> SceneConfig:
+    """The scene every point starts from: the soft ids' v4 tissue (presets.v4_tissue: the
+    continuum energy, Coulomb per contact, layers as thick as the spacing) or, with ``"v3"``, the
+    v3 ids' (TissueConfig's defaults: shape matching, the patch law)."""
+    if tissue not in TISSUES:
+        raise ValueError(f"tissue must be one of {TISSUES}, got {tissue!r}")
+    return SceneConfig(tissue=presets.v4_tissue()) if tissue == "v4" else SceneConfig()
+
+
+def _at_density(tissue, density: float):
+    """``tissue`` at ``density`` [1/m^2], the v4 tissue's layers re-chosen for it (auto_layers)."""
+    t = replace(tissue, particle_density=density)
+    return replace(t, layers=t.auto_layers) if t.group_energy == "continuum" else t
+
+
+def settings(quick: bool, tiny: bool = False, tissue: str = "v4") -> list[tuple[str, str, SceneConfig]]:
     """(method family, setting label, scene) for every point of the chart."""
-    base = SceneConfig()
+    base = base_scene(tissue)
     rows: list[tuple[str, str, SceneConfig]] = []
     if tiny:  # CI: one point per family and the resolution sweep the test checks
         rows += [(kind, kind, replace(base, fingers=kind)) for kind in FINGERS if kind not in ("tissue", *TINY_SKIP)]
-        rows += [("preset", name, presets.scene_config(name)) for name in presets.PRESETS
+        rows += [("preset", name, presets.scene_config(name, base=base)) for name in presets.PRESETS
                  if name not in TINY_PRESETS_SKIP]
         rows += [("tissue, thesis", "default", base), ("tissue, thesis", "dt/2", replace(base, sim=replace(base.sim, dt=base.sim.dt / 2)))]
         return rows
@@ -101,10 +119,12 @@ def settings(quick: bool, tiny: bool = False) -> list[tuple[str, str, SceneConfi
             rows.append((kind, kind, replace(base, fingers=kind)))
     rows.append(("fem", "fem fine", replace(base, fingers=FemConfig(resolution="fine"))))
     for name in presets.PRESETS:
-        rows.append(("preset", name, presets.scene_config(name)))
+        rows.append(("preset", name, presets.scene_config(name, base=base)))
     iters = (1, 2, 4, 8) if not quick else (2, 4)
     substeps = (2, 4) if not quick else (2,)
-    dens = (0.5, 2.0) if not quick else (2.0,)
+    # the v4 tissue means the same material at every density: its sweep runs to the converged
+    # preset's 16 x (64,000 per m^2, two layers); the v3 tissue's material changes with it
+    dens = ((0.625, 4.0, 16.0) if tissue == "v4" else (0.5, 2.0)) if not quick else (4.0,)
     for coupling in ("thesis", "consistent"):
         fam = f"tissue, {coupling}"
         sim0 = replace(base.sim, coupling=coupling)
@@ -116,7 +136,8 @@ def settings(quick: bool, tiny: bool = False) -> list[tuple[str, str, SceneConfi
             rows.append((fam, f"dt/{k}", replace(c0, sim=replace(sim0, dt=sim0.dt / k))))
         if coupling == "thesis":
             for f in dens:
-                rows.append((fam, f"density x{f:g}", replace(c0, tissue=replace(base.tissue, particle_density=f * base.tissue.particle_density))))
+                rows.append((fam, f"density x{f:g}",
+                             replace(c0, tissue=_at_density(base.tissue, f * base.tissue.particle_density))))
             rows.append((fam, "group size 6", replace(c0, tissue=replace(base.tissue, group_size=6))))
             rows.append((fam, "all faces", replace(c0, fingers=TissueFingerConfig(faces="all"))))
     return rows
@@ -146,18 +167,20 @@ def main() -> None:
     parser.add_argument("--only", default="", help="comma-separated method families to run (e.g. fem,segmented)")
     parser.add_argument("--merge", action="store_true",
                         help="keep the other rows of an existing methods.csv in --out (replacing those re-run) and redraw")
+    parser.add_argument("--tissue", choices=TISSUES, default="v4",
+                        help="the tissue every soft point starts from: the v4 ids' (default) or the v3 ids'")
     parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args()
-    rows = settings(args.quick, args.tiny)
+    rows = settings(args.quick, args.tiny, args.tissue)
     if args.only:
         wanted = set(args.only.split(","))
         unknown = wanted - {fam for fam, _, _ in rows}
         if unknown:
             raise SystemExit(f"--only: unknown method families {sorted(unknown)}; known: {sorted({f for f, _, _ in rows})}")
         rows = [r for r in rows if r[0] in wanted]
-    base = SceneConfig()
+    base = base_scene(args.tissue)
     k = 2 if args.tiny else 4
-    ref_cfg = replace(base, tissue=replace(base.tissue, particle_density=k * base.tissue.particle_density),
+    ref_cfg = replace(base, tissue=_at_density(base.tissue, k * base.tissue.particle_density),
                       sim=replace(base.sim, iterations=4 * k, dt=base.sim.dt / k))  # fmt: skip
     reference = None
     if any(cfg.fingers == "tissue" for _, _, cfg in rows):  # the converged run only the tissue is compared with
