@@ -62,16 +62,29 @@ from .base import FingerConfig, FingerKind, Visual
 FEM_CELLS_THROUGH = {"coarse": 1, "fine": 2}
 """Tetrahedral-mesh resolution: hex cells through the pad's thickness (8 mm: 8 or 4 mm cells)."""
 
-# --- material ------------------------------------------------------------------------------------
-# pybullet's NeoHookean force (Smith et al. 2018 stable Neo-Hookean, as btDeformableNeoHookeanForce
-# implements it) takes the Lame parameters mu, lambda [Pa] and a damping coefficient [s] (Rayleigh
-# stiffness damping: the stress of the strain rate times it). Poisson ratio 0.4. Tried at 1/240 s:
-# a stiffer pad (mu x10) or less damping (x0.1) blew up already in the approach, before any
-# contact (explicit elastic forces, see FemConfig.substeps); at 1/960 s, 3x the damping let
-# the cylinder slide out and fall over (14.6 mm of slip in a 1 s hold, against 4 mm).
-FEM_MU = 1.2e4
-FEM_LAMBDA = 4.0 * FEM_MU  # nu = 0.4: lambda = 2 mu nu / (1 - 2 nu)
+# --- material ---------------------------------------------------------------------------------------
+# pybullet's NeoHookean force is Smith et al. 2018's stable Neo-Hookean (btDeformableNeoHookeanForce):
+# first Piola stress P = mu (1 - 1 / (I_C + 1)) F + (lambda (J - 1) - 3/4 mu) cof F, with its own
+# parameters mu, lambda [Pa] and a damping coefficient [s] (Rayleigh stiffness damping: the stress
+# of the strain rate times it). Linearised about F = I that is Lame's mu_L = 3/4 mu and lambda_L =
+# lambda - 5/8 mu (Smith et al. sec. 3.4: mu = 4/3 mu_L, lambda = lambda_L + 5/6 mu_L). The pads
+# take the tissue's material: shear modulus G (TissueConfig.shear_modulus) and Poisson's ratio 0,
+# the linear elasticity the tissue's continuum group energy discretises (its finite-element
+# reference's too), so mu_L = G, lambda_L = 0.
+
+
+def neo_hookean_parameters(shear_modulus: float) -> tuple[float, float]:
+    """pybullet's (NeoHookeanMu, NeoHookeanLambda) [Pa] for a pad of shear modulus ``shear_modulus``
+    [Pa] and Poisson's ratio 0 at small strain."""
+    return 4.0 / 3.0 * shear_modulus, 5.0 / 6.0 * shear_modulus
+
+
 FEM_DAMPING = 0.01
+"""The stable Neo-Hookean's damping coefficient [s]. Tried at 1/240 s on the earlier, stiffer pads
+(Lame mu 9 kPa, nu 0.41): a pad ten times stiffer or with a tenth of this damping blew up in the
+approach, before any contact (explicit elastic forces, see FemConfig.substeps); at 1/960 s three
+times this damping let the cylinder slide out and fall over (14.6 mm of slip in a 1 s hold,
+against 4 mm)."""
 FEM_COLLISION_MARGIN = 0.001
 """Collision margin of the pad [m]: contacts begin this far from a rigid surface."""
 FEM_SDF_VOXEL = 0.005
@@ -209,6 +222,7 @@ class FemPads:
         self.core_half_extents = tuple(cfg.finger_half_extents)
         c.setPhysicsEngineParameter(sparseSdfVoxelSize=FEM_SDF_VOXEL)
         fh = cfg.finger_half_extents
+        mu, lam = neo_hookean_parameters(cfg.tissue.shear_modulus)
         self.meshes: list[PadMesh] = []
         self.bodies: list[int] = []
         for link, side in zip(links, (+1, -1), strict=True):  # the left core's inner face is +x, the right's -x
@@ -217,8 +231,8 @@ class FemPads:
             with _quiet_c_stdout():  # bullet prints node/link/face/tet counts on C stdout
                 body = c.loadSoftBody(
                     vtk_file(mesh), basePosition=pos, baseOrientation=orn, scale=1.0,
-                    mass=cfg.tissue.mass_density * mesh.volume, useNeoHookean=1, NeoHookeanMu=FEM_MU,
-                    NeoHookeanLambda=FEM_LAMBDA, NeoHookeanDamping=FEM_DAMPING, useMassSpring=0,
+                    mass=cfg.tissue.mass_density * mesh.volume, useNeoHookean=1, NeoHookeanMu=mu,
+                    NeoHookeanLambda=lam, NeoHookeanDamping=FEM_DAMPING, useMassSpring=0,
                     useBendingSprings=0, collisionMargin=FEM_COLLISION_MARGIN, useSelfCollision=0,
                     frictionCoeff=cfg.tissue.friction_static,
                 )  # fmt: skip
@@ -293,8 +307,8 @@ class FemConfig(FingerConfig):
     substeps: int = 8
     """pybullet steps per world step (``sim.dt``), each ``sim.dt / substeps`` long. pybullet's
     deformable world integrates the elastic forces explicitly (only the damping and the
-    constraints are implicit): fewer than 8 substeps at 1/240 s let the coarse pads blow up or let
-    the cylinder slide."""
+    constraints are implicit): with fewer than 8 substeps at 1/240 s the coarse pads knock the
+    cylinder over at first contact (1) or let it slide 3-5 mm in the hold (2, 4)."""
 
     def __post_init__(self) -> None:
         check_choice("resolution", self.resolution, tuple(FEM_CELLS_THROUGH), owner="FemConfig")
