@@ -85,3 +85,18 @@ def test_trilinear_pads_left_under_the_finger_squeeze_with_half_the_force():
     the default."""
     r = run_grasp(PeerConfig(dof="trilinear", hoist=False), GraspPlan(lift=0.0, hold=0.0))
     assert r.press["left pad"] == pytest.approx(0.5 * SCENE.finger_force, rel=0.02), r.press
+
+
+def test_peers_prints_ours_beside_mujoco_at_a_level_in_one_run(tmp_path):
+    """benchmarks/peers.py at the coarsest level: our tissue and MuJoCo's trilinear pads, each with its
+    rig's compression against the reference, the grasp held, and the ratio of their speeds."""
+    import csv
+
+    from benchmarks.peers import main
+
+    assert main(["--levels", "30", "--methods", "ours,mujoco_trilinear", "--out", str(tmp_path)]) == 0
+    rows = {r["method"]: r for r in csv.DictReader(open(tmp_path / "peers.csv"))}
+    assert set(rows) == {"ours", "mujoco_trilinear"}
+    for r in rows.values():
+        assert r["held"] == "True" and float(r["sim_s_per_wall_s"]) > 0 and int(r["nodes_per_pad"]) == 30
+        assert abs(float(r["compression_1N_mm"]) / REFERENCE_MM[1.0] - 1.0) < 0.2  # measured -1.1 / -15.4 %
