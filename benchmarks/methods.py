@@ -104,8 +104,44 @@ def _at_density(tissue, density: float):
     return replace(t, layers=t.auto_layers) if t.group_energy == "continuum" else t
 
 
-def settings(quick: bool, tiny: bool = False, tissue: str = "v4") -> list[tuple[str, str, SceneConfig]]:
-    """(method family, setting label, scene) for every point of the chart."""
+MUJOCO_POINTS = (("full", "30"), ("full", "100"), ("full", "570"), ("trilinear", "30"), ("trilinear", "100"),
+                 ("trilinear", "570"))  # fmt: skip
+"""MuJoCo's flex pads on the chart (benchmarks/mujoco_peer.py, with the ``[peers]`` extra): (dof, nodes a
+pad), the node counts of our tissue's 4,000 / 16,000 / 64,000 per m^2; the hold bound only up to 100."""
+MUJOCO_BOUND_NODES = 100
+
+
+def mujoco_available() -> bool:
+    try:
+        import mujoco  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def measure_mujoco(cfg, *, bound: bool) -> dict:
+    """measure()'s row for a MuJoCo peer (mujoco_peer.PeerConfig): the same figures from its own
+    grasp; penetration is its contacts' deepest overlap (the flat facets' chord against the curved
+    cylinder included)."""
+    from benchmarks.mujoco_peer import hold_bound
+    from benchmarks.mujoco_peer import run_grasp as mujoco_grasp
+
+    g = mujoco_grasp(cfg, PLAN)
+    row = dict(particles=cfg.nodes_per_pad * 2, steps_per_s=g.steps_per_second, realtime=g.realtime, held=g.held(PLAN),
+               penetration_mm=1000 * g.max_penetration, in_hand_mm=1000 * g.in_hand_motion, pose_rms_mm=math.nan,
+               bound_err_pct=math.nan)  # fmt: skip
+    if bound and cfg.nodes_per_pad <= MUJOCO_BOUND_NODES:
+        scene = SceneConfig()  # the peer's friction, squeeze and gravity are the scene's
+        ref = coulomb_hold_bound(scene.tissue.friction_static, scene.finger_force, scene.sim.gravity)
+        h = hold_bound(cfg, BOUND_PLAN, lo=0.4 * ref, hi=1.6 * ref)
+        row["bound_err_pct"] = 100 * (h["mass"] / ref - 1.0)
+    return row
+
+
+def settings(quick: bool, tiny: bool = False, tissue: str = "v4", fem_fine: bool = False) -> list[tuple[str, str, SceneConfig]]:
+    """(method family, setting label, scene) for every point of the chart; MuJoCo's points (with the
+    ``[peers]`` extra, not in the tiny run) carry a mujoco_peer.PeerConfig instead of a scene.
+    ``fem_fine``: also pybullet's fine FEM pads (about 40 minutes for their one grasp)."""
     base = base_scene(tissue)
     rows: list[tuple[str, str, SceneConfig]] = []
     if tiny:  # CI: one point per family and the resolution sweep the test checks
@@ -117,7 +153,15 @@ def settings(quick: bool, tiny: bool = False, tissue: str = "v4") -> list[tuple[
     for kind in FINGERS:
         if kind != "tissue":
             rows.append((kind, kind, replace(base, fingers=kind)))
-    rows.append(("fem", "fem fine", replace(base, fingers=FemConfig(resolution="fine"))))
+    if fem_fine:
+        rows.append(("fem", "fem fine", replace(base, fingers=FemConfig(resolution="fine"))))
+    if mujoco_available():
+        from benchmarks.mujoco_peer import LEVELS, PeerConfig
+
+        rows += [("MuJoCo flex", f"{dof} {n}", PeerConfig(counts=LEVELS[n], dof=dof)) for dof, n in MUJOCO_POINTS
+                 if not quick or n == "30"]  # fmt: skip
+    else:
+        print("MuJoCo is not installed (the [peers] extra): its flex pads are left off the chart")
     for name in presets.PRESETS:
         rows.append(("preset", name, presets.scene_config(name, base=base)))
     iters = (1, 2, 4, 8) if not quick else (2, 4)
@@ -167,11 +211,12 @@ def main() -> None:
     parser.add_argument("--only", default="", help="comma-separated method families to run (e.g. fem,segmented)")
     parser.add_argument("--merge", action="store_true",
                         help="keep the other rows of an existing methods.csv in --out (replacing those re-run) and redraw")
+    parser.add_argument("--fem-fine", action="store_true", help="also the fine FEM pads (their grasp: ~40 min)")
     parser.add_argument("--tissue", choices=TISSUES, default="v4",
                         help="the tissue every soft point starts from: the v4 ids' (default) or the v3 ids'")
     parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args()
-    rows = settings(args.quick, args.tiny, args.tissue)
+    rows = settings(args.quick, args.tiny, args.tissue, args.fem_fine)
     if args.only:
         wanted = set(args.only.split(","))
         unknown = wanted - {fam for fam, _, _ in rows}
@@ -183,7 +228,7 @@ def main() -> None:
     ref_cfg = replace(base, tissue=_at_density(base.tissue, k * base.tissue.particle_density),
                       sim=replace(base.sim, iterations=4 * k, dt=base.sim.dt / k))  # fmt: skip
     reference = None
-    if any(cfg.fingers == "tissue" for _, _, cfg in rows):  # the converged run only the tissue is compared with
+    if any(isinstance(cfg, SceneConfig) and cfg.fingers == "tissue" for _, _, cfg in rows):  # the converged run only the tissue is compared with
         scene = GraspScene(ref_cfg)
         try:
             reference = run_grasp(scene, PLAN, trace=True).trace
@@ -193,9 +238,12 @@ def main() -> None:
     print(f"{'method':<22}{'setting':<16}{'particles':>9}{'steps/s':>9}{'x real':>7}{'held':>6}"
           f"{'pen mm':>8}{'hand mm':>8}{'pose mm':>8}{'bound %':>8}")  # fmt: skip
     for fam, label, cfg in rows:
-        tissue_like = cfg.fingers == "tissue"
-        row = dict(method=fam, setting=label, **measure(cfg, bound=not args.no_bound,
-                                                          reference=reference if tissue_like else None))  # fmt: skip
+        if not isinstance(cfg, SceneConfig):  # a MuJoCo peer
+            row = dict(method=fam, setting=label, **measure_mujoco(cfg, bound=not args.no_bound))
+        else:
+            tissue_like = cfg.fingers == "tissue"
+            row = dict(method=fam, setting=label, **measure(cfg, bound=not args.no_bound,
+                                                              reference=reference if tissue_like else None))  # fmt: skip
         results.append(row)
         print(f"{fam:<22}{label:<16}{row['particles']:>9}{row['steps_per_s']:>9.0f}{row['realtime']:>7.1f}"
               f"{str(row['held']):>6}{row['penetration_mm']:>8.3f}{row['in_hand_mm']:>8.3f}"
