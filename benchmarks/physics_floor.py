@@ -18,6 +18,11 @@
   pybullet, pose reads, attached particles synced), and the env (everything else: the arm's
   path, finger forces, the task, the observation, gymnasium's wrappers).
 
+- **Targets**: each id's ratio to the floor against the speed work's aims (soft >= 0.25, rigid >=
+  0.8), the hand-over and the env's own Python as a share of an env step (soft <= 25 %, rigid <=
+  40 %), and SoftGrasp-v4 at ``preset="converged"`` on one thread (>= 100 env steps/s;
+  ``--no-converged`` leaves it out): met or missed, in this run.
+
 Interleaved: every configuration runs once per repeat, in turn, and the best of the repeats is
 kept (the machine is shared).
 """
@@ -25,6 +30,7 @@ kept (the machine is shared).
 from __future__ import annotations
 
 import argparse
+import math
 import time
 from collections import defaultdict
 
@@ -35,6 +41,11 @@ from softgrasp_env.policies import ScriptedGraspPolicy
 from softgrasp_env.tissue import solver as solver_module
 
 IDS = ("SoftGrasp-v4", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3")
+CONVERGED_ID = "SoftGrasp-v4"
+TARGETS = {"soft floor": 0.25, "rigid floor": 0.8, "soft ours": 0.25, "rigid ours": 0.40, "converged env steps/s": 100.0}
+"""What the speed work aims at: env steps/s x 12 over the 1/240 s floor (soft ids, rigid ids); the
+hand-over and the env's own Python as a share of an env step (soft, rigid); the converged preset's
+env steps/s on one thread."""
 
 
 def _grasped(env_id: str):
@@ -79,10 +90,11 @@ class _Timer:
             self.totals[self.name] += time.perf_counter() - tic
 
 
-def env_rate(env_id: str, seconds: float, *, breakdown: bool) -> tuple[float, dict[str, float], int]:
-    """(env steps/s, seconds per env step by stage, pybullet steps per env step)."""
+def env_rate(env_id: str, seconds: float, *, breakdown: bool, **kwargs) -> tuple[float, dict[str, float], int]:
+    """(env steps/s, seconds per env step by stage, pybullet steps per env step); ``kwargs`` go to
+    gym.make."""
     totals: dict[str, float] = defaultdict(float)
-    env = gym.make(env_id)
+    env = gym.make(env_id, **kwargs)
     env.action_space.seed(0)
     env.reset(seed=0)
     kernel = solver_module._step
@@ -138,6 +150,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=3.0, help="timed wall time per configuration and repeat")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--ids", default=",".join(IDS))
+    parser.add_argument("--no-converged", action="store_true",
+                        help="leave out SoftGrasp-v4 at preset='converged' (its target: env steps/s on one thread)")
     ns = parser.parse_args(argv)
     ids = ns.ids.split(",")
     unknown = sorted(set(ids) - set(softgrasp_env.ENV_IDS))
@@ -164,6 +178,10 @@ def main(argv: list[str] | None = None) -> int:
             for env_id in ids:
                 stages[env_id] = env_rate(env_id, ns.seconds, breakdown=True)[1]
 
+    converged = math.nan
+    if not ns.no_converged:  # one thread, the env's default
+        converged = max(env_rate(CONVERGED_ID, ns.seconds, breakdown=False, preset="converged")[0] for _ in range(ns.repeats))
+
     sim_dt = 1.0 / 240.0
     base = floors[min(floors, key=lambda h: abs(h - sim_dt))]
     print(f"floor: pybullet alone, the grasped scene's bodies (best of {ns.repeats}, {ns.seconds:g} s each)")
@@ -184,6 +202,20 @@ def main(argv: list[str] | None = None) -> int:
         st = stages[env_id]
         total = sum(st.values())
         print(f"{env_id:<28}" + "".join(f"{st.get(n, 0.0) * 1e6:>12.0f}" for n in names) + f"{total * 1e6:>12.0f}")
+    print()
+    print("targets (this run)")
+    for env_id in ids:
+        soft = "Rigid" not in env_id
+        ratio, aim = rates[env_id] * 12 / base, TARGETS["soft floor" if soft else "rigid floor"]
+        st = stages[env_id]
+        ours = (st.get("hand-over", 0.0) + st.get("env", 0.0)) / sum(st.values())
+        share = TARGETS["soft ours" if soft else "rigid ours"]
+        print(f"  {env_id:<28} {ratio:.2f} of the floor (target >= {aim:g}): {'met' if ratio >= aim else 'missed'}; "
+              f"hand-over + env {ours:.0%} of an env step (target <= {share:.0%}): {'met' if ours <= share else 'missed'}")  # fmt: skip
+    if not ns.no_converged:
+        aim = TARGETS["converged env steps/s"]
+        print(f"  {CONVERGED_ID}, preset='converged': {converged:.1f} env steps/s on one thread (target >= {aim:g}): "
+              f"{'met' if converged >= aim else 'missed'}")  # fmt: skip
     return 0
 
 

@@ -134,8 +134,12 @@ def test_no_tearing_in_a_hundred_thousand_random_steps(stream, env_id, law):
 def test_physics_floor_prints_the_floor_the_ratios_and_a_breakdown_that_adds_up():
     import re
 
-    out = _run_plain("physics_floor.py", "--seconds", "0.3", "--repeats", "1", "--ids",
+    out = _run_plain("physics_floor.py", "--seconds", "0.3", "--repeats", "1", "--no-converged", "--ids",
                      "SoftGrasp-v4,SoftGraspRigid-v3")  # fmt: skip
+    targets = out.split("targets (this run)")[1]
+    assert re.search(r"SoftGrasp-v4 +[\d.]+ of the floor \(target >= 0.25\): (met|missed); hand-over \+ env \d+%", targets)
+    assert re.search(r"SoftGraspRigid-v3 +[\d.]+ of the floor \(target >= 0.8\): (met|missed)", targets), out
+    out = out.split("targets (this run)")[0]
     floors = [float(f.replace(",", "")) for f in re.findall(r"world step 1/(?:240|1440) s: ([\d,]+) pybullet", out)]
     assert len(floors) == 2 and min(floors) > 0, out
     table, breakdown = out.split("where an env step goes")
