@@ -141,7 +141,7 @@ from pathlib import Path
 
 import numpy as np
 
-from softgrasp_env.accuracy import GraspPlan, find_hold_bound
+from softgrasp_env.accuracy import GraspPlan, _min_jerk, _min_jerk_rate, find_hold_bound  # the lift's profile, ours
 from softgrasp_env.config import SimConfig, TissueConfig
 from softgrasp_env.scene import FINGER_DROP, PALM_HALF_EXTENTS, GripperControl, SceneConfig
 from softgrasp_env.scene.config import ARM_PUSH
@@ -556,16 +556,6 @@ class GraspResult:
     def holds_without_slip(self, plan: GraspPlan, *, max_slip: float = SLIP) -> bool:
         """Held, and slipping less than ``max_slip`` through the hold (the bound's criterion)."""
         return self.held(plan) and self.hold_slip < max_slip
-
-
-def _min_jerk(u: float) -> float:
-    u = min(max(u, 0.0), 1.0)
-    return u * u * u * (10.0 + u * (-15.0 + 6.0 * u))
-
-
-def _min_jerk_rate(u: float) -> float:
-    u = min(max(u, 0.0), 1.0)
-    return 30.0 * u * u * (1.0 - u) * (1.0 - u)
 
 
 def _tilt(xmat: np.ndarray) -> float:
