@@ -11,6 +11,7 @@ Record again (only when behaviour is meant to change, with the ids moving versio
 named and measured):
 
     python -m tests.trajectories --set v3 | more
+    python -m tests.trajectories --set more --cases fem/scripted   # one case, the others kept
 """
 
 from __future__ import annotations
@@ -168,8 +169,23 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--set", choices=sorted(SETS), required=True,
                         help="which recording to make again (each is a file of its own)")
-    cases, path = SETS[parser.parse_args(argv).set]
+    parser.add_argument("--cases", default="",
+                        help="comma-separated case names: record only these again and keep the file's others "
+                             "(only on a machine whose fingerprint matches the file's)")  # fmt: skip
+    ns = parser.parse_args(argv)
+    cases, path = SETS[ns.set]
     out: dict[str, np.ndarray] = {"fingerprint": np.array(fingerprint())}
+    if ns.cases:
+        wanted = ns.cases.split(",")
+        unknown = sorted(set(wanted) - {c[0] for c in cases})
+        if unknown:
+            parser.error(f"--cases: {unknown} are not cases of the {ns.set} set")
+        old = dict(np.load(path))
+        if str(old["fingerprint"]) != fingerprint():
+            parser.error(f"--cases: {path.name} was recorded on {old['fingerprint']}, this machine is {fingerprint()}; "
+                         "record the whole set instead")  # fmt: skip
+        out.update({k: v for k, v in old.items() if k != "fingerprint" and k.rsplit("/", 1)[0] not in wanted})
+        cases = tuple(c for c in cases if c[0] in wanted)
     for name, env_id, kwargs, policy, steps in cases:
         for key, arr in record(env_id, kwargs, policy, steps).items():
             out[f"{name}/{key}"] = arr
