@@ -182,7 +182,7 @@ def main(argv: list[str] | None = None) -> None:
             parser.error(f"--cases: {unknown} are not cases of the {ns.set} set")
         old = dict(np.load(path))
         if str(old["fingerprint"]) != fingerprint():
-            parser.error(f"--cases: {path.name} was recorded on {old['fingerprint']}, this machine is {fingerprint()}; "
+            parser.error(f"--cases: {path.name} was recorded on {old['fingerprint']}, the one running is {fingerprint()}; "
                          "record the whole set instead")  # fmt: skip
         out.update({k: v for k, v in old.items() if k != "fingerprint" and k.rsplit("/", 1)[0] not in wanted})
         cases = tuple(c for c in cases if c[0] in wanted)
