@@ -21,8 +21,8 @@ For each method and level:
   1 s, 2 s hold) of the 0.1 kg cylinder: held (GraspRecord.held), in-hand motion from the lift on,
   and speed, physics steps per wall second of the stepping alone (ours: the whole world step,
   pybullet's rigid bodies included; MuJoCo: mj_step) and simulated seconds per wall second at the
-  default dt 1/240 s. A grasp projected to take more than ``--budget`` wall seconds is not run to
-  the end (MuJoCo: its speed from the approach; ours and FEM: skipped).
+  default dt 1/240 s. A MuJoCo rig or grasp projected to take more than ``--budget`` wall seconds
+  is not run to the end (its speed is then the approach's); ours and the FEM pads always run whole.
 
 Then per level the ratio of our simulated seconds per wall second to each peer's. One process, one
 thread (MuJoCo steps a model on one thread; ours at its default, threads=1). A measurement: no
