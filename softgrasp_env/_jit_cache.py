@@ -191,7 +191,7 @@ def ensure_compiled(config) -> None:
     with reporting():
         scene = GraspScene(config)
         try:
-            scene.world.step()
+            scene.step()  # the arm's path, the kind's hook and the world
             # the per-step queries with kernels of their own (the env calls them from its first step)
             scene.finger_forces()
             scene.world.tissue_deviation()

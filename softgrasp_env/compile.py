@@ -25,7 +25,7 @@ from ._jit_cache import Compiled, install_reporter, reporting
 
 KINDS = ("tissue", "rigid")
 """The finger kinds of the registered ids; every other kind uses a subset of their kernels (the
-segmented and FEM fingers need only the rigid kind's scatter kernel)."""
+segmented and FEM fingers need only the rigid kind's kernels: the arm's path and the state scatter)."""
 
 
 def warm(kinds: tuple[str, ...] = KINDS, threads: int = 1) -> list[Compiled]:
@@ -42,7 +42,7 @@ def warm(kinds: tuple[str, ...] = KINDS, threads: int = 1) -> list[Compiled]:
         for kind in kinds:
             scene = GraspScene(SceneConfig(fingers=kind, sim=sim))
             try:
-                scene.world.step()
+                scene.step()
                 scene.world.penetration()
                 if scene.fingers.no_tactile is None:
                     scene.fingers.tactile(scene.fingers.taxel_grid(2, 2))

@@ -7,6 +7,7 @@ clock). Tasks read the same :class:`Reading` by name: nothing indexes the observ
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -121,15 +122,30 @@ class Reading:
     @property
     def tilt(self) -> float:
         """Angle of the cylinder's axis from the vertical [rad]."""
-        return math.acos(float(np.clip(self.cyl_axis[2], -1.0, 1.0)))
+        z = float(self.cyl_axis[2])
+        # np.clip's value in Python floats (a scalar through numpy costs ~3 us, and every env
+        # step reads this twice); a NaN stays NaN as np.clip leaves it
+        return math.acos(z if z != z else (-1.0 if z < -1.0 else (1.0 if z > 1.0 else z)))
 
     def vector(self, names: tuple[str, ...]) -> np.ndarray:
         """The observation of ``names`` (whole groups of OBS_GROUPS, in their order), float64."""
-        groups = [g for g, members in OBS_GROUPS.items() if members[0] in names]
-        parts = [np.atleast_1d(np.asarray(getattr(self, g), dtype=np.float64)) for g in groups]
+        values: list[float] = []
+        for g in _groups_of(tuple(names)):
+            v = getattr(self, g)
+            if isinstance(v, np.ndarray):
+                values.extend(v.ravel().tolist())
+            else:
+                values.append(float(v))
+        out = np.array(values, dtype=np.float64)
         if names and names[-1].startswith(TACTILE_PREFIX):  # the taxels come last
-            parts.append(self.tactile.ravel())
-        return np.concatenate(parts)
+            out = np.concatenate((out, self.tactile.ravel()))
+        return out
+
+
+@functools.lru_cache(maxsize=64)
+def _groups_of(names: tuple[str, ...]) -> tuple[str, ...]:
+    """The groups of OBS_GROUPS whose entries ``names`` holds, in their order."""
+    return tuple(g for g, members in OBS_GROUPS.items() if members[0] in names)
 
 
 def read(scene: GraspScene, force: np.ndarray, grid: TaxelGrid | None = None) -> Reading:

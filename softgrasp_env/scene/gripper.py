@@ -18,6 +18,7 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol
 
+import numba as nb
 import numpy as np
 import pybullet as p
 from gymnasium import spaces
@@ -74,74 +75,126 @@ class PalmPath:
     """The arm's setpoint, one physics step at a time, with speed at most ``v_max`` and
     acceleration at most ``a_max`` exactly: each step changes its velocity by at most a_max dt.
     Position mode heads for the target and brakes on the discrete curve that stops it exactly there
-    (:meth:`_brake`), plus the target's own velocity; velocity mode takes the commanded velocity.
+    (:func:`_brake`), plus the target's own velocity; velocity mode takes the commanded velocity.
     Either way it brakes before the walls of ``palm_box`` and before it leads the palm by more
     than ``max_lead`` (a blocked palm, pressing on something, must not find its setpoint far away
     when it comes free). The palm's constraint then tracks a path that is smooth and the same at
-    every dt. Python floats: it runs every physics step."""
+    every dt. It runs every physics step, so the step is one compiled call (:func:`_path_step`)
+    on a packed state and a packed control; the arithmetic is IEEE double without contraction,
+    the same numbers as the same formulas in Python floats."""
 
     def __init__(self, x0: np.ndarray, *, v_max: float, a_max: float, dt: float, max_lead: float = MAX_LEAD) -> None:
-        self.x = [float(v) for v in x0]
-        self.v = [0.0, 0.0, 0.0]
         self.v_max, self.a_max, self.dt, self.max_lead = float(v_max), float(a_max), float(dt), float(max_lead)
+        self._state = np.zeros(_PATH_STATE)
+        self._state[0:3] = [float(v) for v in x0]
+        self._state[6:10] = self.v_max, self.a_max, self.dt, self.max_lead
+        self._control: GripperControl | None = None  # the control packed last, and its packing
+        self._packed = np.zeros(_PATH_CONTROL)
 
-    def _brake(self, d: float) -> float:
-        """The fastest speed for this step from which the path stops exactly at distance ``d`` >= 0,
-        braking by at most a_max dt per step: the speeds s, s - a dt, s - 2 a dt, ... then 0, their
-        steps summing to d. With u = d / (a dt^2) and m = floor((sqrt(8u + 1) - 1) / 2) whole
-        braking steps, s = a dt (u + m (m + 1) / 2) / (m + 1); for d < a dt^2 that is d / dt, the
-        last step landing on the target. (The continuous curve s^2 / 2a = d overshoots by up to
-        a dt^2 / 8 on the last step.)"""
-        adt = self.a_max * self.dt
-        u = d / (adt * self.dt)
-        m = math.floor(0.5 * (math.sqrt(8.0 * u + 1.0) - 1.0))
-        return adt * (u + 0.5 * m * (m + 1)) / (m + 1)
+    @property
+    def x(self) -> list[float]:
+        """The setpoint [m]."""
+        return self._state[0:3].tolist()
+
+    @property
+    def v(self) -> list[float]:
+        """The setpoint's velocity [m/s]."""
+        return self._state[3:6].tolist()
 
     def step(self, control: GripperControl, palm) -> bool:
         """Advance the setpoint by one step for ``control``, the palm being at ``palm``; False if
-        it stayed where it was (at rest)."""
-        dt, vm, x = self.dt, self.v_max, self.x
-        u = control.palm_velocity
-        wx, wy, wz = (0.0, 0.0, 0.0) if u is None else (float(u[0]), float(u[1]), float(u[2]))
-        if control.palm_target is not None:
-            t = control.palm_target
-            ex, ey, ez = float(t[0]) - x[0], float(t[1]) - x[1], float(t[2]) - x[2]
-            d = math.sqrt(ex * ex + ey * ey + ez * ez)
-            if d > 0.0:
-                s = self._brake(d) / d
-                wx, wy, wz = wx + ex * s, wy + ey * s, wz + ez * s
-        vx, vy, vz = self.v
-        if wx == wy == wz == 0.0 and vx == vy == vz == 0.0:
-            return False  # at rest, and nothing asks it to move
-        w = math.sqrt(wx * wx + wy * wy + wz * wz)
-        if w > vm:
-            wx, wy, wz = wx * vm / w, wy * vm / w, wz * vm / w
-        # a palm that lags (blocked, pressing on something): the setpoint brakes to wait for it at
-        # max_lead, as before a wall, so that it is not far away when the palm comes free
-        lx, ly, lz = x[0] - float(palm[0]), x[1] - float(palm[1]), x[2] - float(palm[2])
-        lead = math.sqrt(lx * lx + ly * ly + lz * lz)
-        if lead > 0.0:
-            out = (wx * lx + wy * ly + wz * lz) / lead
-            cap = self._brake(max(0.0, self.max_lead - lead))
-            if out > cap:
-                wx, wy, wz = wx - (out - cap) * lx / lead, wy - (out - cap) * ly / lead, wz - (out - cap) * lz / lead
-        w3 = [wx, wy, wz]
-        if control.palm_box is not None:  # brake before the walls, axis by axis
-            low, high = control.palm_box
-            for k in range(3):
-                if w3[k] > 0.0:
-                    w3[k] = min(w3[k], self._brake(max(0.0, float(high[k]) - x[k])))
-                elif w3[k] < 0.0:
-                    w3[k] = max(w3[k], -self._brake(max(0.0, x[k] - float(low[k]))))
-        dx, dy, dz = w3[0] - vx, w3[1] - vy, w3[2] - vz
-        dv = math.sqrt(dx * dx + dy * dy + dz * dz)
-        lim = self.a_max * dt
-        if dv > lim:
-            dx, dy, dz = dx * lim / dv, dy * lim / dv, dz * lim / dv
-        vx, vy, vz = vx + dx, vy + dy, vz + dz
-        self.v = [vx, vy, vz]
-        self.x = [x[0] + vx * dt, x[1] + vy * dt, x[2] + vz * dt]
-        return True
+        it stayed where it was (at rest). A control is a value (GripperControl): it is packed once
+        and its packing kept while the same control comes again."""
+        if control is not self._control:
+            _pack_control(control, self._packed)
+            self._control = control
+        return _path_step(self._state, self._packed, float(palm[0]), float(palm[1]), float(palm[2]))
+
+
+_PATH_STATE = 10
+"""PalmPath's packed state: x (3), v (3), v_max, a_max, dt, max_lead."""
+_PATH_CONTROL = 14
+"""A packed control: has a target, the target (3), the target's velocity or the commanded one (3),
+has a box, the box's low (3) and high (3) corners."""
+
+
+def _pack_control(control: GripperControl, out: np.ndarray) -> None:
+    out[:] = 0.0
+    if control.palm_target is not None:
+        out[0] = 1.0
+        out[1:4] = control.palm_target
+    if control.palm_velocity is not None:
+        out[4:7] = control.palm_velocity
+    if control.palm_box is not None:
+        out[7] = 1.0
+        out[8:11] = control.palm_box[0]
+        out[11:14] = control.palm_box[1]
+
+
+@nb.njit(cache=True)
+def _brake(d, adt, dt):
+    """The fastest speed for this step from which the path stops exactly at distance ``d`` >= 0,
+    braking by at most a dt = ``adt`` per step: the speeds s, s - a dt, s - 2 a dt, ... then 0,
+    their steps summing to d. With u = d / (a dt^2) and m = floor((sqrt(8u + 1) - 1) / 2) whole
+    braking steps, s = a dt (u + m (m + 1) / 2) / (m + 1); for d < a dt^2 that is d / dt, the
+    last step landing on the target. (The continuous curve s^2 / 2a = d overshoots by up to
+    a dt^2 / 8 on the last step.)"""
+    u = d / (adt * dt)
+    m = math.floor(0.5 * (math.sqrt(8.0 * u + 1.0) - 1.0))
+    return adt * (u + 0.5 * m * (m + 1)) / (m + 1)
+
+
+@nb.njit(cache=True)
+def _path_step(state, ctl, px, py, pz):
+    """PalmPath.step on the packed state and control; the palm at (px, py, pz)."""
+    dt, vm, a_max, max_lead = state[8], state[6], state[7], state[9]
+    adt = a_max * dt
+    x0, x1, x2 = state[0], state[1], state[2]
+    wx, wy, wz = ctl[4], ctl[5], ctl[6]
+    if ctl[0] != 0.0:
+        ex, ey, ez = ctl[1] - x0, ctl[2] - x1, ctl[3] - x2
+        d = math.sqrt(ex * ex + ey * ey + ez * ez)
+        if d > 0.0:
+            s = _brake(d, adt, dt) / d
+            wx, wy, wz = wx + ex * s, wy + ey * s, wz + ez * s
+    vx, vy, vz = state[3], state[4], state[5]
+    if wx == 0.0 and wy == 0.0 and wz == 0.0 and vx == 0.0 and vy == 0.0 and vz == 0.0:
+        return False  # at rest, and nothing asks it to move
+    w = math.sqrt(wx * wx + wy * wy + wz * wz)
+    if w > vm:
+        wx, wy, wz = wx * vm / w, wy * vm / w, wz * vm / w
+    # a palm that lags (blocked, pressing on something): the setpoint brakes to wait for it at
+    # max_lead, as before a wall, so that it is not far away when the palm comes free
+    lx, ly, lz = x0 - px, x1 - py, x2 - pz
+    lead = math.sqrt(lx * lx + ly * ly + lz * lz)
+    if lead > 0.0:
+        out = (wx * lx + wy * ly + wz * lz) / lead
+        cap = _brake(max(0.0, max_lead - lead), adt, dt)
+        if out > cap:
+            wx, wy, wz = wx - (out - cap) * lx / lead, wy - (out - cap) * ly / lead, wz - (out - cap) * lz / lead
+    if ctl[7] != 0.0:  # brake before the walls, axis by axis
+        wx = _wall(wx, x0, ctl[8], ctl[11], adt, dt)
+        wy = _wall(wy, x1, ctl[9], ctl[12], adt, dt)
+        wz = _wall(wz, x2, ctl[10], ctl[13], adt, dt)
+    dx, dy, dz = wx - vx, wy - vy, wz - vz
+    dv = math.sqrt(dx * dx + dy * dy + dz * dz)
+    lim = a_max * dt
+    if dv > lim:
+        dx, dy, dz = dx * lim / dv, dy * lim / dv, dz * lim / dv
+    vx, vy, vz = vx + dx, vy + dy, vz + dz
+    state[3], state[4], state[5] = vx, vy, vz
+    state[0], state[1], state[2] = x0 + vx * dt, x1 + vy * dt, x2 + vz * dt
+    return True
+
+
+@nb.njit(cache=True)
+def _wall(w, x, low, high, adt, dt):
+    """Velocity ``w`` along one axis at ``x``, braked to stop at the wall it heads for."""
+    if w > 0.0:
+        return min(w, _brake(max(0.0, high - x), adt, dt))
+    if w < 0.0:
+        return max(w, -_brake(max(0.0, x - low), adt, dt))
+    return w
 
 
 class Gripper:
@@ -213,6 +266,8 @@ class Gripper:
         self.palm_constraint = c.createConstraint(g, -1, -1, -1, p.JOINT_FIXED, [0, 0, 0], [0, 0, 0],
                                                   np.asarray(start_palm).tolist())  # fmt: skip
         self._orientation = c.getQuaternionFromEuler([0.0, 0.0, self.yaw])
+        self._arm_force = arm_force_limit(cfg)
+        self._client_id = c._client
         self.control = GripperControl(np.array(start_palm, dtype=np.float64), 0.0)
         """The control applied last."""
         self.path = PalmPath(self.control.palm_target, v_max=cfg.arm_speed, a_max=cfg.arm_acceleration, dt=cfg.sim.dt)
@@ -244,9 +299,10 @@ class Gripper:
         return np.array(self.path.x, dtype=np.float64)
 
     def _set_palm_target(self, pos) -> None:
-        self.client.changeConstraint(self.palm_constraint, jointChildPivot=[float(v) for v in pos],
-                                     jointChildFrameOrientation=self._orientation,
-                                     maxForce=arm_force_limit(self.config))  # fmt: skip
+        # pybullet's own function with the client's id and arguments by position (pybullet parses
+        # each keyword at ~0.4 us): this runs every physics step the arm moves
+        p.changeConstraint(self.palm_constraint, pos, self._orientation, self._arm_force,
+                           physicsClientId=self._client_id)  # fmt: skip
 
     def _set_finger_closing(self, closing: float, force: float | None = None) -> None:
         cfg = self.config

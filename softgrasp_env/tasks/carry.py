@@ -117,6 +117,7 @@ class CarryTest(TaskWrapper):
         self.angle = 0.0
         """The sway's direction from across the jaw toward the closing axis [rad]."""
         self._anchor: np.ndarray | None = None
+        self._direction = np.zeros(3)  # the sway's, in the world (set with the anchor)
         self._rel0: np.ndarray | None = None
         self.slide = 0.0
         """The largest in-hand slide of this episode's carry so far [m]."""
@@ -186,13 +187,14 @@ class CarryTest(TaskWrapper):
         if n < self._first or n > self._last:
             return control
         t = self.phase(n)
-        yaw = scene.config.yaw
-        across = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
         omega = 2.0 * math.pi * self.frequency
         if self._anchor is None:  # where the arm has the palm when the carry begins
             self._anchor = scene.palm_setpoint
-        c, s = math.cos(self.angle), math.sin(self.angle)
-        direction = across * c + np.array([math.cos(yaw), math.sin(yaw), 0.0]) * s
+            yaw = scene.config.yaw
+            across = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
+            c, s = math.cos(self.angle), math.sin(self.angle)
+            self._direction = across * c + np.array([math.cos(yaw), math.sin(yaw), 0.0]) * s
+        direction = self._direction
         # ramped in over the first period: position and velocity start at 0 (the path starts at rest)
         ramp, ramp_rate = (t * self.frequency, self.frequency) if t * self.frequency < 1.0 else (1.0, 0.0)
         sin, cos = math.sin(omega * t), math.cos(omega * t)

@@ -147,7 +147,7 @@ class LiftTask(Task):
         return reading.tilt > self.max_tilt
 
     def terms(self, reading: Reading) -> dict[str, float]:
-        lift = float(np.clip(reading.lift / self.success_height, 0.0, 1.0))
+        lift = _unit_clip(reading.lift / self.success_height)
         d = float(np.linalg.norm(reading.cyl_rel))
         reach = -self.reach_weight * min(d / REACH_SCALE, 1.0)  # exactly -reach_weight from 10 cm on
         return {"lift": lift, "reach": reach}
@@ -158,6 +158,11 @@ class LiftTask(Task):
         reward = float(held) if self.reward_type == "sparse" else terms["lift"] + terms["reach"]
         return Outcome(held=held, success=held, terminated=self.knocked_over_or_gone(reading), reward=reward,
                        terms=terms)  # fmt: skip
+
+
+def _unit_clip(v: float) -> float:
+    """float(np.clip(v, 0, 1)) in Python floats (numpy on a scalar costs ~3 us); NaN stays NaN."""
+    return v if v != v else (0.0 if v < 0.0 else (1.0 if v > 1.0 else float(v)))
 
 
 __all__ = ["MIN_GRIP_FORCE", "RESET_OPTIONS", "LiftTask", "StartRanges", "check_option"]
