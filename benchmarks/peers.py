@@ -8,15 +8,15 @@ and pybullet's FEM pads (``fingers="fem"``), at matching node counts.
 Levels are nodes a pad: 30 / 100 / 570 / 3,800, our tissue at 4,000 / 16,000 / 64,000 / 256,000
 particles per m^2 of face (30 / 100 / 570 / 3,800 particles a pad, layers as thick as the spacing:
 1 / 1 / 2 / 4) and MuJoCo's flexcomp grids 2x3x5 / 2x5x10 / 3x10x19 / 5x20x38. pybullet's FEM pad
-has its own mesh (coarse: one hex cell through the 8 mm, 6 tetrahedra a cell); it is run once, at
-the level nearest its node count.
+has its own meshes (``--fem-resolutions``: coarse, one hex cell through the 8 mm, 6 tetrahedra a
+cell; fine, two), each run once, in the first level's rows.
 
 For each method and level:
 
 - **rig**: one pad, its core fixed, gravity off, pressed by a frictionless cylinder with 1, 3 and
   6 N; compression against the plane-strain finite-element reference at nu 0 (pad_reference.py:
   1.344 / 2.865 / 4.603 mm). Ours: spatial_convergence.measure_tissue; MuJoCo: mujoco_peer.run_rig.
-  pybullet's FEM pads have no rig here (their anchors need the gripper's links): "-".
+  pybullet's FEM pad: benchmarks/fem_rig.py, the fem kind's mesh and material in the same rig.
 - **grasp**: accuracy.GraspPlan's scripted grasp (approach, squeeze at 3 N per finger, 5 cm lift in
   1 s, 2 s hold) of the 0.1 kg cylinder: held (GraspRecord.held), in-hand motion from the lift on,
   and speed, physics steps per wall second of the stepping alone (ours: the whole world step,
@@ -94,14 +94,17 @@ def mujoco_row(level: str, dof: str, plan: GraspPlan, budget: float) -> dict:
     return out
 
 
-def fem_row(plan: GraspPlan) -> dict:
+def fem_row(plan: GraspPlan, resolution: str = "coarse") -> dict:
+    from benchmarks.fem_rig import run_rig
     from softgrasp_env.fingers.fem import FEM_CELLS_THROUGH, pad_mesh
 
-    cfg = SceneConfig(fingers=FemConfig(resolution="coarse"))
-    nodes = pad_mesh(cfg.finger_half_extents, cfg.tissue.extrude, FEM_CELLS_THROUGH["coarse"]).node_count
+    cfg = SceneConfig(fingers=FemConfig(resolution=resolution))
+    nodes = pad_mesh(cfg.finger_half_extents, cfg.tissue.extrude, FEM_CELLS_THROUGH[resolution]).node_count
+    rig = run_rig(resolution, LOADS, substeps=cfg.fingers.substeps)
     r = _scene_grasp(cfg, plan)
     r.pop("particles")
-    return {"nodes_per_pad": nodes, **r}
+    return {"nodes_per_pad": nodes, **{f"compression_{f:g}N_mm": c * 1e3 for f, c in zip(LOADS, rig.compression, strict=True)},
+            **r}  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -109,12 +112,19 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--levels", default="30,100,570", help=f"comma-separated, of {', '.join(DENSITY)}")
     parser.add_argument("--methods", default=",".join(METHODS), help=f"comma-separated, of {', '.join(METHODS)}")
     parser.add_argument("--budget", type=float, default=300.0, help="wall seconds a peer's grasp may take")
+    parser.add_argument("--fem-resolutions", default="coarse",
+                        help="comma-separated FemConfig resolutions of the fem row (fine: about an hour)")
     parser.add_argument("--out", type=Path, default=OUT)
     ns = parser.parse_args(argv)
     levels, methods = ns.levels.split(","), ns.methods.split(",")
     bad = [lv for lv in levels if lv not in DENSITY] + [m for m in methods if m not in METHODS]
     if bad:
         parser.error(f"unknown levels or methods {bad}: levels {tuple(DENSITY)}, methods {METHODS}")
+    from softgrasp_env.fingers.fem import FEM_CELLS_THROUGH
+
+    bad_fem = [r for r in ns.fem_resolutions.split(",") if r not in FEM_CELLS_THROUGH]
+    if bad_fem:
+        parser.error(f"unknown --fem-resolutions {bad_fem}: of {tuple(FEM_CELLS_THROUGH)}")
     if not ns.budget > 0:
         parser.error(f"--budget must be > 0 s, got {ns.budget}")
     plan = GraspPlan()
@@ -124,14 +134,19 @@ def main(argv: list[str] | None = None) -> int:
     for level in levels:
         for method in methods:
             if method == "fem" and level != levels[0]:
-                continue  # one mesh: run once
+                continue  # its own meshes: run once
             tic = time.perf_counter()
             if method == "ours":
                 row = {**ours_rig(level), **ours_grasp(level, plan)}
             elif method.startswith("mujoco"):
                 row = mujoco_row(level, method.split("_")[1], plan, ns.budget)
             else:
-                row = fem_row(plan)
+                for resolution in ns.fem_resolutions.split(","):
+                    tic = time.perf_counter()
+                    row = {"level": level, "method": f"fem_{resolution}", **fem_row(plan, resolution)}
+                    rows.append({**row, "wall_s": time.perf_counter() - tic})
+                    print(_line(rows[-1]), flush=True)
+                continue
             row = {"level": level, "method": method, **row, "wall_s": time.perf_counter() - tic}
             rows.append(row)
             print(_line(row), flush=True)

@@ -1,7 +1,7 @@
 """Speed and sameness checks of the tissue kernel (softgrasp_env/tissue/solver.py::_step).
 
     python benchmarks/solver_kernel.py block        # us/step of a free 125-particle block
-    python benchmarks/solver_kernel.py dispatch     # us/step of a 1-particle model (call overhead)
+    python benchmarks/solver_kernel.py dispatch     # the call's fixed cost (8 particles, 0 iterations)
     python benchmarks/solver_kernel.py conserve     # momentum drift, zero gravity, damping 0
     python benchmarks/solver_kernel.py scene        # us/step of the grasp scene's tissue (352 p.)
     python benchmarks/solver_kernel.py demo         # whole scripted grasp: steps/s, tissue share
@@ -60,10 +60,36 @@ def bench_block(repeats: int = 7) -> None:
 
 
 def bench_dispatch(repeats: int = 7) -> None:
+    """The call's fixed cost: the smallest block (8 particles, one group of all 8 each) stepped at 1
+    and 2 iterations, extrapolated to none (each iteration's work on 8 groups is ~9 us of it), and
+    of that the Python front end (TissueSolver.step less the compiled _step called directly)."""
+    from dataclasses import replace
+
+    from softgrasp_env.tissue.solver import _step
+
     model, sim, state = free_block(spacing=0.008, half=0.008)
-    solver = TissueSolver(model, sim)
-    t = time_steps(solver, state, empty_colliders(), 3000, repeats)
-    print(f"dispatch {model.particle_count} particle(s): {t * 1e6:.2f} us/step (best of {repeats})")
+    col = empty_colliders()
+    t = {}
+    for it in (1, 2):
+        t[it] = time_steps(TissueSolver(model, replace(sim, iterations=it)), state, col, 3000, repeats)
+    solver = TissueSolver(model, replace(sim, iterations=1))
+    solver.step(state.copy(), col)
+    s = state.copy()
+    args = (s.particle_x, s.particle_v, s.particle_q, s.particle_omega, s.group_q, s.particle_anchor_shape,
+            s.particle_anchor_x, s.particle_anchor_slide, col.rigid_x, col.rigid_q, col.rigid_v, col.rigid_w,
+            col.rigid_inv_mass, col.rigid_inv_inertia, col.rigid_axis, col.rigid_force, col.rigid_gravity,
+            col.rigid_in_solve, col.shape_kind, col.shape_params, col.shape_rigid, col.shape_local_x,
+            col.shape_local_q, *solver._tail_args)  # fmt: skip
+    raw = np.inf
+    for _ in range(repeats):
+        tic = time.perf_counter()
+        for _ in range(3000):
+            _step(*args)
+        raw = min(raw, (time.perf_counter() - tic) / 3000)
+    fixed = 2.0 * t[1] - t[2]
+    print(f"dispatch, {model.particle_count} particles (best of {repeats}): {t[1] * 1e6:.2f} us/step at 1 iteration, "
+          f"{t[2] * 1e6:.2f} at 2; fixed cost per call {fixed * 1e6:.2f} us, of which the Python front end "
+          f"{(t[1] - raw) * 1e6:.2f} (the compiled call alone {raw * 1e6:.2f} us at 1 iteration)")  # fmt: skip
 
 
 def angular_momentum(model, state) -> np.ndarray:
