@@ -16,6 +16,7 @@ import math
 
 import numba as nb
 
+from .jit import KERNEL
 from .rigid import generalized_inv_mass, rigid_apply
 from .rotation import qmul, qrotate
 
@@ -60,7 +61,7 @@ def _project_anchor(i, r, slack, rest_x, xp, inv_mass, rig_x, rig_q, rig_inv_mas
                 rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang)  # fmt: skip
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q, rig_inv_mass,
                     rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt):  # fmt: skip
     """One Gauss-Seidel pass of the consistent coupling over every attached particle (see
@@ -69,7 +70,7 @@ def project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_r
                        rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def project_anchors_of(lo, hi, rest_x, inv_mass, attached, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q,
                        rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt):  # fmt: skip
     """project_anchors over particles lo .. hi - 1."""
@@ -81,7 +82,7 @@ def project_anchors_of(lo, hi, rest_x, inv_mass, attached, p_body, body_core_sha
                                 rig_move, imp_lin, imp_ang, dt)  # fmt: skip
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def limit_deviation(rest_x, inv_mass, attached, p_body, body_core_shape, body_max_deviation, shape_rigid, xp, rig_x,
                     rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt):  # fmt: skip
     """The material's strain limit: every free particle back within its body's
@@ -99,7 +100,7 @@ def limit_deviation(rest_x, inv_mass, attached, p_body, body_core_shape, body_ma
                        dt)  # fmt: skip
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def limit_deviation_of(lo, hi, rest_x, inv_mass, attached, p_body, body_core_shape, body_max_deviation, shape_rigid, xp,
                        rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt):  # fmt: skip
     """limit_deviation over particles lo .. hi - 1."""
@@ -116,7 +117,7 @@ def limit_deviation_of(lo, hi, rest_x, inv_mass, attached, p_body, body_core_sha
                             rig_move, imp_lin, imp_ang, dt)  # fmt: skip
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def snap_attached(
     model_rest_x, model_rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x, rig_q,
     imp_lin, imp_ang, coupling_imp, dt,
@@ -129,7 +130,7 @@ def snap_attached(
                      xp, qp, rig_x, rig_q, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def snap_attached_of(lo, hi, model_rest_x, model_rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp,
                      rig_x, rig_q, imp_lin, imp_ang, coupling_imp, dt):  # fmt: skip
     """snap_attached over particles lo .. hi - 1."""
@@ -167,7 +168,7 @@ def snap_attached_of(lo, hi, model_rest_x, model_rest_q, mass, attached, p_body,
         qp[i, 3] = qn[3]
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def mark_fixed(attached, p_body, body_core_shape, fixed):
     """fixed[i]: particle i is held by its core inside the group solve (compliant.project_group):
     attached, of a body with a core. Under the thesis coupling it does not move (the core is infinitely heavy in

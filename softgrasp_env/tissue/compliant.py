@@ -38,6 +38,7 @@ import math
 import numba as nb
 import numpy as np
 
+from .jit import KERNEL
 from .linalg import inv_sym3, solve_sym3
 from .model import TissueModel
 from .rigid import rigid_apply
@@ -112,7 +113,7 @@ def world_substeps(model: TissueModel, core_mass: np.ndarray, dt: float) -> int:
     return max(substeps_for(model, dt), coupling_substeps(model, core_mass, dt))
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, frame,
                     attached, fixed, rest_q, rest_moment, xs, xp, qp, group_q, moment, g_u, g_raw, mass,
                     body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
@@ -138,7 +139,7 @@ def bodies_independent(model: TissueModel, shape_rigid: np.ndarray) -> bool:
     return covered and all(c >= 0 for c in cores) and len(set(cores)) == len(cores)
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def sweep_body(b, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, frame, attached, fixed,
                rest_q, rest_moment, xs, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid, rig_x,
                rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, continuum,
@@ -168,7 +169,7 @@ def sweep_body(b, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem
             _turn_centre(i, qr, 1.0 - (1.0 / (1.0 + s)) ** (1.0 / iterations), rest_q, qp, rest_moment, moment)
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def project_group(i, s, core, core_lo, core_hi, m_att, rot_iters, g_off, g_mem, g_pack, frame, xs, xp, group_q, moment,
                   fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin,
                   imp_ang, coupling_imp, dt):  # fmt: skip
@@ -441,7 +442,7 @@ def _core_column(b0, b1, b2, inv_m, m, o0, o1, o2, h, hb, bf0, bf1, bf2, wfix, y
     return gam, qj
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs, xp, group_q,
                     fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin,
                     imp_ang, coupling_imp, dt):  # fmt: skip
@@ -560,12 +561,9 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
     for e in range(start, end):
         j = np.uint64(g_mem[e])
         m = mass[j]
-        q0 = g_pack[e, 1]
-        q1 = g_pack[e, 2]
-        q2 = g_pack[e, 3]
-        b0 = p00 * q0 + p01 * q1 + p02 * q2
-        b1 = p01 * q0 + p11 * q1 + p12 * q2
-        b2 = p02 * q0 + p12 * q1 + p22 * q2
+        b0 = g_pack[e, 8]
+        b1 = g_pack[e, 9]
+        b2 = g_pack[e, 10]
         if sliding:
             o0 = g_pack[e, 4]
             o1 = g_pack[e, 5]
@@ -594,7 +592,7 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
                 t21 += b2 * o1
                 t22 += b2 * o2
         # z_j = u_j + D b_j / m_j (per unit mass)
-        inv_m = 1.0 / m
+        inv_m = g_pack[e, 7]
         zx = g_u[e, 0] + (d00 * b0 + d01 * b1 + d02 * b2) * inv_m
         zy = g_u[e, 1] + (d10 * b0 + d11 * b1 + d12 * b2) * inv_m
         zz = g_u[e, 2] + (d20 * b0 + d21 * b1 + d22 * b2) * inv_m
@@ -721,13 +719,10 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
             j = np.uint64(g_mem[e])
             if fixed[j]:
                 continue
-            inv_m = 1.0 / mass[j]
-            q0 = g_pack[e, 1]
-            q1 = g_pack[e, 2]
-            q2 = g_pack[e, 3]
-            b0 = p00 * q0 + p01 * q1 + p02 * q2
-            b1 = p01 * q0 + p11 * q1 + p12 * q2
-            b2 = p02 * q0 + p12 * q1 + p22 * q2
+            inv_m = g_pack[e, 7]
+            b0 = g_pack[e, 8]
+            b1 = g_pack[e, 9]
+            b2 = g_pack[e, 10]
             dx, dy, dz = _held_step(b0, b1, b2, inv_m, g_raw[e, 0], g_raw[e, 1], g_raw[e, 2], y00, y01, y02, y10, y11,
                                     y12, y20, y21, y22, hb, opm, gx, gy, gz)  # fmt: skip
             gam, qj = _core_column(b0, b1, b2, inv_m, mass[j], g_pack[e, 4], g_pack[e, 5], g_pack[e, 6], h, hb, bf0,
@@ -741,13 +736,10 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
         j = np.uint64(g_mem[e])
         if fixed[j]:
             continue
-        inv_m = 1.0 / mass[j]
-        q0 = g_pack[e, 1]
-        q1 = g_pack[e, 2]
-        q2 = g_pack[e, 3]
-        b0 = p00 * q0 + p01 * q1 + p02 * q2
-        b1 = p01 * q0 + p11 * q1 + p12 * q2
-        b2 = p02 * q0 + p12 * q1 + p22 * q2
+        inv_m = g_pack[e, 7]
+        b0 = g_pack[e, 8]
+        b1 = g_pack[e, 9]
+        b2 = g_pack[e, 10]
         dx, dy, dz = _held_step(b0, b1, b2, inv_m, g_raw[e, 0], g_raw[e, 1], g_raw[e, 2], y00, y01, y02, y10, y11, y12,
                                 y20, y21, y22, hb, opm, gx, gy, gz)  # fmt: skip
         if dc != 0.0:
@@ -794,12 +786,9 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
         if not fixed[j]:
             continue
         m = mass[j]
-        q0 = g_pack[e, 1]
-        q1 = g_pack[e, 2]
-        q2 = g_pack[e, 3]
-        b0 = p00 * q0 + p01 * q1 + p02 * q2
-        b1 = p01 * q0 + p11 * q1 + p12 * q2
-        b2 = p02 * q0 + p12 * q1 + p22 * q2
+        b0 = g_pack[e, 8]
+        b1 = g_pack[e, 9]
+        b2 = g_pack[e, 10]
         rx = g_raw[e, 0] + h * (e00 * b0 + e01 * b1 + e02 * b2) / m
         ry = g_raw[e, 1] + h * (e10 * b0 + e11 * b1 + e12 * b2) / m
         rz = g_raw[e, 2] + h * (e20 * b0 + e21 * b1 + e22 * b2) / m

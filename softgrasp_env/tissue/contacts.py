@@ -17,6 +17,7 @@ import numba as nb
 import numpy as np
 
 from .collision import SHAPE_BOX, SHAPE_CYLINDER, SHAPE_PLANE, SHAPE_SPHERE, shape_distance, support_radius
+from .jit import KERNEL
 from .rigid import generalized_inv_mass, rigid_apply, shape_world_pose
 from .rotation import qconj, qrotate
 
@@ -91,7 +92,7 @@ def _shape_query_at(s, p, shape_kind, shape_params, pose):
     return dist, n
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def collect_contacts(
     xp, x0, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid, shape_local_x,
     shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner, pose,
@@ -148,7 +149,7 @@ def pair_scratch_sizes(particles: int, bodies: int) -> tuple[int, int]:
     return (4 + 2 * _MAX_CELLS_PER_PARTICLE) * particles + 2 * 28, 7 * bodies
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def collect_pairs(xp, x0, radii, body_off, margin, pair_i, pair_j, grid, boxes):
     """Candidate particle pairs between different tissue bodies (the two fingers can touch): i of
     the lower body and j of the higher within their reaches plus the margin. Only the particles in
@@ -231,7 +232,8 @@ def collect_pairs(xp, x0, radii, body_off, margin, pair_i, pair_j, grid, boxes):
                 start[c + 1] += 1
             for c in range(total):
                 start[c + 1] += start[c]
-            fill[:] = start[:total]
+            for c in range(total):  # a loop, not fill[:] = start[:total]: that copies through a temporary
+                fill[c] = start[c]
             for k in range(m):
                 binned[fill[cell_of[k]]] = inside[k]
                 fill[cell_of[k]] += 1
@@ -279,7 +281,7 @@ def clear_multipliers(count, lam, lam_t):
 # The contact and friction kernels below each loop over all their rows: one compiled call per
 # Gauss-Seidel iteration. Called once per row instead, as numba-inlined bodies in _step, the same
 # arithmetic ran at half the speed (the grasp's 124 contacts: 18 us against 9 us a pass).
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def project_shape_contacts(
     count, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass, shape_kind, shape_params,
     shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
@@ -332,7 +334,7 @@ def project_shape_contacts(
                         rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang)  # fmt: skip
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def project_pairs(count, pair_i, pair_j, pair_lambda, pair_normal, xp, qp, radii, inv_mass):
     """Two ellipsoids of different bodies, each approximated by its support radius along the line
     of centres (Mueller & Chentanez 2011 sec. 5), separated with inverse-mass weights."""
@@ -363,7 +365,7 @@ def project_pairs(count, pair_i, pair_j, pair_lambda, pair_normal, xp, qp, radii
             xp[j, a] -= wj * dl * n[a]
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})  # allocates: keeps numba's runtime (jit.py)
 def max_penetration(x, q, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid,
                     shape_local_x, shape_local_q, rig_x, rig_q, out):  # fmt: skip
     """Deepest overlap of any particle ellipsoid with a rigid shape (out[0]) and deepest intrusion

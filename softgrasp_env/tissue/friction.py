@@ -41,6 +41,7 @@ import math
 import numba as nb
 import numpy as np
 
+from .jit import KERNEL
 from .rigid import generalized_inv_mass, rigid_apply, shape_world_pose
 from .rotation import qconj, qrotate
 
@@ -59,7 +60,7 @@ def _coulomb(lam_t, lam_t_done, lam_n, mu_s, mu_k):
 
 # Like the contact kernels, each friction kernel loops over all its rows: one compiled call per
 # pass (see contacts.py).
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def load_anchors(nc, c_particle, c_shape, c_inner, x0, p_body, shape_rigid, shape_local_x, shape_local_q, rig_x0,
                   rig_q0, anchor_shape, anchor_x, anchor_slide, ns, c_anchor, c_patch, patch_slide, patch_change,
                   patch_body, body_contact_law):  # fmt: skip
@@ -117,7 +118,7 @@ def _patch_lever(c, p, c_point, patch):
     return rx - rd * mx, ry - rd * my, rz - rd * mz, mx, my, mz
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def friction_patches(
     nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_normal, c_rn, c_anchor, c_point, xp, inv_mass,
     body_friction, ns, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
@@ -336,7 +337,7 @@ def _set_friction(c, i, r, tx, ty, tz, c_friction, c_point, xp, inv_mass, rig_x,
                     -iz, rig_move[r], dt, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang)  # fmt: skip
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def _apply_patch_law(
     nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_point, xp, inv_mass, shape_rigid, rig_x,
     rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, patch,
@@ -364,7 +365,7 @@ def _apply_patch_law(
                       rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def _apply_with_cones(
     nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_point, xp, inv_mass, body_friction,
     patch_body, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, patch,
@@ -452,7 +453,7 @@ def _apply_with_cones(
                       rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def friction_velocity_pass(
     nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_normal, c_rn, x, v, inv_mass, shape_rigid, rig_x0, rig_q0,
     rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, patch_slide, patch_change,
@@ -530,7 +531,7 @@ def friction_velocity_pass(
                          rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang)  # fmt: skip
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def store_anchors(nc, c_particle, c_shape, c_patch, c_lambda, c_anchor, x, shape_rigid, shape_local_x, shape_local_q,
                    rig_x, rig_q, patch_slide, patch_change, anchor_shape, anchor_x, anchor_slide, c_slip):  # fmt: skip
     """Keep the anchors of touching contacts for the next step: a sticking patch keeps them where
@@ -574,7 +575,7 @@ def store_anchors(nc, c_particle, c_shape, c_patch, c_lambda, c_anchor, x, shape
                 anchor_x[i, k, a] = c_anchor[c, a]
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def friction_pairs(count, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, x0, xp, inv_mass, p_body, body_friction):
     for k in range(count):
         lam_n = pair_lambda[k]

@@ -13,6 +13,7 @@ import math
 
 import numba as nb
 
+from .jit import KERNEL
 from .linalg import solve_sym3
 from .rotation import qconj, qexp, qmat, qmul, qnormalize, qrotate
 from .shape_matching import refresh_moment
@@ -28,7 +29,7 @@ def _world_inertia(i, q, inertia):
             d0 * r3 * r6 + d1 * r4 * r7 + d2 * r5 * r8, d0 * r6 * r6 + d1 * r7 * r7 + d2 * r8 * r8)  # fmt: skip
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def _damped_velocities(x, v, q, omega, mass, inertia, body_off, c, vd, wd):
     """Damp each particle's deviation from its body's rigid motion by the fraction c (Mueller et
     al. 2007 sec. 3.5): v_i += c (v_cm + W x r_i - v_i), w_i += c (W - w_i), with v_cm the body's
@@ -40,7 +41,7 @@ def _damped_velocities(x, v, q, omega, mass, inertia, body_off, c, vd, wd):
         _damped_body(b, x, v, q, omega, mass, inertia, body_off, c, vd, wd)
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def _damped_body(b, x, v, q, omega, mass, inertia, body_off, c, vd, wd):
     """_damped_velocities of body b."""
     s = body_off[b]
@@ -100,7 +101,7 @@ def _damped_body(b, x, v, q, omega, mass, inertia, body_off, c, vd, wd):
         wd[i, 2] = omega[i, 2] + c * (wz - omega[i, 2])
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def predict_particles(x, v, q, omega, group_q, mass, inertia, body_off, rest_moment, gx, gy, gz, damping, dt, xp, qp,
                       q_pred, vd, wd, moment):  # fmt: skip
     """Predicted positions xp and orientations qp of every particle (PBD Alg. 1 lines 5-11; Mueller
@@ -113,7 +114,7 @@ def predict_particles(x, v, q, omega, group_q, mass, inertia, body_off, rest_mom
     predict_particles_of(0, x.shape[0], x, q, group_q, rest_moment, gx, gy, gz, dt, xp, qp, q_pred, vd, wd, moment)
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def predict_body(b, x, v, q, omega, group_q, mass, inertia, body_off, rest_moment, gx, gy, gz, damping, dt, xp, qp,
                  q_pred, vd, wd, moment):  # fmt: skip
     """predict_particles of body b alone (its particles are body_off[b] .. body_off[b + 1] - 1)."""
@@ -123,7 +124,7 @@ def predict_body(b, x, v, q, omega, group_q, mass, inertia, body_off, rest_momen
                          wd, moment)  # fmt: skip
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def predict_particles_of(lo, hi, x, q, group_q, rest_moment, gx, gy, gz, dt, xp, qp, q_pred, vd, wd, moment):
     """predict_particles' prediction of particles lo .. hi - 1 from their damped velocities vd, wd."""
     for i in range(lo, hi):
@@ -143,7 +144,7 @@ def predict_particles_of(lo, hi, x, q, group_q, rest_moment, gx, gy, gz, dt, xp,
             group_q[i, a] = gq[a]
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def update_velocities(x, v, q, omega, xp, qp, wd, inertia, spin_kick, attached, dt):
     """Velocities from positions (PBD Alg. 1 lines 18-21). Angular velocities from angular momentum:
     each particle's own angular momentum l = R_0 I R_0^T w (the rotation it was predicted with,
@@ -155,7 +156,7 @@ def update_velocities(x, v, q, omega, xp, qp, wd, inertia, spin_kick, attached, 
     update_velocities_of(0, x.shape[0], x, v, q, omega, xp, qp, wd, inertia, spin_kick, attached, dt)
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def update_velocities_of(lo, hi, x, v, q, omega, xp, qp, wd, inertia, spin_kick, attached, dt):
     """update_velocities of particles lo .. hi - 1."""
     inv_dt = 1.0 / dt

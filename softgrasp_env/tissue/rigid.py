@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numba as nb
 import numpy as np
 
+from .jit import KERNEL
 from .rotation import qconj, qexp, qmul, qnormalize, qrotate
 
 
@@ -181,7 +182,7 @@ def rigid_apply(r, rx, ry, rz, px, py, pz, move, dt, rig_x, rig_q, rig_inv_mass,
     rig_q[r, 3] = qn[3]
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def predict_rigid(rig_x0, rig_q0, rig_v, rig_w, rig_gravity, rig_move, rig_inv_mass, rig_force, gx, gy, gz, dt, rig_x,
                   rig_q, imp_lin, imp_ang, coupling_imp):  # fmt: skip
     """Predict every rigid body's pose by semi-implicit Euler, as pybullet will integrate it (thesis

@@ -24,6 +24,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from .jit import KERNEL
 from .model import TissueModel
 from .rotation import extract_rotation_unit_t, qconj, qlog, qmat, qmul, qnormalize, qrotate
 
@@ -46,19 +47,45 @@ def rest_moments(model: TissueModel) -> np.ndarray:
 
 
 def group_pack(model: TissueModel) -> np.ndarray:
-    """(G, 8) per group entry e (member j of group i): [m_j / M_i, m_j q_e (3), q_e (3), 0], with
-    q_e = x_bar_j - c_bar_i the rest offset and M_i the group's mass. These are the rest-state
-    factors of Mueller & Chentanez 2011 eq. (10), constant over a run: precomputed once, and one
-    64-byte row per entry, the group solve reads one cache line per member instead of three."""
+    """(G, 12) per group entry e (member j of group i): [m_j / M_i, m_j q_e (3), q_e (3), 1 / m_j,
+    b_e (3), 0], with q_e = x_bar_j - c_bar_i the rest offset, M_i the group's mass and, for a
+    continuum group (model.group_continuum), b_e = A_qq^-1 m_j q_e its member's column of F
+    (compliant.continuum_group; 0 elsewhere). These are the rest-state factors of Mueller &
+    Chentanez 2011 eq. (10) and of the continuum energy, constant over a run: precomputed once,
+    each member's row read in one pass instead of recomputed in each of the group solve's."""
     g_mem = model.group_members.astype(np.int64)
     m = model.particle_mass[g_mem]
     sizes = np.diff(model.group_offsets.astype(np.int64))
     msum = np.add.reduceat(m, model.group_offsets[:-1].astype(np.int64)) if m.size else np.zeros(0)
-    out = np.zeros((g_mem.shape[0], 8))
+    out = np.zeros((g_mem.shape[0], GROUP_PACK_COLUMNS))
     out[:, 0] = m / np.repeat(msum, sizes)
     out[:, 1:4] = m[:, None] * model.group_rest_offset
     out[:, 4:7] = model.group_rest_offset
+    out[:, 7] = 1.0 / m
+    _fill_columns(model.group_offsets, model.group_continuum, out)
     return out
+
+
+GROUP_PACK_COLUMNS = 12
+"""group_pack's columns (a 96-byte row)."""
+
+
+@nb.njit(**KERNEL)
+def _fill_columns(g_off, g_cont, pack):
+    """b_e = A_qq^-1 (m_j q_e) of each continuum group's members into pack[:, 8:11], by the very
+    expression the group solve used to evaluate per pass (same operations, same contraction), so
+    the solve's numbers do not change."""
+    for i in range(g_off.shape[0] - 1):
+        if g_cont.shape[1] == 0 or g_cont[i, 6] <= 0.0:
+            continue
+        p00, p01, p02, p11, p12, p22 = g_cont[i, 0], g_cont[i, 1], g_cont[i, 2], g_cont[i, 3], g_cont[i, 4], g_cont[i, 5]
+        for e in range(g_off[i], g_off[i + 1]):
+            q0 = pack[e, 1]
+            q1 = pack[e, 2]
+            q2 = pack[e, 3]
+            pack[e, 8] = p00 * q0 + p01 * q1 + p02 * q2
+            pack[e, 9] = p01 * q0 + p11 * q1 + p12 * q2
+            pack[e, 10] = p02 * q0 + p12 * q1 + p22 * q2
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
@@ -110,7 +137,7 @@ def _spin_gained(i, q_pred, qp, inertia, spin_kick):
     return kick
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def group_frames(g_off, g_mem, mass, xs, frame):
     """What each group's torque balance needs from the step's start positions xs, once per step
     (they do not change over the iterations): frame[i] = [cs (3), I^-1 (6: xx, xy, xz, yy, yz,
@@ -119,7 +146,7 @@ def group_frames(g_off, g_mem, mass, xs, frame):
     group_frames_of(0, g_off.shape[0] - 1, g_off, g_mem, mass, xs, frame)
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def group_frames_of(lo, hi, g_off, g_mem, mass, xs, frame):
     """group_frames over groups lo .. hi - 1."""
     for i in range(lo, hi):
@@ -231,7 +258,7 @@ def _fit_group(i, rot_iters, g_off, g_mem, g_pack, xp, group_q, moment):
     return qr, cx, cy, cz
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def balance_torques(g_off, g_mem, frame, attached, fixed, inertia, xs, xp, qp, q_pred, spin_kick):
     """After the step's last sweep: give each group's centre the spin of its turns (_spin_gained)
     and turn the group back by dth = I^-1 T, T that spin (I the group's inertia about cs, frame):
@@ -244,7 +271,7 @@ def balance_torques(g_off, g_mem, frame, attached, fixed, inertia, xs, xp, qp, q
                        spin_kick)  # fmt: skip
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def balance_torques_of(lo, hi, g_off, g_mem, frame, attached, fixed, inertia, xs, xp, qp, q_pred, spin_kick):
     """balance_torques over groups lo .. hi - 1."""
     for i in range(lo, hi):

@@ -64,9 +64,18 @@ from .contacts import (
 )
 from .friction import friction_pairs, friction_patches, friction_velocity_pass, load_anchors, store_anchors
 from .integrate import predict_body, predict_particles, update_velocities, update_velocities_of
+from .jit import KERNEL
 from .model import CONTINUUM_COLUMNS, TissueModel
 from .rigid import Colliders, predict_rigid
-from .shape_matching import balance_torques, balance_torques_of, group_frames, group_frames_of, group_pack, rest_moments
+from .shape_matching import (
+    GROUP_PACK_COLUMNS,
+    balance_torques,
+    balance_torques_of,
+    group_frames,
+    group_frames_of,
+    group_pack,
+    rest_moments,
+)
 from .state import TissueState
 
 
@@ -145,7 +154,7 @@ _B_SCRATCH = (("c_inner", "contacts", 0), ("patch_slide", "patches", 0), ("patch
 # the model's arrays, copied in once (TissueModel is frozen; the solver reads it at construction,
 # as it does for the rest moments and group data it derives from it)
 _F_MODEL = (("rest_x", "n", 3), ("rest_q", "n", 4), ("rest_moment", "n", 9), ("inertia", "n", 3), ("radii", "n", 3),
-            ("mass", "n", 0), ("inv_mass", "n", 0), ("g_pack", "members", 8),
+            ("mass", "n", 0), ("inv_mass", "n", 0), ("g_pack", "members", GROUP_PACK_COLUMNS),
             ("body_friction", "bodies", 2), ("group_kappa", "n", 0), ("body_max_deviation", "bodies", 0),
             ("g_cont", "n", CONTINUUM_COLUMNS))  # fmt: skip
 _I_MODEL = (("p_body", "n", 0), ("g_off", "groups", 0), ("g_mem", "members", 0), ("body_off", "body_offsets", 0),
@@ -194,7 +203,7 @@ def _view1(buf, layout, k):
 # =================================================================================================
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
            rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
            rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont):  # fmt: skip
@@ -257,7 +266,7 @@ def _bodies_end(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_r
         update_velocities_of(lo, hi, x, v, q, omega, xp, qp, wd, inertia, spin_kick, attached, dt)
 
 
-@nb.njit(cache=True, error_model="numpy", fastmath={"contract"})
+@nb.njit(**KERNEL)
 def _step(
     # state (updated in place on success)
     x, v, q, omega, group_q, anchor_shape, anchor_x, anchor_slide,
