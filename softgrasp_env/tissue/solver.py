@@ -78,6 +78,9 @@ from .shape_matching import (
 )
 from .state import TissueState
 
+RIGID_ROW = 16
+"""Floats a row of the solver's rigid outputs takes (128 bytes: TissueSolver._rigid_buffers)."""
+
 
 @dataclass(eq=False)
 class StepOutput:
@@ -496,12 +499,20 @@ class TissueSolver:
         self._args_for = None
 
     def _rigid_buffers(self, count: int) -> None:
+        """The rigid outputs, one row per rigid slot, each row RIGID_ROW floats wide of which the
+        first 3 (4: the orientation) are used: every pad's passes add to its own core's row of the
+        impulses at each attached member (compliant.deliver_to_core), and on threads two cores'
+        rows in one cache line would bounce it between the cores at every add (false sharing);
+        rows a cache line apart or more do not share one. The kernels index the columns they use
+        and never read the rest; StepOutput hands out views of the used columns."""
         if self._rigid_buffers_for != count:
-            self._rig_x = np.zeros((count, 3))
-            self._rig_q = np.zeros((count, 4))
-            self._imp_lin = np.zeros((count, 3))
-            self._imp_ang = np.zeros((count, 3))
-            self._coupling_imp = np.zeros((count, 3))
+            self._rig_x = np.zeros((count, RIGID_ROW))
+            self._rig_q = np.zeros((count, RIGID_ROW))
+            self._imp_lin = np.zeros((count, RIGID_ROW))
+            self._imp_ang = np.zeros((count, RIGID_ROW))
+            self._coupling_imp = np.zeros((count, RIGID_ROW))
+            self._outputs = (self._rig_x[:, :3], self._rig_q[:, :4], self._imp_lin[:, :3], self._imp_ang[:, :3],
+                             self._coupling_imp[:, :3])  # fmt: skip
             self._rigid_buffers_for = count
             self._args_for = None
 
@@ -593,8 +604,7 @@ class TissueSolver:
             self._pack(tuple(grown))
         contact_count, pair_count = self._counts.tolist()
         # positional: StepOutput's fields in order (keywords cost ~1 us a step here)
-        return StepOutput(self._rig_x, self._rig_q, self._imp_lin, self._imp_ang, self._coupling_imp, contact_count,
-                          pair_count)  # fmt: skip
+        return StepOutput(*self._outputs, contact_count, pair_count)
 
     def last_contacts(self) -> LastContacts:
         """The particle-shape contacts of the last step, as the solve left them (views, valid until
