@@ -34,7 +34,6 @@ them. Nothing here imports pybullet or gymnasium.
 
 from __future__ import annotations
 
-import os
 import warnings
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -569,7 +568,6 @@ class TissueSolver:
             self._threaded_for = col.shape_rigid
             self._args_for = None
         if self._threaded:
-            _passive_thread_wait()
             before = nb.get_num_threads()
             nb.set_num_threads(self._threads)
             try:
@@ -637,22 +635,6 @@ class TissueSolver:
                         m.body_core_shape, col.shape_kind, col.shape_params, col.shape_rigid, col.shape_local_x,
                         col.shape_local_q, col.rigid_x, col.rigid_q, out)  # fmt: skip
         return float(out[0]), float(out[1])
-
-
-OMP_WAIT_POLICY = "PASSIVE"
-"""What the threaded step asks of OpenMP's idle threads (numba's default thread pool, libgomp):
-to sleep at the end of a parallel pass rather than spin. A step runs a parallel pass per pad pass
-and its serial parts (contacts, friction, pybullet) in between; a spinning worker held two-thread
-SoftGraspEasy-v4 at 64,000 per m^2 to x1.30 of one thread, sleeping gave x1.49 (one run each, 2
-cores of an Intel Xeon)."""
-
-
-def _passive_thread_wait() -> None:
-    """Set OMP_WAIT_POLICY for the thread pool unless the user has: libgomp reads it when numba's
-    OpenMP layer loads it, at the first threaded step (if the process has loaded libgomp before,
-    torch does, the policy it started with stays)."""
-    if "OMP_WAIT_POLICY" not in os.environ:
-        os.environ["OMP_WAIT_POLICY"] = OMP_WAIT_POLICY
 
 
 @nb.njit(cache=True)

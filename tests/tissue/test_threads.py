@@ -63,19 +63,6 @@ elif what == "same":
     one = run(1, sys.argv[2], steps, particle_density=density)
     two = run(2, sys.argv[2], steps, particle_density=density)
     assert all(a.tobytes() == b.tobytes() for a, b in zip(one, two)), "1 and 2 threads differ"
-elif what == "wait":
-    import os
-    assert "OMP_WAIT_POLICY" not in os.environ
-    run(1, "thesis", 2)
-    assert "OMP_WAIT_POLICY" not in os.environ  # one thread touches nothing
-    run(2, "thesis", 2)
-    assert os.environ["OMP_WAIT_POLICY"] == "PASSIVE"
-    from numba.np.ufunc import parallel
-    assert parallel._is_initialized
-elif what == "wait-kept":
-    import os
-    run(2, "thesis", 2)
-    assert os.environ["OMP_WAIT_POLICY"] == "ACTIVE"  # the user's choice stays
 elif what == "warn":
     from softgrasp_env.accuracy import _Pad
     from softgrasp_env.config import TissueConfig
@@ -169,16 +156,6 @@ def test_pads_that_share_a_core_or_have_none_stay_on_one_thread():
     Model.particle_count = 9
     Model.body_core_shape = np.array([-1, 1])
     assert not bodies_independent(Model, np.array([0, 1]))  # a pad without a core
-
-
-@needs_two
-def test_the_threaded_step_asks_idle_threads_to_sleep_unless_the_user_said_otherwise(monkeypatch):
-    """OMP_WAIT_POLICY=PASSIVE is set at the first threaded step (a spinning worker costs the serial
-    parts between the parallel passes: x1.30 against x1.49 at 64,000 per m^2), not by one thread,
-    and a policy the user set is kept."""
-    monkeypatch.delenv("OMP_WAIT_POLICY", raising=False)
-    _child("wait")
-    _child("wait-kept", env={"OMP_WAIT_POLICY": "ACTIVE"})
 
 
 @needs_two
