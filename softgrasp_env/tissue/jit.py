@@ -14,7 +14,7 @@
   owns every buffer), so there is nothing for the counts to keep alive. It is numba's own flag for
   code that does not need its runtime (an underscore option of ``numba.njit``); a kernel that
   must allocate (contacts.max_penetration) keeps the runtime, and a test checks the flag is set
-  where it matters (tests/tissue/test_kernel_options.py). Results are unchanged to the bit.
+  where it matters (the test suite). Results are unchanged to the bit.
 """
 
 from __future__ import annotations
