@@ -193,10 +193,10 @@ class SoftGraspEnv(gym.Env):
     | share of the normal load sticking at Q / mu P 0.5 / 0.9 | 0.85 / 0.42 | 1.00 / 0.51 | 0.97 / 0.47 | 0.96 / 0.46 |
     | heaviest cylinder held, over Coulomb's | 1 | 1.05 | 1.04 | 1.05 |
     | squeeze at which a grip lowered from 4 N lets go, over Coulomb's least | 1 | 1.00-1.19 | 1.02-1.18 | 1.02-1.16 |
-    | env steps/s (SoftGraspEasy, random actions) | | 60 | 36 | 4 |
+    | env steps/s (SoftGraspEasy, random actions) | | 102 | 47 | 6.2 |
 
-    The last row was measured on one core of an AMD EPYC (2 cores, no AVX-512) with another job on
-    the other; the grip-lowering row over five grip-force episodes (seeds 1000-1003, 1013; the
+    The last row was measured on one core of an Intel Xeon (2 cores, AVX-512), the other free; the
+    grip-lowering row over five grip-force episodes (seeds 1000-1003, 1013; the
     squeeze falls 10 % every other step, so a drop lands up to about 1.1 times late); the stick
     share's reference is the finite-element pad with Coulomb's law at every node. At the default,
     the pad is too coarse for the strip (three particle columns across it): it is stiffer than the
@@ -204,8 +204,9 @@ class SoftGraspEnv(gym.Env):
     the continuum's edges have already let 15 % of the load slip. The package's documentation
     (Results: convergence in space) has every row at every level, with its observed order.
 
-    ``threads=2`` runs each pad on a thread of its own, with the same result to the bit: x1.4-1.8
-    env steps/s at ``converged`` on two free cores, by machine. No run tore: 10^5 env steps of
+    ``threads=2`` runs each pad on a thread of its own, with the same result to the bit: x1.3-1.4
+    env steps/s at ``converged`` and x1.6 at 256,000 per m² on two cores of the same Intel Xeon
+    (the tissue kernel alone x1.6 at ``converged``: pybullet, contacts and friction stay serial). No run tore: 10^5 env steps of
     uniform random actions and 10^5 of the noisy scripted grasp at the default, and 10^4 of each
     at ``converged`` (the package's documentation: Finger kinds, the tissue's settings).
 

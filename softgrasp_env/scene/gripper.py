@@ -84,12 +84,31 @@ class PalmPath:
     the same numbers as the same formulas in Python floats."""
 
     def __init__(self, x0: np.ndarray, *, v_max: float, a_max: float, dt: float, max_lead: float = MAX_LEAD) -> None:
-        self.v_max, self.a_max, self.dt, self.max_lead = float(v_max), float(a_max), float(dt), float(max_lead)
         self._state = np.zeros(_PATH_STATE)
         self._state[0:3] = [float(v) for v in x0]
-        self._state[6:10] = self.v_max, self.a_max, self.dt, self.max_lead
+        self._state[6:10] = float(v_max), float(a_max), float(dt), float(max_lead)
         self._control: GripperControl | None = None  # the control packed last, and its packing
         self._packed = np.zeros(_PATH_CONTROL)
+
+    @property
+    def v_max(self) -> float:
+        """Top speed [m/s] (fixed at construction, as the other limits)."""
+        return float(self._state[6])
+
+    @property
+    def a_max(self) -> float:
+        """Top acceleration [m/s^2]."""
+        return float(self._state[7])
+
+    @property
+    def dt(self) -> float:
+        """The step [s]."""
+        return float(self._state[8])
+
+    @property
+    def max_lead(self) -> float:
+        """Farthest the setpoint leads the palm [m]."""
+        return float(self._state[9])
 
     @property
     def x(self) -> list[float]:
@@ -178,9 +197,8 @@ def _path_step(state, ctl, px, py, pz):
         wz = _wall(wz, x2, ctl[10], ctl[13], adt, dt)
     dx, dy, dz = wx - vx, wy - vy, wz - vz
     dv = math.sqrt(dx * dx + dy * dy + dz * dz)
-    lim = a_max * dt
-    if dv > lim:
-        dx, dy, dz = dx * lim / dv, dy * lim / dv, dz * lim / dv
+    if dv > adt:  # at most a_max dt of velocity change a step
+        dx, dy, dz = dx * adt / dv, dy * adt / dv, dz * adt / dv
     vx, vy, vz = vx + dx, vy + dy, vz + dz
     state[3], state[4], state[5] = vx, vy, vz
     state[0], state[1], state[2] = x0 + vx * dt, x1 + vy * dt, x2 + vz * dt

@@ -76,7 +76,7 @@ def _fill_columns(g_off, g_cont, pack):
     expression the group solve used to evaluate per pass (same operations, same contraction), so
     the solve's numbers do not change."""
     for i in range(g_off.shape[0] - 1):
-        if g_cont.shape[1] == 0 or g_cont[i, 6] <= 0.0:
+        if g_cont[i, 6] <= 0.0:  # not a continuum group
             continue
         p00, p01, p02, p11, p12, p22 = g_cont[i, 0], g_cont[i, 1], g_cont[i, 2], g_cont[i, 3], g_cont[i, 4], g_cont[i, 5]
         for e in range(g_off[i], g_off[i + 1]):
