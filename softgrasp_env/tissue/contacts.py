@@ -16,7 +16,18 @@ import math
 import numba as nb
 import numpy as np
 
-from .collision import SHAPE_BOX, SHAPE_CYLINDER, SHAPE_PLANE, SHAPE_SPHERE, shape_distance, support_radius
+from .collision import (
+    SHAPE_BOX,
+    SHAPE_CAPSULE,
+    SHAPE_CONE,
+    SHAPE_CYLINDER,
+    SHAPE_ELLIPTIC,
+    SHAPE_HULL,
+    SHAPE_PLANE,
+    SHAPE_SPHERE,
+    shape_distance_of,
+    support_radius,
+)
 from .jit import KERNEL
 from .rigid import generalized_inv_mass, rigid_apply, shape_world_pose
 from .rotation import qconj, qrotate
@@ -27,12 +38,13 @@ _NO_RIGID = -1
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q):
-    """Signed distance of world point p from shape s and the world outward normal."""
+def _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, more_kinds):
+    """Signed distance of world point p from shape s and the world outward normal (``more_kinds``:
+    collision.shape_distance_of)."""
     sx, sq = shape_world_pose(s, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
     d = (p[0] - sx[0], p[1] - sx[1], p[2] - sx[2])
     pl = qrotate(qconj(sq), d)
-    dist, nx, ny, nz = shape_distance(shape_kind[s], (shape_params[s, 0], shape_params[s, 1], shape_params[s, 2]), pl)
+    dist, nx, ny, nz = shape_distance_of(shape_kind[s], shape_params, s, pl, more_kinds)
     n = qrotate(sq, (nx, ny, nz))
     return dist, n
 
@@ -42,8 +54,14 @@ _BOUND_SLACK = 1e-9
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def _bounding_radius(kind, p0, p1, p2):
-    """Radius of a sphere about the shape origin that holds the whole shape (inf for the plane)."""
+def _bounding_radius(kind, p0, p1, p2, more_kinds):
+    """Radius of a sphere about the shape origin that holds the whole shape (inf for the plane),
+    from the first three columns of its params row. The kinds after the capsule only where
+    ``more_kinds`` is not None (collision.shape_distance_of: for None, numba drops the branch and
+    the code is the one the first five kinds always had)."""
+    if more_kinds is not None:
+        if kind > SHAPE_CAPSULE:
+            return _more_bounding_radius(kind, p0, p1, p2)
     if kind == SHAPE_PLANE:
         return np.inf
     if kind == SHAPE_SPHERE:
@@ -56,7 +74,20 @@ def _bounding_radius(kind, p0, p1, p2):
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def _shape_poses(shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, pose):
+def _more_bounding_radius(kind, p0, p1, p2):
+    """_bounding_radius of the kinds after the capsule; inf (never culled) for a code that is no
+    shape."""
+    if kind == SHAPE_CONE or kind == SHAPE_ELLIPTIC:
+        # cone (r_bottom, r_top, hh): its wider rim; elliptic (a, b, hh): the rim at its major axis
+        r = max(p0, p1)
+        return math.sqrt(r * r + p2 * p2)
+    if kind == SHAPE_HULL:
+        return p1  # its row keeps the farthest corner's distance in column 1
+    return np.inf
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _shape_poses(shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, pose, more_kinds):
     """pose[s] = world position (0:3), orientation (3:7) and bounding radius (7) of every shape, once
     per pass over all particles instead of once per particle (same expressions as _shape_query)."""
     for s in range(shape_kind.shape[0]):
@@ -65,7 +96,8 @@ def _shape_poses(shape_kind, shape_params, shape_rigid, shape_local_x, shape_loc
             pose[s, a] = sx[a]
         for a in range(4):
             pose[s, 3 + a] = sq[a]
-        pose[s, 7] = _bounding_radius(shape_kind[s], shape_params[s, 0], shape_params[s, 1], shape_params[s, 2])
+        pose[s, 7] = _bounding_radius(shape_kind[s], shape_params[s, 0], shape_params[s, 1], shape_params[s, 2],
+                                      more_kinds)  # fmt: skip
         pose[s, 7] += _BOUND_SLACK
 
 
@@ -81,13 +113,13 @@ def _far_from_shape(s, p, reach, pose):
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
-def _shape_query_at(s, p, shape_kind, shape_params, pose):
+def _shape_query_at(s, p, shape_kind, shape_params, pose, more_kinds):
     """_shape_query with the shape's world pose taken from ``pose`` (see _shape_poses)."""
     sx = (pose[s, 0], pose[s, 1], pose[s, 2])
     sq = (pose[s, 3], pose[s, 4], pose[s, 5], pose[s, 6])
     d = (p[0] - sx[0], p[1] - sx[1], p[2] - sx[2])
     pl = qrotate(qconj(sq), d)
-    dist, nx, ny, nz = shape_distance(shape_kind[s], (shape_params[s, 0], shape_params[s, 1], shape_params[s, 2]), pl)
+    dist, nx, ny, nz = shape_distance_of(shape_kind[s], shape_params, s, pl, more_kinds)
     n = qrotate(sq, (nx, ny, nz))
     return dist, n
 
@@ -95,18 +127,19 @@ def _shape_query_at(s, p, shape_kind, shape_params, pose):
 @nb.njit(**KERNEL)
 def collect_contacts(
     xp, x0, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid, shape_local_x,
-    shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner, pose,
+    shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner, pose, more_kinds,
 ):  # fmt: skip
     """Candidate (particle, shape) contacts for this step: within the particle's largest radius plus
     how far it moves plus a margin. A particle meets its own core only as an inner contact (outer
     particles; attached ones are tied to the core anyway). Returns the count (or the number
     needed, if larger than the buffers). Shapes are posed once, and a particle far outside a
-    shape's bounding sphere skips the exact query (the candidates are the same)."""
+    shape's bounding sphere skips the exact query (the candidates are the same). ``more_kinds``:
+    collision.shape_distance_of."""
     n = xp.shape[0]
     ns = shape_kind.shape[0]
     cap = c_particle.shape[0]
     count = 0
-    _shape_poses(shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, pose)
+    _shape_poses(shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, pose, more_kinds)
     for i in range(n):
         rmax = max(radii[i, 0], max(radii[i, 1], radii[i, 2]))
         mv = math.sqrt((xp[i, 0] - x0[i, 0]) ** 2 + (xp[i, 1] - x0[i, 1]) ** 2 + (xp[i, 2] - x0[i, 2]) ** 2)
@@ -119,7 +152,7 @@ def collect_contacts(
             reach = mv + margin if inner else rmax + mv + margin
             if _far_from_shape(s, p, reach, pose):
                 continue
-            dist, _ = _shape_query_at(s, p, shape_kind, shape_params, pose)
+            dist, _ = _shape_query_at(s, p, shape_kind, shape_params, pose, more_kinds)
             if dist < reach:
                 if count < cap:
                     c_particle[count] = i
@@ -285,7 +318,7 @@ def clear_multipliers(count, lam, lam_t):
 def project_shape_contacts(
     count, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass, shape_kind, shape_params,
     shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
-    imp_lin, imp_ang, dt, shape_pose,
+    imp_lin, imp_ang, dt, shape_pose, more_kinds,
 ):  # fmt: skip
     """Non-penetration of an ellipsoid particle and a rigid shape (Mueller & Chentanez 2011 sec. 5:
     the ellipsoid is treated as a sphere of its support radius along the contact normal), split by
@@ -298,11 +331,12 @@ def project_shape_contacts(
         p = (xp[i, 0], xp[i, 1], xp[i, 2])
         r = shape_rigid[s]
         if r >= 0 and rig_move[r]:
-            dist, n = _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q)
+            dist, n = _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
+                                   more_kinds)  # fmt: skip
         else:
             # Static shapes and bodies that do not move inside the solve keep the pose the contacts were
             # collected at (_shape_poses): the same numbers without re-posing the shape per contact.
-            dist, n = _shape_query_at(s, p, shape_kind, shape_params, shape_pose)
+            dist, n = _shape_query_at(s, p, shape_kind, shape_params, shape_pose, more_kinds)
         if c_inner[c]:
             rn = 0.0
         else:
@@ -367,13 +401,14 @@ def project_pairs(count, pair_i, pair_j, pair_lambda, pair_normal, xp, qp, radii
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract"})  # allocates: keeps numba's runtime (jit.py)
 def max_penetration(x, q, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid,
-                    shape_local_x, shape_local_q, rig_x, rig_q, out):  # fmt: skip
+                    shape_local_x, shape_local_q, rig_x, rig_q, out, more_kinds):  # fmt: skip
     """Deepest overlap of any particle ellipsoid with a rigid shape (out[0]) and deepest intrusion
-    of an outer particle's centre into its own core (out[1]) [m]."""
+    of an outer particle's centre into its own core (out[1]) [m]. ``more_kinds``:
+    collision.shape_distance_of."""
     out[0] = 0.0
     out[1] = 0.0
     pose = np.empty((shape_kind.shape[0], 8))
-    _shape_poses(shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, pose)
+    _shape_poses(shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, pose, more_kinds)
     for i in range(x.shape[0]):
         p = (x[i, 0], x[i, 1], x[i, 2])
         own = body_core_shape[p_body[i]]
@@ -384,12 +419,12 @@ def max_penetration(x, q, radii, p_body, attached, body_core_shape, shape_kind, 
             if s == own:
                 if attached[i] or _far_from_shape(s, p, 0.0, pose):
                     continue
-                dist, _ = _shape_query_at(s, p, shape_kind, shape_params, pose)
+                dist, _ = _shape_query_at(s, p, shape_kind, shape_params, pose, more_kinds)
                 out[1] = max(out[1], -dist)
                 continue
             if _far_from_shape(s, p, rmax, pose):
                 continue
-            dist, nrm = _shape_query_at(s, p, shape_kind, shape_params, pose)
+            dist, nrm = _shape_query_at(s, p, shape_kind, shape_params, pose, more_kinds)
             rn = support_radius((q[i, 0], q[i, 1], q[i, 2], q[i, 3]), (radii[i, 0], radii[i, 1], radii[i, 2]), nrm)
             out[0] = max(out[0], rn - dist)
 

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numba as nb
 import numpy as np
 
+from .collision import HULL_HEADER, HULL_MIN_PLANES, HULL_PLANE, SHAPE_CODES, SHAPE_HULL
 from .jit import KERNEL
 from .rotation import qconj, qexp, qmul, qnormalize, qrotate
 
@@ -46,9 +47,13 @@ class Colliders:
     """(R,) bool: takes its mass-weighted share of corrections inside the solve. False treats it
     as infinitely heavy while solving; its impulses are still collected (thesis 5.1.3)."""
     shape_kind: np.ndarray
-    """(S,) int32 shape code (see collision.py)."""
+    """(S,) int32 shape code (see collision.py). A solver reads which kinds there are when it first
+    sees this array (the kernels it runs depend on it, collision.shape_distance_of): to change a
+    shape's kind, assign a new array rather than editing this one."""
     shape_params: np.ndarray
-    """(S, 3) shape dimensions [m]."""
+    """(S, K) shape dimensions [m], K >= 3, float64: each kind's three in columns 0-2 (the rest
+    zeros), or a hull's row [plane count, bounding radius, 0, n0x, n0y, n0z, d0, n1x, ...]
+    (collision.hull_params), all rows padded to the longest."""
     shape_rigid: np.ndarray
     """(S,) int32 owning rigid body, -1 for static world geometry."""
     shape_local_x: np.ndarray
@@ -66,6 +71,7 @@ class Colliders:
     solve as if nothing pushed it. Defaults to zeros."""
 
     def __post_init__(self) -> None:
+        _check_shape_table(self.shape_kind, self.shape_params)
         n = self.rigid_inv_mass.shape[0]
         if self.rigid_axis is None:
             self.rigid_axis = np.zeros((n, 3))
@@ -79,6 +85,23 @@ class Colliders:
     @property
     def shape_count(self) -> int:
         return int(self.shape_kind.shape[0])
+
+
+def _check_shape_table(kind: np.ndarray, params: np.ndarray) -> None:
+    """The kernels index shape_params by the kind's layout without checks: a code they do not know
+    or a hull row cut short would be read as garbage, so refuse them here."""
+    s = kind.shape[0]
+    if params.ndim != 2 or params.shape[0] != s or params.shape[1] < 3:
+        raise ValueError(f"Colliders.shape_params must be (S, K) with S = {s} shapes and K >= 3, got {params.shape}")
+    known = np.isin(kind, list(SHAPE_CODES.values()))
+    if not known.all():
+        raise ValueError(f"Colliders.shape_kind {int(kind[~known][0])} is no shape code (collision.SHAPE_CODES)")
+    for k in np.flatnonzero(kind == SHAPE_HULL):
+        count = params[k, 0]
+        if not (count >= HULL_MIN_PLANES and count == int(count)
+                and HULL_HEADER + HULL_PLANE * int(count) <= params.shape[1]):  # fmt: skip
+            raise ValueError(f"Colliders: shape {k} is a hull of {float(count)!r} planes, which its params row of "
+                             f"{params.shape[1]} columns cannot hold (rows from collision.hull_params)")  # fmt: skip
 
 
 def empty_colliders() -> Colliders:

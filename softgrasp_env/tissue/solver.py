@@ -52,6 +52,7 @@ from .anchors import (
     snap_attached,
     snap_attached_of,
 )
+from .collision import more_kinds_of
 from .compliant import bodies_independent, compliant_sweep, sweep_body
 from .contacts import (
     clear_multipliers,
@@ -280,7 +281,7 @@ def _step(
     # the model's arrays and every scratch array of the step, packed (see TissueSolver._pack and _view)
     f_pack, i_pack, b_pack, layout,
     # parameters
-    dt, iterations, rot_iters, gx, gy, gz, damping, coupling, margin, continuum, counts, threads,
+    dt, iterations, rot_iters, gx, gy, gz, damping, coupling, margin, continuum, counts, threads, more_kinds,
 ):  # fmt: skip
     """One tissue step. Returns 0, or 1 if a contact buffer was too small (``counts`` then holds
     the sizes needed and the state is untouched, so the caller can grow the buffers and retry).
@@ -290,7 +291,11 @@ def _step(
     because numba prunes such a branch when it compiles: the None overload holds no parallel code,
     so a one-thread process never loads it. Loading parallel code starts numba's thread pool, and
     once started the pool refuses any change of NUMBA_NUM_THREADS, which training sets for its env
-    processes."""
+    processes.
+
+    ``more_kinds`` is None when every shape is a plane, sphere, box, cylinder or capsule, True
+    when there is a cone, elliptic cylinder or hull (collision.shape_distance_of): the same test
+    on None, so a world of the first five kinds runs the code it always ran."""
     # The model's and the scratch arrays arrive packed in three flat buffers: numba unboxes every
     # array argument on each call (~0.1 us apiece), and ~45 separate arrays cost ~5 us a step.
     rest_x, rest_q = _view(f_pack, layout, _REST_X), _view(f_pack, layout, _REST_Q)
@@ -340,7 +345,7 @@ def _step(
     # --- contact candidates, against predicted rigid poses
     nc = collect_contacts(xp, x, radii, p_body, attached, body_core_shape, shape_kind, shape_params, shape_rigid,
                           shape_local_x, shape_local_q, rig_x, rig_q, margin, c_particle, c_shape, c_inner,
-                          shape_pose)  # fmt: skip
+                          shape_pose, more_kinds)  # fmt: skip
     npairs = collect_pairs(xp, x, radii, body_off, margin, pair_i, pair_j, pair_grid, pair_boxes)
     counts[0] = nc
     counts[1] = npairs
@@ -377,7 +382,8 @@ def _step(
                    imp_lin, imp_ang, coupling_imp, continuum, g_cont)  # fmt: skip
         project_shape_contacts(nc, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass,
                                shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
-                               rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose)  # fmt: skip
+                               rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose,
+                               more_kinds)  # fmt: skip
         project_pairs(npairs, pair_i, pair_j, pair_lambda, pair_normal, xp, qp, radii, inv_mass)
         # Friction inside the loop, after the normal corrections: static friction is then a
         # constraint of the same Gauss-Seidel solve as the shape matching. Applied once after the
@@ -467,6 +473,8 @@ class TissueSolver:
         self._threads = sim.solver_threads()  # checked here: a bad count fails at construction
         self._threaded = False
         self._threaded_for: np.ndarray | None = None
+        self._more_kinds: bool | None = None
+        self._kinds_for: np.ndarray | None = None
         self._warned_serial = False
 
     def _pack(self, resized: tuple[str, ...]) -> None:
@@ -542,6 +550,7 @@ class TissueSolver:
             *self._packed,
             sim.dt, sim.iterations, sim.rotation_iterations, 0.0, 0.0, -sim.gravity, self.damping, coupling,
             sim.contact_margin, self.model.continuum, self._counts, True if self._threaded else None,
+            self._more_kinds,
         )  # fmt: skip
         self._args_for = sim
 
@@ -554,6 +563,12 @@ class TissueSolver:
             self._rigid_buffers(col.rigid_inv_mass.shape[0])
         if col.shape_kind.shape[0] != self._sizes["shapes"]:
             self._shape_buffer(col.shape_kind.shape[0])
+        if col.shape_kind is not self._kinds_for:
+            # which kernels the shapes need (collision.shape_distance_of), read once per array as
+            # shape_rigid is below: a Colliders' shape arrays are replaced, not edited in place
+            self._more_kinds = more_kinds_of(col.shape_kind)
+            self._kinds_for = col.shape_kind
+            self._args_for = None
         if col.shape_rigid is not self._threaded_for or self._args_for is not self.sim:
             # the pads on threads only where no two share a core (_bodies_pass)
             self._threads = self.sim.solver_threads()
@@ -633,7 +648,7 @@ class TissueSolver:
         out = np.zeros(2)
         max_penetration(state.particle_x, state.particle_q, m.particle_radii, m.particle_body, m.particle_attached,
                         m.body_core_shape, col.shape_kind, col.shape_params, col.shape_rigid, col.shape_local_x,
-                        col.shape_local_q, col.rigid_x, col.rigid_q, out)  # fmt: skip
+                        col.shape_local_q, col.rigid_x, col.rigid_q, out, more_kinds_of(col.shape_kind))  # fmt: skip
         return float(out[0]), float(out[1])
 
 
