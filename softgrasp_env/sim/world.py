@@ -21,7 +21,7 @@ import pybullet as p
 from pybullet_utils.bullet_client import BulletClient
 
 from ..config import SimConfig
-from ..tissue.collision import SHAPE_CODES
+from ..tissue.collision import SHAPE_CODES, check_hull_row
 from ..tissue.compliant import world_substeps
 from ..tissue.model import TissueModel, concatenate, with_core_shapes
 from ..tissue.rigid import Colliders
@@ -68,14 +68,25 @@ class SimulationDiverged(RuntimeError):
     """The tissue solve produced non-finite numbers; they were not handed to pybullet."""
 
 
+# Which of a kind's three params are lengths that must be > 0 (the others are unused, or for the
+# cone a radius that may be 0 at one end: checked on its own).
+_POSITIVE_PARAMS = {"plane": (), "sphere": (0,), "box": (0, 1, 2), "cylinder": (0, 1), "capsule": (0, 1),
+                    "cone": (2,), "elliptic": (0, 1, 2)}  # fmt: skip
+_PARAM_NAMES = {"plane": "(unused)", "sphere": "(radius, -, -)", "box": "(half extents x, y, z)",
+                "cylinder": "(radius, half height, -)", "capsule": "(radius, half height, -)",
+                "cone": "(bottom radius, top radius, half height)",
+                "elliptic": "(semi-axis x, semi-axis y, half height)"}  # fmt: skip
+
+
 @dataclass(frozen=True)
 class ShapeSpec:
-    """A collision shape the tissue can touch: ``kind`` in plane/sphere/box/cylinder/capsule,
-    ``params`` its dimensions (see tissue/collision.py), on rigid slot ``rigid`` (-1 = static
-    world geometry) at ``local_x``/``local_q`` in that slot's centre-of-mass frame."""
+    """A collision shape the tissue can touch: ``kind`` in plane/sphere/box/cylinder/capsule/cone/
+    elliptic/hull, ``params`` its dimensions (see tissue/collision.py: three for every kind but the
+    hull, whose params are its row from ``collision.hull_params``), on rigid slot ``rigid`` (-1 =
+    static world geometry) at ``local_x``/``local_q`` in that slot's centre-of-mass frame."""
 
     kind: str
-    params: tuple[float, float, float]
+    params: tuple[float, ...]
     rigid: int = -1
     local_x: tuple[float, float, float] = (0.0, 0.0, 0.0)
     local_q: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
@@ -83,6 +94,26 @@ class ShapeSpec:
     def __post_init__(self) -> None:
         if self.kind not in SHAPE_CODES:
             raise ValueError(f"ShapeSpec.kind must be one of {tuple(SHAPE_CODES)}, got {self.kind!r}")
+        try:
+            params = tuple(float(x) for x in self.params)
+        except (TypeError, ValueError) as e:
+            raise ValueError(f"ShapeSpec.params of a {self.kind} must be numbers, got {self.params!r}") from e
+        if self.kind == "hull":
+            check_hull_row(params, "ShapeSpec('hull') params")
+        else:
+            if len(params) != 3:
+                raise ValueError(f"ShapeSpec.params of a {self.kind} must be 3 numbers {_PARAM_NAMES[self.kind]}, got "
+                                 f"{len(params)}: {params!r}")  # fmt: skip
+            if not all(math.isfinite(x) for x in params):
+                raise ValueError(f"ShapeSpec.params of a {self.kind} must be finite, got {params!r}")
+            bad = [k for k in _POSITIVE_PARAMS[self.kind] if not params[k] > 0.0]
+            if bad:
+                raise ValueError(f"ShapeSpec.params of a {self.kind} {_PARAM_NAMES[self.kind]} must be > 0, got "
+                                 f"params[{bad[0]}] = {params[bad[0]]!r}")  # fmt: skip
+            if self.kind == "cone" and not (min(params[0], params[1]) >= 0.0 and max(params[0], params[1]) > 0.0):
+                raise ValueError(f"ShapeSpec.params of a cone {_PARAM_NAMES['cone']}: the radii must be >= 0 and not "
+                                 f"both 0 (one 0 is a full cone), got {params[0]!r} and {params[1]!r}")  # fmt: skip
+        object.__setattr__(self, "params", params)
 
 
 @dataclass(frozen=True)
@@ -92,6 +123,16 @@ class TissueSpec:
 
     model: TissueModel
     core_shape: int
+
+
+def _params_table(shapes: list[ShapeSpec]) -> np.ndarray:
+    """(S, K) params of the shapes, each row padded with zeros to the longest (K >= 3: a hull's
+    row is longer; without one, the (S, 3) table the kernels always read)."""
+    width = max([3] + [len(s.params) for s in shapes])
+    table = np.zeros((len(shapes), width))
+    for k, s in enumerate(shapes):
+        table[k, : len(s.params)] = s.params
+    return table
 
 
 def _mass(inv_mass: float) -> float:
@@ -141,7 +182,7 @@ class World:
                 [r.in_solve or (r.core and sim.coupling == "consistent") for r in self.rigid], dtype=np.bool_
             ),
             shape_kind=np.array([SHAPE_CODES[s.kind] for s in self.shapes], dtype=np.int32),
-            shape_params=np.array([s.params for s in self.shapes], dtype=np.float64).reshape(-1, 3),
+            shape_params=_params_table(self.shapes),
             shape_rigid=np.array([s.rigid for s in self.shapes], dtype=np.int32),
             shape_local_x=np.array([s.local_x for s in self.shapes], dtype=np.float64).reshape(-1, 3),
             shape_local_q=np.array([s.local_q for s in self.shapes], dtype=np.float64).reshape(-1, 4),

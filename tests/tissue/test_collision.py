@@ -8,6 +8,7 @@ import numba
 import numpy as np
 import pytest
 
+from softgrasp_env.sim.world import ShapeSpec, _params_table
 from softgrasp_env.tissue.collision import (
     HULL_HEADER,
     HULL_PLANE,
@@ -749,3 +750,47 @@ def test_colliders_refuse_tables_the_kernels_would_misread():
         _static_colliders([SHAPE_BOX], np.zeros((1, 2)))
     with pytest.raises(ValueError, match="S = 2 shapes"):
         _static_colliders([SHAPE_BOX, SHAPE_BOX], np.zeros((1, 3)))
+
+
+# --- the world's shapes -----------------------------------------------------------------------------
+
+
+def test_shape_spec_takes_each_kinds_params():
+    hull = hull_params(*_box_hull((0.01, 0.02, 0.03)))
+    for kind, params in [("plane", (0, 0, 0)), ("sphere", (0.5, 0.0, 0.0)), ("box", np.array([1.0, 2.0, 3.0])),
+                         ("cylinder", (0.02, 0.05, 0.0)), ("capsule", (0.02, 0.05, 0.0)), ("cone", (0.03, 0.0, 0.04)),
+                         ("cone", (0.0, 0.03, 0.04)), ("cone", (0.02, 0.04, 0.04)), ("elliptic", (0.03, 0.02, 0.04)),
+                         ("hull", hull)]:  # fmt: skip
+        spec = ShapeSpec(kind, params)
+        assert spec.params == tuple(float(x) for x in params)
+        assert all(type(x) is float for x in spec.params)
+
+
+@pytest.mark.parametrize(
+    "kind, params, match",
+    [("box", (1.0, 2.0), "box must be 3 numbers .* got 2"),
+     ("cylinder", (0.02, 0.05, 0.0, 0.0), "cylinder must be 3 numbers .* got 4"),
+     ("elliptic", (0.03, math.nan, 0.04), "elliptic must be finite"),
+     ("elliptic", (0.03, 0.0, 0.04), "must be > 0, got params\\[1\\] = 0.0"),
+     ("box", (1.0, -2.0, 3.0), "must be > 0, got params\\[1\\] = -2.0"),
+     ("sphere", (0.0, 0.0, 0.0), "sphere .* must be > 0"),
+     ("cone", (0.0, 0.0, 0.04), "not both 0"), ("cone", (0.03, -0.01, 0.04), "radii must be >= 0"),
+     ("cone", (0.03, 0.01, 0.0), "cone .* must be > 0, got params\\[2\\]"),
+     ("hull", (1.0, 2.0, 3.0), "ShapeSpec\\('hull'\\) params: a hull's params row"),
+     ("hull", (1.0, 2.0), "at least 4 planes"), ("box", "abc", "numbers"), ("ellipse", (1, 1, 1), "must be one of")],
+)  # fmt: skip
+def test_shape_spec_rejects_wrong_params(kind, params, match):
+    with pytest.raises(ValueError, match=match):
+        ShapeSpec(kind, params)
+
+
+def test_the_worlds_params_table_pads_to_the_longest_row():
+    hull = hull_params(*_box_hull((0.01, 0.02, 0.03)))
+    shapes = [ShapeSpec("plane", (0, 0, 0)), ShapeSpec("hull", hull, rigid=0), ShapeSpec("cone", (0.03, 0.0, 0.04))]
+    table = _params_table(shapes)
+    assert table.shape == (3, len(hull)) and table.dtype == np.float64 and table.flags.c_contiguous
+    np.testing.assert_array_equal(table[1], hull)
+    np.testing.assert_array_equal(table[2], [0.03, 0.0, 0.04] + [0.0] * (len(hull) - 3))
+    # without a hull, the (S, 3) table the kernels always read
+    assert _params_table(shapes[::2]).shape == (2, 3)
+    assert _params_table([]).shape == (0, 3)
