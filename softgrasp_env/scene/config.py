@@ -16,6 +16,7 @@ from typing import Any
 from ..config import SimConfig, TissueConfig
 from ..fingers import FINGERS, FemConfig, FingerConfig, SegmentedConfig, TissueFingerConfig, finger_config
 from ..validation import accept_old_names, check_choice, check_range, check_type, deprecated, retired_choice
+from .objects import ObjectShape, object_geometry, object_shape
 
 PALM_HALF_EXTENTS = (0.09, 0.03, 0.01)
 """Half extents of the gripper's palm box [m]."""
@@ -24,6 +25,8 @@ FINGER_DROP = 0.04
 not modelled: only the fingertip segment touches anything)."""
 GEOMETRY_MARGIN = 0.001
 """Clearance the start geometry must leave between the cylinder and the open fingers or palm [m]."""
+GROUND_CLEARANCE = 0.003
+"""The fingertips come down to this far above the ground at most, pads included [m]."""
 
 
 ARM_PUSH = 40.0
@@ -115,6 +118,19 @@ class SceneConfig:
     coefficient is ``friction_static``), pad depth and mass density for the tissue and the FEM
     pads, the particles' discretisation for the tissue."""
     sim: SimConfig = field(default_factory=SimConfig)
+    object: ObjectShape | str | None = None
+    """What is grasped, if not the cylinder of ``cylinder_radius`` and ``cylinder_height``: a named
+    object ('sphere', 'cube', 'rod', ...: softgrasp_env.scene.objects.PRESETS) or an
+    :class:`~softgrasp_env.scene.objects.ObjectShape`. It has the mass ``cylinder_mass`` and the
+    friction ``cylinder_friction``. A cylinder given here becomes ``cylinder_radius`` and
+    ``cylinder_height`` (and ``object`` None), so a scene has one description of its cylinder."""
+
+    @property
+    def object_shape(self) -> ObjectShape:
+        """The grasped object's shape: :attr:`object`, or the cylinder."""
+        if self.object is not None:
+            return self.object  # type: ignore[return-value]
+        return ObjectShape("cylinder", (self.cylinder_radius, self.cylinder_height))
 
     @property
     def finger_travel(self) -> float:
@@ -126,6 +142,24 @@ class SceneConfig:
     def __post_init__(self) -> None:
         o = "SceneConfig"
         object.__setattr__(self, "fingers", finger_config(self.fingers, owner=o))
+        if self.object is not None:
+            shape = object_shape(self.object)
+            if shape.kind == "cylinder":
+                default = SceneConfig.__dataclass_fields__
+                for name in ("cylinder_radius", "cylinder_height"):
+                    if getattr(self, name) != default[name].default:
+                        raise ValueError(f"SceneConfig: object={self.object!r} and {name}={getattr(self, name)!r} both "
+                                         "describe the cylinder; give one")  # fmt: skip
+                object.__setattr__(self, "cylinder_radius", shape.size[0])
+                object.__setattr__(self, "cylinder_height", shape.size[1])
+                shape = None
+            else:
+                default = SceneConfig.__dataclass_fields__
+                for name in ("cylinder_radius", "cylinder_height"):
+                    if getattr(self, name) != default[name].default:
+                        raise ValueError(f"SceneConfig: {name}={getattr(self, name)!r} is the cylinder's, but the "
+                                         f"object is a {shape.kind} ({shape.name}); give its size in the object")  # fmt: skip
+            object.__setattr__(self, "object", shape)
         check_range("cylinder_radius", self.cylinder_radius, 0.005, 0.2, owner=o)
         check_range("cylinder_height", self.cylinder_height, 0.01, 0.5, owner=o)
         check_range("cylinder_mass", self.cylinder_mass, 0.001, 10.0, owner=o)
@@ -205,9 +239,24 @@ def fit_error(*, cylinder_radius: float, jaw_wedge: float, finger_stroke: float,
     return None
 
 
+def grasp_height(cfg: SceneConfig) -> float:
+    """Height of the finger centres when they grip the object [m]: the cylinder's mid height; for
+    another object its centre of mass at rest, or, for a low one, the lowest the arm takes them
+    (the workspace's floor: the tissue's depth and :data:`GROUND_CLEARANCE` above the ground,
+    whatever the kind)."""
+    if cfg.object is None:
+        return 0.5 * cfg.cylinder_height
+    return max(object_geometry(cfg.object).rest_height, lowest_grip(cfg.finger_half_extents[2], cfg.tissue.extrude))
+
+
+def lowest_grip(finger_half_height: float, extrude: float) -> float:
+    """The lowest grip point of the arm's workspace [m] (scene.gripper.Workspace)."""
+    return finger_half_height + extrude + GROUND_CLEARANCE
+
+
 def geometry_error(cfg: SceneConfig, **changes: Any) -> str | None:
     """Why the scene ``cfg`` - with ``changes`` to its misalignment, cylinder or start, if given -
-    cannot start, or None: the cylinder must fit between the open fingers with their pads on, and
+    cannot start, or None: the object must fit between the open fingers with their pads on, and
     neither a finger nor the palm may start inside it. A pure function of the settings, so the env
     checks the corners of its ranges without building a config for each."""
 
@@ -216,31 +265,57 @@ def geometry_error(cfg: SceneConfig, **changes: Any) -> str | None:
 
     fh = cfg.finger_half_extents
     pad = cfg.pad_thickness
-    wedge, r, h = get("jaw_wedge"), get("cylinder_radius"), get("cylinder_height")
-    error = fit_error(cylinder_radius=r, jaw_wedge=wedge, finger_stroke=cfg.finger_stroke, pad=pad,
-                      finger_half_height=fh[2], kind=cfg.fingers.kind)  # fmt: skip
-    if error is not None:
-        return error
+    wedge, yaw = get("jaw_wedge"), get("yaw")
+    if cfg.object is None:
+        r, h = get("cylinder_radius"), get("cylinder_height")
+        across_r = along_r = r
+        grasp_z, what = 0.5 * h, "the cylinder"
+        error = fit_error(cylinder_radius=r, jaw_wedge=wedge, finger_stroke=cfg.finger_stroke, pad=pad,
+                          finger_half_height=fh[2], kind=cfg.fingers.kind)  # fmt: skip
+        if error is not None:
+            return error
+    else:
+        geo = object_geometry(cfg.object)
+        c, s = math.cos(yaw), math.sin(yaw)
+        # the object's reach along the closing axis and along the faces, both ways (a shape need not
+        # be symmetric about its centre of mass)
+        across_r = max(geo.half_width(c, s), geo.half_width(-c, -s))
+        along_r = max(geo.half_width(-s, c), geo.half_width(s, -c))
+        h, grasp_z, what = geo.top, grasp_height(cfg), f"the {cfg.object.name}"
+        gap = open_half_gap(cfg.finger_stroke, pad, fh[2], wedge)
+        if across_r + GEOMETRY_MARGIN > gap:
+            return (f"SceneConfig: {what} ({across_r:.4f} m from its centre along the closing axis at yaw={yaw:g}) "
+                    f"does not fit between the open fingers: finger_stroke={cfg.finger_stroke:g} m less the "
+                    f"{cfg.fingers.kind} pad ({pad:g} m) and the jaw_wedge={wedge:g} rad leave a half gap of "
+                    f"{gap:.4f} m")  # fmt: skip
     gap = open_half_gap(cfg.finger_stroke, pad, fh[2], wedge)
     start_height, cyl_xy, grip_xy = get("start_height"), get("cylinder_xy"), get("gripper_xy")
-    lateral, yaw = get("lateral_offset"), get("yaw")
-    grip_z = 0.5 * h + start_height
+    lateral = get("lateral_offset")
+    grip_z = grasp_z + start_height
     dx = cyl_xy[0] - grip_xy[0]
     dy = cyl_xy[1] - grip_xy[1] - lateral
     across = abs(dx * math.cos(yaw) + dy * math.sin(yaw))  # along the closing axis
     along = abs(-dx * math.sin(yaw) + dy * math.cos(yaw))  # along the faces
     tips = grip_z - fh[2] - pad
-    if tips < h and along < fh[1] + r and across + r + GEOMETRY_MARGIN > gap:
-        return (f"SceneConfig: the open fingers start inside the cylinder: their tips ({tips:.3f} m up, start_height="
-                f"{start_height:g}) are below its top (cylinder_height={h:g}) and it stands {across:.4f} m across "
-                f"the closing axis from the grip (cylinder_xy={cyl_xy}, gripper_xy={grip_xy}, "
-                f"lateral_offset={lateral:g}, yaw={yaw:g}); with cylinder_radius={r:g} at most "
-                f"{gap - r - GEOMETRY_MARGIN:.4f} m fits")  # fmt: skip
+    if tips < h and along < fh[1] + along_r and across + across_r + GEOMETRY_MARGIN > gap:
+        if cfg.object is None:
+            return (f"SceneConfig: the open fingers start inside the cylinder: their tips ({tips:.3f} m up, start_height="
+                    f"{start_height:g}) are below its top (cylinder_height={h:g}) and it stands {across:.4f} m across "
+                    f"the closing axis from the grip (cylinder_xy={cyl_xy}, gripper_xy={grip_xy}, "
+                    f"lateral_offset={lateral:g}, yaw={yaw:g}); with cylinder_radius={r:g} at most "
+                    f"{gap - r - GEOMETRY_MARGIN:.4f} m fits")  # fmt: skip
+        return (f"SceneConfig: the open fingers start inside {what}: their tips ({tips:.3f} m up, start_height="
+                f"{start_height:g}) are below its top ({h:.3f} m) and it stands {across:.4f} m across the closing "
+                f"axis from the grip (cylinder_xy={cyl_xy}, gripper_xy={grip_xy}, lateral_offset={lateral:g}, "
+                f"yaw={yaw:g}); at most {gap - across_r - GEOMETRY_MARGIN:.4f} m fits")  # fmt: skip
     palm_bottom = grip_z + fh[2] + FINGER_DROP
-    if palm_bottom < h + GEOMETRY_MARGIN and across < PALM_HALF_EXTENTS[0] + r and along < PALM_HALF_EXTENTS[1] + r:
-        return (f"SceneConfig: the palm starts inside the cylinder: its underside is {palm_bottom:.3f} m up, the "
-                f"cylinder (cylinder_height={h:g}) reaches {h:g} m; raise start_height={start_height:g} by "
-                f"{h + GEOMETRY_MARGIN - palm_bottom:.3f} m or lower the cylinder")  # fmt: skip
+    if palm_bottom < h + GEOMETRY_MARGIN and across < PALM_HALF_EXTENTS[0] + across_r and along < PALM_HALF_EXTENTS[1] + along_r:
+        if cfg.object is None:
+            return (f"SceneConfig: the palm starts inside the cylinder: its underside is {palm_bottom:.3f} m up, the "
+                    f"cylinder (cylinder_height={h:g}) reaches {h:g} m; raise start_height={start_height:g} by "
+                    f"{h + GEOMETRY_MARGIN - palm_bottom:.3f} m or lower the cylinder")  # fmt: skip
+        return (f"SceneConfig: the palm starts inside {what}: its underside is {palm_bottom:.3f} m up, the object "
+                f"reaches {h:.3f} m; raise start_height={start_height:g} by {h + GEOMETRY_MARGIN - palm_bottom:.3f} m")  # fmt: skip
     return None
 
 

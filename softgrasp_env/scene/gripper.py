@@ -26,7 +26,7 @@ from pybullet_utils.bullet_client import BulletClient
 
 from ..fingers.base import CORE_RGBA
 from ..validation import deprecated
-from .config import FINGER_DROP, PALM_HALF_EXTENTS, SceneConfig, arm_force_limit
+from .config import FINGER_DROP, PALM_HALF_EXTENTS, SceneConfig, arm_force_limit, lowest_grip
 
 if TYPE_CHECKING:
     from ..fingers import FingerKind
@@ -42,8 +42,6 @@ GRIP_TOP = 0.20
 """Highest the arm takes the grip point [m]."""
 WORKSPACE_HALF_WIDTH = 0.15
 """The arm takes the grip point at most this far from the origin in x and in y [m]."""
-GROUND_CLEARANCE = 0.003
-"""The fingertips come down to this far above the ground at most, pads included [m]."""
 MAX_LEAD = 0.02
 """Farthest the arm's setpoint may lead the palm [m], as a real arm's tracking limit would."""
 
@@ -351,7 +349,7 @@ class Workspace:
         so every kind has the same workspace; up to GRIP_TOP."""
         fh = cfg.finger_half_extents
         w = WORKSPACE_HALF_WIDTH
-        return cls(np.array([-w, -w, fh[2] + cfg.tissue.extrude + GROUND_CLEARANCE]), np.array([w, w, GRIP_TOP]))
+        return cls(np.array([-w, -w, lowest_grip(fh[2], cfg.tissue.extrude)]), np.array([w, w, GRIP_TOP]))
 
     def clip(self, grip: np.ndarray) -> np.ndarray:
         """``grip`` moved into the box."""

@@ -21,8 +21,9 @@ from pybullet_utils.bullet_client import BulletClient
 from ..fingers import FingerKind, FingerSite, Visual
 from ..sim.bullet import RigidRef, connect
 from ..sim.world import ShapeSpec, World
-from .config import PALM_HALF_EXTENTS, SceneConfig
+from .config import PALM_HALF_EXTENTS, SceneConfig, grasp_height
 from .gripper import FINGER_GEAR_ERP, FINGER_GEAR_FORCE, PALM_RGBA, Gripper, GripperControl
+from .objects import OBJECT_KINDS, ObjectGeometry, object_geometry
 
 SLOTS = ("left_core", "right_core", "cylinder", "palm")
 """The rigid bodies the world tracks, in the order of its rigid arrays (``world.colliders``)."""
@@ -73,22 +74,34 @@ class GraspScene:
         self.ground = c.createMultiBody(baseMass=0.0, baseCollisionShapeIndex=fingers.ground_shape(c))
         c.changeDynamics(self.ground, -1, lateralFriction=cfg.ground_friction)
 
-        # --- cylinder (a free rigid body)
+        # --- the object (a free rigid body): the cylinder, or cfg.object
         r, h = cfg.cylinder_radius, cfg.cylinder_height
-        cyl_col = c.createCollisionShape(p.GEOM_CYLINDER, radius=r, height=h)
-        cyl_vis = c.createVisualShape(p.GEOM_CYLINDER, radius=r, length=h, rgbaColor=list(CYLINDER_RGBA))
-        self.cylinder = c.createMultiBody(
-            baseMass=cfg.cylinder_mass, baseCollisionShapeIndex=cyl_col, baseVisualShapeIndex=cyl_vis,
-            basePosition=[cfg.cylinder_xy[0], cfg.cylinder_xy[1], 0.5 * h],
-        )  # fmt: skip
-        c.changeDynamics(self.cylinder, -1, lateralFriction=cfg.cylinder_friction, linearDamping=0.0,
-                         angularDamping=0.0)  # fmt: skip
-        self.cylinder_rest_z = 0.5 * h
+        self.object_geometry: ObjectGeometry | None = None
+        """The grasped object's shape, mass properties and resting pose; None for the cylinder."""
+        if cfg.object is None:
+            cyl_col = c.createCollisionShape(p.GEOM_CYLINDER, radius=r, height=h)
+            cyl_vis = c.createVisualShape(p.GEOM_CYLINDER, radius=r, length=h, rgbaColor=list(CYLINDER_RGBA))
+            self.cylinder = c.createMultiBody(
+                baseMass=cfg.cylinder_mass, baseCollisionShapeIndex=cyl_col, baseVisualShapeIndex=cyl_vis,
+                basePosition=[cfg.cylinder_xy[0], cfg.cylinder_xy[1], 0.5 * h],
+            )  # fmt: skip
+            c.changeDynamics(self.cylinder, -1, lateralFriction=cfg.cylinder_friction, linearDamping=0.0,
+                             angularDamping=0.0)  # fmt: skip
+            self.cylinder_rest_z = 0.5 * h
+            object_shape = ShapeSpec("cylinder", (r, 0.5 * h, 0.0), rigid=CYLINDER)
+        else:
+            geo = self.object_geometry = object_geometry(cfg.object)
+            self.cylinder = _create_object(c, geo, cfg.cylinder_mass, (*cfg.cylinder_xy, geo.rest_height))
+            c.changeDynamics(self.cylinder, -1, lateralFriction=cfg.cylinder_friction, linearDamping=0.0,
+                             angularDamping=0.0)  # fmt: skip
+            self.cylinder_rest_z = geo.rest_height
+            object_shape = ShapeSpec(geo.tissue_kind, geo.tissue_params, rigid=CYLINDER, local_x=geo.tissue_local_x)
 
         # --- gripper, its finger cores at the cylinder's mid height plus the start height
         fh = cfg.finger_half_extents
-        self.grasp_height = 0.5 * h
-        """Height of the finger centres when they grip the cylinder at its middle [m]."""
+        self.grasp_height = grasp_height(cfg)
+        """Height of the finger centres when they grip the object [m]: the cylinder's middle
+        (scene.config.grasp_height)."""
         palm_offset = Gripper.palm_offset_of(cfg)
         self.start_palm = np.array([cfg.gripper_xy[0], cfg.gripper_xy[1] + cfg.lateral_offset,
                                     self.grasp_height + palm_offset + cfg.start_height])  # fmt: skip
@@ -113,7 +126,7 @@ class GraspScene:
         }
         shapes = {
             "ground": ShapeSpec("plane", (0.0, 0.0, 0.0)),
-            "cylinder": ShapeSpec("cylinder", (r, 0.5 * h, 0.0), rigid=CYLINDER),
+            "cylinder": object_shape,
             "left_core": ShapeSpec("box", tuple(fh), rigid=LEFT),
             "right_core": ShapeSpec("box", tuple(fh), rigid=RIGHT),
             "palm": ShapeSpec("box", PALM_HALF_EXTENTS, rigid=PALM),
@@ -205,10 +218,55 @@ class GraspScene:
         return self.gripper.finger_closing()
 
     def cylinder_tilt(self) -> float:
-        """Angle between the cylinder's axis and the vertical [rad]."""
+        """Angle between the cylinder's axis and the vertical [rad]; for another object, the turn of
+        its tilt axis (objects.ObjectGeometry.tilt_axis) from where it points at rest: a standing
+        object's up direction from the vertical, a lying capsule's axis from the horizontal, 0 for
+        a sphere."""
         x, y, z, w = self.cylinder_pose()[1]
-        axis_z = 1.0 - 2.0 * (x * x + y * y)
-        return float(math.acos(max(-1.0, min(1.0, axis_z))))
+        if self.object_geometry is None:
+            axis_z = 1.0 - 2.0 * (x * x + y * y)
+            return float(math.acos(max(-1.0, min(1.0, axis_z))))
+        return self.object_tilt(np.array([x, y, z, w]))
+
+    def object_tilt(self, q: np.ndarray) -> float:
+        """The object's tilt at orientation ``q`` (x, y, z, w) [rad] (:meth:`cylinder_tilt`)."""
+        g = self.object_geometry
+        if g is None:
+            return float(math.acos(max(-1.0, min(1.0, float(self.object_up(q)[2])))))
+        if g.tilt_axis is None:
+            return 0.0
+        z = float((_matrix(q) @ np.array(g.tilt_axis))[2])
+        if g.tilt_axis == g.up:
+            return float(math.acos(max(-1.0, min(1.0, z))))
+        return float(math.asin(min(1.0, abs(z))))
+
+    def object_up(self, q: np.ndarray) -> np.ndarray:
+        """The world direction of the object's up axis at orientation ``q`` (x, y, z, w): the
+        cylinder's axis, or the body direction that points up when the object rests."""
+        x, y, z, w = (float(v) for v in q)
+        if self.object_geometry is None:
+            return np.array([2.0 * (x * z + y * w), 2.0 * (y * z - x * w), 1.0 - 2.0 * (x * x + y * y)])
+        return _matrix(q) @ np.array(self.object_geometry.up)
+
+    @property
+    def shape_description(self) -> tuple[np.ndarray, np.ndarray]:
+        """(kind one-hot over objects.OBJECT_KINDS, half extents at rest (3,) [m]) of the object:
+        what the observation's shape entries hold (copies)."""
+        if self._shape_description is None:
+            cfg = self.config
+            shape = cfg.object_shape
+            kind = np.zeros(len(OBJECT_KINDS))
+            kind[OBJECT_KINDS.index(shape.kind)] = 1.0
+            if self.object_geometry is None:
+                extent = np.array([cfg.cylinder_radius, cfg.cylinder_radius, 0.5 * cfg.cylinder_height])
+            else:
+                g = self.object_geometry
+                extent = np.array([0.5 * (g.half_width(1.0, 0.0) + g.half_width(-1.0, 0.0)),
+                                   0.5 * (g.half_width(0.0, 1.0) + g.half_width(0.0, -1.0)), 0.5 * g.top])  # fmt: skip
+            self._shape_description = (kind, extent)
+        return self._shape_description[0].copy(), self._shape_description[1].copy()
+
+    _shape_description: tuple[np.ndarray, np.ndarray] | None = None
 
     # --- what the fingers measure ----------------------------------------------------------------
 
@@ -244,8 +302,15 @@ class GraspScene:
     def visuals(self) -> list[Visual]:
         """What a renderer draws: the cylinder and the palm, then what the finger kind shows."""
         cfg = self.config
-        cylinder = Visual("cylinder", np.asarray(CYLINDER_RGBA), body=self.cylinder, link=-1,
-                          half_extents=(cfg.cylinder_radius, cfg.cylinder_radius, 0.5 * cfg.cylinder_height))  # fmt: skip
+        if self.object_geometry is None:
+            cylinder = Visual("cylinder", np.asarray(CYLINDER_RGBA), body=self.cylinder, link=-1,
+                              half_extents=(cfg.cylinder_radius, cfg.cylinder_radius, 0.5 * cfg.cylinder_height))  # fmt: skip
+        else:
+            g = self.object_geometry
+            reach = float(np.linalg.norm(g.support_points, axis=1).max())
+            reach = max(reach, g.top - g.rest_height, g.rest_height)
+            cylinder = Visual("object", np.asarray(CYLINDER_RGBA), body=self.cylinder, link=-1,
+                              half_extents=(reach, reach, reach), geometry=g)  # fmt: skip
         palm = Visual("box", np.asarray(PALM_RGBA), body=self.gripper.body, link=-1, half_extents=PALM_HALF_EXTENTS)
         return [cylinder, palm, *self.fingers.visuals()]
 
@@ -258,4 +323,55 @@ class GraspScene:
             self.client = None
 
 
-__all__ = ["CYLINDER_SHAPE", "SHAPES", "SLOTS", "GraspScene"]
+def _matrix(q) -> np.ndarray:
+    """The rotation matrix of the quaternion ``q`` (x, y, z, w)."""
+    x, y, z, w = (float(v) for v in q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])  # fmt: skip
+
+
+def object_visual_shape(c: BulletClient, geo: ObjectGeometry, rgba) -> int:
+    """pybullet's visual shape of the object ``geo`` in ``c`` (for the scene, and for a renderer's
+    own copy), coloured ``rgba``."""
+    k, t = geo.shape.kind, geo.tissue_params
+    if geo.vertices is not None:
+        return c.createVisualShape(p.GEOM_MESH, vertices=geo.vertices.tolist(), indices=geo.triangles.ravel().tolist(),
+                                   rgbaColor=list(rgba))  # fmt: skip
+    if k == "sphere":
+        return c.createVisualShape(p.GEOM_SPHERE, radius=t[0], rgbaColor=list(rgba))
+    if k == "box":
+        return c.createVisualShape(p.GEOM_BOX, halfExtents=list(t), rgbaColor=list(rgba))
+    if k == "capsule":
+        return c.createVisualShape(p.GEOM_CAPSULE, radius=t[0], length=2.0 * t[1], rgbaColor=list(rgba))
+    raise ValueError(f"no pybullet shape for a {k}")
+
+
+def _create_object(c: BulletClient, geo: ObjectGeometry, mass: float, position: tuple[float, float, float]) -> int:
+    """A free body of ``geo``'s shape and ``mass`` [kg] resting at ``position`` (its centre of mass)
+    [m], its frame the principal one (objects.py) and its inertia the exact one: pybullet's own
+    for a mesh comes from its bounding box."""
+    k, t = geo.shape.kind, geo.tissue_params
+    if geo.vertices is not None:
+        col = c.createCollisionShape(p.GEOM_MESH, vertices=geo.vertices.tolist())
+    elif k == "sphere":
+        col = c.createCollisionShape(p.GEOM_SPHERE, radius=t[0])
+    elif k == "box":
+        col = c.createCollisionShape(p.GEOM_BOX, halfExtents=list(t))
+    elif k == "capsule":
+        col = c.createCollisionShape(p.GEOM_CAPSULE, radius=t[0], height=2.0 * t[1])
+    else:
+        raise ValueError(f"no pybullet shape for a {k}")
+    vis = object_visual_shape(c, geo, CYLINDER_RGBA)
+    body = c.createMultiBody(baseMass=mass, baseCollisionShapeIndex=col, baseVisualShapeIndex=vis,
+                             basePosition=list(position), baseOrientation=list(geo.rest_q))  # fmt: skip
+    inertia = [mass * v for v in geo.inertia_per_mass]
+    # a mesh's rounding margin (1 mm by default) would stand the object on a cushion the tissue
+    # does not see
+    c.changeDynamics(body, -1, localInertiaDiagonal=inertia)
+    if geo.vertices is not None:
+        c.changeDynamics(body, -1, collisionMargin=0.0)
+    return body
+
+
+__all__ = ["CYLINDER_SHAPE", "SHAPES", "SLOTS", "GraspScene", "object_visual_shape"]
