@@ -28,9 +28,11 @@ from . import presets
 from .config import SimConfig, TissueConfig, kinetic_friction
 from .fingers import FINGERS, FemConfig, FingerConfig, TissueFingerConfig, finger_config
 from .fingers.tactile import MAX_TAXELS, TaxelGrid
-from .observation import CARRY_OBS_NAMES, OBS_NAMES, tactile_names, without_object
+from .observation import CARRY_OBS_NAMES, OBS_NAMES, SHAPE_OBS_NAMES, tactile_names, without_object
 from .scene import GRIP_TOP, GripperActions, SceneConfig, Workspace, fit_error, geometry_error
+from .scene.config import lowest_grip
 from .scene.gripper import FINGER_ACTIONS, VelocityActions
+from .scene.objects import ObjectShape, object_geometry, object_shape
 from .tasks import STARTS, CarryTest, GripForceTask, StartRanges, Task, check_option
 from .tasks.carry import (
     CARRY_ACCELERATION_RANGE,
@@ -157,7 +159,11 @@ KEYWORDS: tuple[Keyword, ...] = (
     _kw("cylinder_height", "cylinder", "float", 0.1,
         "Cylinder height [m]"),
     _kw("cylinder_mass", "cylinder", "float", 0.1,
-        "Cylinder mass [kg]"),
+        "Cylinder mass [kg] (the object's, when ``object`` is another shape)"),
+    _kw("object", "cylinder", "str or ObjectShape", None,
+        "What is grasped, if not the cylinder of cylinder_radius and cylinder_height: a named object "
+        "('sphere', 'cube', 'slab', 'capsule', 'cone', 'rod', 'elliptic', 'pebble-0', 'pebble-1', 'pebble-2'; "
+        "softgrasp_env.scene.objects.PRESETS) or an ObjectShape; it has the cylinder_mass and its friction"),
     # control
     _kw("control_frequency", "control", "float", 20.0,
         "Env steps per second [Hz]; must divide the physics rate 1 / sim.dt"),
@@ -236,6 +242,10 @@ KEYWORDS: tuple[Keyword, ...] = (
         "False: the observation leaves out the cylinder's pose and motion (cyl_rel, cyl_axis, cyl_v, cyl_w, "
         "lift), keeping what the gripper's own sensors give - its pose and velocity, the fingers' gap and forces,"
         " the clock, the taxels (the grip ids: an exact in-hand pose would show a slip without touch)"),
+    _kw("observe_shape", "observation", "bool", None,
+        "True: the observation describes the object after the clock - its kind one-hot (shape_cylinder, "
+        "shape_sphere, ..., shape_hull) and its half extents at rest (shape_extent_x/y/z [m]); None: on when "
+        "`object` is given"),
     # camera
     _kw("render_width", "camera", "int", 480,
         "Width of an rgb_array frame [px]"),
@@ -339,11 +349,18 @@ class CylinderConfig:
     """[m]"""
     mass: float = 0.1
     """[kg]"""
+    object: ObjectShape | None = None
+    """Another shape to grasp instead (``object``; a cylinder given there becomes radius and
+    height), or None: the cylinder."""
 
     def __post_init__(self) -> None:
         check_range("cylinder_height", self.height, 0.01, 0.5)
         check_range("cylinder_radius", self.radius, 0.005, 0.2)
         check_range("cylinder_mass", self.mass, 0.001, 10.0)
+        if self.object is not None:
+            check_type("object", self.object, ObjectShape)
+            if self.object.kind == "cylinder":
+                raise ValueError("CylinderConfig.object: a cylinder is given by radius and height")
 
 
 @dataclass(frozen=True)
@@ -469,9 +486,12 @@ class ObservationConfig:
     observe_object: bool = True
     tactile: tuple[int, int] | None = None
     """(rows, cols) of each pad's taxel grid, or None."""
+    observe_shape: bool = False
+    """Whether the observation describes the object's shape (its kind and extents)."""
 
     def __post_init__(self) -> None:
         check_bool("observe_object", self.observe_object)
+        check_bool("observe_shape", self.observe_shape)
         if self.tactile is not None:
             if not isinstance(self.tactile, tuple) or len(self.tactile) != 2:
                 raise ValueError(f"tactile must be (rows, cols) or None, got {self.tactile!r}")
@@ -629,14 +649,15 @@ class EnvArguments:
                             _tuple(v["carry_frequency"]), _tuple(v["carry_acceleration"]), v["carry_slide_limit"])  # fmt: skip
         return cls(
             physics=physics,
-            cylinder=CylinderConfig(v["cylinder_radius"], v["cylinder_height"], v["cylinder_mass"]),
+            cylinder=_cylinder_or_object(v, kwargs),
             control=ControlConfig(v["control_frequency"], v["arm_speed"], v["arm_acceleration"], v["finger_action"],
                                   v["finger_force"]),
             lift=lift,
             ranges=ranges,
             carry_test=carry,
             grip_force=GripForceConfig(v["squeeze_weight"], v["squeeze_factor"]),
-            observation=ObservationConfig(v["observe_object"], _tuple(v["tactile"], integers=True)),
+            observation=ObservationConfig(v["observe_object"], _tuple(v["tactile"], integers=True),
+                                          _given(v["observe_shape"], v["object"] is not None)),
             camera=CameraConfig(v["render_width"], v["render_height"], v["render_camera"], v["camera_distance"],
                                 v["camera_yaw"], v["camera_pitch"], _tuple(v["camera_target"])),
         )  # fmt: skip
@@ -663,13 +684,30 @@ _FLAT: dict[str, tuple[str, str]] = {
     "carry_start": ("carry_test", "start_time"),
     **{f"carry_{a}": ("carry_test", a) for a in ("duration", "frequency", "acceleration", "slide_limit")},
     **{a: ("grip_force", a) for a in ("squeeze_weight", "squeeze_factor")},
-    **{a: ("observation", a) for a in ("observe_object", "tactile")},
+    **{a: ("observation", a) for a in ("observe_object", "tactile", "observe_shape")},
     "render_width": ("camera", "width"), "render_height": ("camera", "height"), "render_camera": ("camera", "mode"),
     **{f"camera_{a}": ("camera", a) for a in ("distance", "yaw", "pitch", "target")},
 }  # fmt: skip
 """Flat keyword -> (config, field) of the keywords that are a field of one config (the others fold
 into a config: ``tissue_faces`` into ``physics.fingers``, the tissue keywords into
 ``physics.tissue``)."""
+
+
+def _cylinder_or_object(v: dict[str, Any], given: dict[str, Any]) -> CylinderConfig:
+    """The ``cylinder`` group of the keywords ``v`` (``given``: those the caller gave): ``object``
+    a cylinder sets radius and height, another shape stands instead of the cylinder, and neither
+    may come with the cylinder's own size keywords."""
+    if v["object"] is None:
+        return CylinderConfig(v["cylinder_radius"], v["cylinder_height"], v["cylinder_mass"])
+    shape = object_shape(v["object"])
+    clash = sorted(k for k in ("cylinder_radius", "cylinder_height", "cylinder_radius_range")
+                   if k in given and given[k] != KEYWORD[k].default)  # fmt: skip
+    if clash:
+        raise ValueError(f"object={v['object']!r} with {', '.join(f'{k}={given[k]!r}' for k in clash)}: the object "
+                         "has its own size (give an ObjectShape for another size)")  # fmt: skip
+    if shape.kind == "cylinder":
+        return CylinderConfig(shape.size[0], shape.size[1], v["cylinder_mass"])
+    return CylinderConfig(mass=v["cylinder_mass"], object=shape)
 
 
 def _given(value: Any, default: Any) -> Any:
@@ -725,13 +763,23 @@ class EnvPlan:
         fh = field_defaults["finger_half_extents"].default
         stroke = field_defaults["finger_stroke"].default
         pad = FINGERS[phys.fingers.kind].pad_thickness(phys.fingers, phys.tissue)
-        error = fit_error(cylinder_radius=cyl.radius, jaw_wedge=0.0, finger_stroke=stroke, pad=pad,
-                          finger_half_height=fh[2], kind=phys.fingers.kind)  # fmt: skip
+        # (another object's fit is judged with the scene, below: SceneConfig's geometry_error)
+        error = None if cyl.object is not None else fit_error(
+            cylinder_radius=cyl.radius, jaw_wedge=0.0, finger_stroke=stroke, pad=pad, finger_half_height=fh[2],
+            kind=phys.fingers.kind)  # fmt: skip
         if error is not None:
             raise ValueError(error)
-        start_height = start.start_height(cyl.height, fh[2], pad)
+        if cyl.object is None:
+            height, grasp_z = cyl.height, 0.5 * cyl.height
+        else:
+            geo = object_geometry(cyl.object)
+            # gripped at its centre of mass or just above the ground (scene.config.grasp_height),
+            # it stands as a cylinder whose mid height that is and whose top is the object's
+            grasp_z = max(geo.rest_height, lowest_grip(fh[2], phys.tissue.extrude))
+            height = 2.0 * (geo.top - grasp_z)
+        start_height = start.start_height(height, fh[2], pad)
         top = GRIP_TOP - GRIP_TOP_MARGIN
-        grip_z = 0.5 * cyl.height + start_height
+        grip_z = grasp_z + start_height
         if grip_z > top:
             raise ValueError(f"cylinder_height={cyl.height:g} m is too tall for start={args.lift.start!r}: the grip "
                              f"would start {grip_z:.3f} m up, too near the top of the arm's workspace ({GRIP_TOP:g} "
@@ -739,11 +787,13 @@ class EnvPlan:
         scene = SceneConfig(fingers=phys.fingers, cylinder_radius=cyl.radius, cylinder_height=cyl.height,
                             cylinder_mass=cyl.mass, finger_force=args.control.finger_force, tissue=phys.tissue,
                             sim=phys.sim, start_height=start_height, arm_speed=args.control.arm_speed,
-                            arm_acceleration=args.control.arm_acceleration)  # fmt: skip
+                            arm_acceleration=args.control.arm_acceleration, object=cyl.object)  # fmt: skip
         _check_range_corners(args, scene)
         names = CARRY_OBS_NAMES if args.carry_test.on else OBS_NAMES
         if not args.observation.observe_object:
             names = without_object(names)
+        if args.observation.observe_shape:
+            names = names + SHAPE_OBS_NAMES
         grid = None
         if args.observation.tactile is not None:
             rows, cols = args.observation.tactile

@@ -4,6 +4,7 @@
     python -m softgrasp_env.compile            # or: softgrasp-compile
     python -m softgrasp_env.compile --report   # every kernel compiled, its time and signature
     python -m softgrasp_env.compile --threads 2  # also the tissue step on threads (SimConfig.threads)
+    python -m softgrasp_env.compile --objects    # also the tissue step with the round and convex objects
 
 Run it once after ``pip install`` (the repository's setup script does). A cold cache takes about a
 minute on 2 cores; a warm one a fraction of a second. ``NUMBA_CACHE_DIR`` moves numba's cache (by
@@ -11,7 +12,10 @@ default it sits beside the package's sources, in ``__pycache__``). ``--report`` 
 compiled in this run only: with a warm cache, nothing (clear the cache or point ``NUMBA_CACHE_DIR``
 at an empty folder to measure a cold one). The tissue step on threads is a kernel of its own,
 compiled only with ``--threads`` (or at the first step of an env made with ``threads`` above 1):
-a one-thread process never loads it.
+a one-thread process never loads it. So is the tissue step in a scene with a cone, an elliptic
+cylinder or a convex hull (``object=``: the collision kinds beyond pybullet's primitives), compiled
+only with ``--objects`` or at its first step, about 100 s on 2 cores: the default scenes keep the
+step compiled without those kinds.
 """
 
 from __future__ import annotations
@@ -28,10 +32,11 @@ KINDS = ("tissue", "rigid")
 segmented and FEM fingers need only the rigid kind's kernels: the arm's path and the state scatter)."""
 
 
-def warm(kinds: tuple[str, ...] = KINDS, threads: int = 1) -> list[Compiled]:
+def warm(kinds: tuple[str, ...] = KINDS, threads: int = 1, *, objects: bool = False) -> list[Compiled]:
     """Build a scene of each finger kind and step it once, and measure the tissue's penetration:
     every kernel the envs and the accuracy checks run is compiled or loaded; with ``threads``
-    above 1 the tissue's step is the one on threads. Returns what was compiled (cache misses)."""
+    above 1 the tissue's step is the one on threads; with ``objects`` the scenes grasp a convex
+    hull, whose step serves every object kind. Returns what was compiled (cache misses)."""
     from .config import SimConfig
     from .scene import GraspScene, SceneConfig
 
@@ -40,7 +45,7 @@ def warm(kinds: tuple[str, ...] = KINDS, threads: int = 1) -> list[Compiled]:
     install_reporter()
     with reporting() as done:
         for kind in kinds:
-            scene = GraspScene(SceneConfig(fingers=kind, sim=sim))
+            scene = GraspScene(SceneConfig(fingers=kind, sim=sim, object="pebble-0" if objects else None))
             try:
                 scene.step()
                 scene.world.penetration()
@@ -73,10 +78,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--report", action="store_true", help="list every kernel compiled, with its time")
     parser.add_argument("--threads", type=int, default=1,
                         help="also compile the tissue step on this many threads (SimConfig.threads; default 1)")  # fmt: skip
+    parser.add_argument("--objects", action="store_true",
+                        help="also compile the tissue step for scenes with a cone, elliptic cylinder or convex hull")  # fmt: skip
     ns = parser.parse_args(argv)
     tic = time.perf_counter()
     try:
         done = warm(KINDS) if ns.threads == 1 else warm(KINDS) + warm(("tissue",), ns.threads)
+        if ns.objects:
+            done += warm(("tissue",), objects=True)
     except ValueError as e:  # a bad thread count, named
         parser.error(str(e))
     seconds = time.perf_counter() - tic

@@ -29,6 +29,8 @@ OBS_BOUNDS: dict[str, tuple[float, float]] = {
     "force": (0.0, np.inf),  # normal forces only push (pybullet's normalForce, the tissue's lambda >= 0)
     "gripper_yaw": (-np.pi, np.pi),  # atan2
     "time": (0.0, np.inf),
+    "shape_kind": (0.0, 1.0),  # one-hot
+    "shape_extent": (0.0, np.inf),
 }
 """The observation groups whose bounds hold whatever happens; every other entry is unbounded.
 Not bounded though they look it: ``finger_gap`` (pybullet's joint limits are soft: 1.2e-8 m past
@@ -112,6 +114,8 @@ class SoftGraspEnv(gym.Env):
     | 21 | lift | cylinder centre above its resting height [m] |
     | 22 | gripper_yaw | palm yaw (the misalignment the agent cannot command) [rad] |
     | 23 | time | time since reset [s] (only with the carry test, which starts at a fixed time) |
+    | then | shape_<kind> | only with ``observe_shape`` (on when ``object=`` is given): the object's kind, one-hot over cylinder, sphere, box, capsule, cone, elliptic, hull |
+    | then | shape_extent_x/y/z | only with ``observe_shape``: the object's half extents at rest (half its bounding box) [m] |
     | then | tactile_<left/right>_r<row>_c<col>_<channel> | only with ``tactile=(rows, cols)``: each pad's taxels over its core's inner face, row 0 at the top, columns from -y to +y, five channels per taxel - pressure, traction_y, traction_z [Pa] and the tissue's shear_y, shear_z [m] (0 for rigid pads; core frame); ``softgrasp_env.observation.tactile_view`` gives the (2, rows, cols, 5) grid; unbounded |
 
     The forces are reported, not capped: the arm (40 N) can press a finger onto

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .fingers.tactile import TAXEL_CHANNELS, TaxelGrid
+from .scene.objects import OBJECT_KINDS
 
 if TYPE_CHECKING:
     from .scene import GraspScene
@@ -31,10 +32,18 @@ OBS_GROUPS: dict[str, tuple[str, ...]] = {
     "lift": ("lift",),
     "gripper_yaw": ("gripper_yaw",),
     "time": ("time",),
+    "shape_kind": tuple(f"shape_{k}" for k in OBJECT_KINDS),
+    "shape_extent": ("shape_extent_x", "shape_extent_y", "shape_extent_z"),
 }
 """Each field of a :class:`Reading` and the observation entries it fills, in observation order."""
 
-OBS_NAMES: tuple[str, ...] = tuple(n for g, names in OBS_GROUPS.items() if g != "time" for n in names)
+SHAPE_GROUPS: tuple[str, ...] = ("shape_kind", "shape_extent")
+"""The groups that describe the grasped object's shape (``observe_shape``, on when the env is made with
+``object=``): its kind one-hot (softgrasp_env.scene.objects.OBJECT_KINDS) and its half extents at rest."""
+SHAPE_OBS_NAMES: tuple[str, ...] = tuple(n for g in SHAPE_GROUPS for n in OBS_GROUPS[g])
+"""The shape description's entries: they follow the clock (if any) and precede the taxels."""
+OBS_NAMES: tuple[str, ...] = tuple(n for g, names in OBS_GROUPS.items() if g != "time" and g not in SHAPE_GROUPS
+                                   for n in names)  # fmt: skip
 """Names of the observation entries, in order (the env card documents each)."""
 CARRY_OBS_NAMES: tuple[str, ...] = OBS_NAMES + ("time",)
 """With the carry test (``carry=True``) the observation ends with the time since
@@ -118,10 +127,21 @@ class Reading:
     tactile: np.ndarray | None = None
     """(2, rows, cols, channels) the pads' taxels (fingers/tactile.py), when the env reads them
     (``tactile=(rows, cols)``)."""
+    shape_kind: np.ndarray | None = None
+    """(len(OBJECT_KINDS),) the object's kind, one-hot."""
+    shape_extent: np.ndarray | None = None
+    """(3,) the object's half extents at rest along x, y, z [m] (half its bounding box)."""
+    object_tilt: float | None = None
+    """The tilt of an object other than the cylinder (scene.GraspScene.cylinder_tilt: a sphere
+    has none, a lying capsule's is its axis from the horizontal); None: the cylinder's, from
+    its axis."""
 
     @property
     def tilt(self) -> float:
-        """Angle of the cylinder's axis from the vertical [rad]."""
+        """Angle of the cylinder's axis from the vertical [rad] (another object's own tilt:
+        :attr:`object_tilt`)."""
+        if self.object_tilt is not None:
+            return self.object_tilt
         z = float(self.cyl_axis[2])
         # np.clip's value in Python floats (a scalar through numpy costs ~3 us, and every env
         # step reads this twice); a NaN stays NaN as np.clip leaves it
@@ -155,16 +175,24 @@ def read(scene: GraspScene, force: np.ndarray, grid: TaxelGrid | None = None) ->
     palm_x, palm_q, palm_v, _ = scene.palm_state()
     cyl_x, cyl_q, cyl_v, cyl_w = scene.cylinder_state()
     x, y, z, w = cyl_q
-    axis = np.array([2.0 * (x * z + y * w), 2.0 * (y * z - x * w), 1.0 - 2.0 * (x * x + y * y)])
+    object_tilt = None
+    if scene.object_geometry is None:
+        axis = np.array([2.0 * (x * z + y * w), 2.0 * (y * z - x * w), 1.0 - 2.0 * (x * x + y * y)])
+    else:  # the object's up direction at rest, where it points now
+        axis = scene.object_up(cyl_q)
+        object_tilt = scene.object_tilt(cyl_q)
     px, py, pz, pw = palm_q
     yaw = math.atan2(2.0 * (pw * pz + px * py), 1.0 - 2.0 * (py * py + pz * pz))
     gap = 2.0 * scene.config.finger_stroke - float(scene.finger_closing().sum())
+    kind, extent = scene.shape_description
     return Reading(grip=grip, grip_v=palm_v.copy(), finger_gap=gap, cyl_rel=cyl_x - grip, cyl_axis=axis,
                    cyl_v=cyl_v.copy(), cyl_w=cyl_w.copy(), force=np.array(force, dtype=np.float64),
                    lift=float(cyl_x[2] - scene.cylinder_rest_z), gripper_yaw=yaw,
                    time=scene.steps * scene.config.sim.dt, cylinder_x=cyl_x.copy(),
-                   tactile=None if grid is None else scene.fingers.tactile(grid))  # fmt: skip
+                   tactile=None if grid is None else scene.fingers.tactile(grid), shape_kind=kind,
+                   shape_extent=extent, object_tilt=object_tilt)  # fmt: skip
 
 
-__all__ = ["CARRY_OBS_NAMES", "OBJECT_GROUPS", "OBS_GROUPS", "OBS_NAMES", "TACTILE_PREFIX", "Reading", "obs_slice",
+__all__ = ["CARRY_OBS_NAMES", "OBJECT_GROUPS", "OBS_GROUPS", "OBS_NAMES", "SHAPE_GROUPS", "SHAPE_OBS_NAMES",
+           "TACTILE_PREFIX", "Reading", "obs_slice",
            "read", "tactile_names", "tactile_view", "without_object"]  # fmt: skip

@@ -29,6 +29,7 @@ import pybullet as p
 
 from .fingers import Visual
 from .scene import GraspScene
+from .scene.scene import object_visual_shape
 from .sim.bullet import connect
 
 GROUND_RGBA = (0.82, 0.84, 0.86, 1.0)
@@ -248,7 +249,9 @@ class SceneRenderer:
             elif self.human and v.in_scene:
                 self._rigid.append((v, None))  # the GUI draws it; the follow camera still frames it
             else:
-                if v.kind == "cylinder":
+                if v.kind == "object":
+                    shape = object_visual_shape(c, v.geometry, v.rgba)
+                elif v.kind == "cylinder":
                     shape = c.createVisualShape(p.GEOM_CYLINDER, radius=v.half_extents[0], length=2.0 * v.half_extents[2],
                                                 rgbaColor=list(v.rgba))  # fmt: skip
                 else:

@@ -7,12 +7,13 @@ import numpy as np
 import pytest
 
 from softgrasp_env import ENV_IDS
-from softgrasp_env.observation import CARRY_OBS_NAMES, OBS_GROUPS, OBS_NAMES, obs_slice
+from softgrasp_env.observation import CARRY_OBS_NAMES, OBS_GROUPS, OBS_NAMES, SHAPE_GROUPS, SHAPE_OBS_NAMES, obs_slice
 from tests.helpers import obs_vector
 
 
 def test_names_and_groups_agree():
-    assert OBS_NAMES == tuple(n for g, names in OBS_GROUPS.items() if g != "time" for n in names)
+    assert OBS_NAMES == tuple(n for g, names in OBS_GROUPS.items() if g not in ("time", *SHAPE_GROUPS) for n in names)
+    assert SHAPE_OBS_NAMES == tuple(n for g in SHAPE_GROUPS for n in OBS_GROUPS[g]) and len(SHAPE_OBS_NAMES) == 10
     assert CARRY_OBS_NAMES == OBS_NAMES + ("time",) and len(OBS_NAMES) == 23
     assert obs_slice(OBS_NAMES, "force") == slice(19, 21) and obs_slice(CARRY_OBS_NAMES, "time") == slice(23, 24)
 

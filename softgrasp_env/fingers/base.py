@@ -25,7 +25,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, fields
-from typing import TYPE_CHECKING, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 import pybullet as p
@@ -86,6 +86,8 @@ class Visual:
     """Something a renderer draws for a finger kind (softgrasp_env/render.py).
 
     ``kind="box"``: the link ``link`` of ``body`` as a box of ``half_extents``, at the link's pose.
+    ``kind="object"``: a grasped object of ``geometry`` (scene.objects.ObjectGeometry), its
+    ``half_extents`` a box round it for the camera.
     ``kind="points"``: ellipsoids of ``radii`` (N, 3) at ``positions()`` (N, 3) turned by
     ``orientations()`` (N, 4, xyzw; ``None``: unturned), coloured ``rgba`` (N, 4).
     ``in_scene``: the physics server has it as a body already (a GUI draws it itself); False for
@@ -100,6 +102,7 @@ class Visual:
     positions: Callable[[], np.ndarray] | None = None
     orientations: Callable[[], np.ndarray] | None = None
     in_scene: bool = True
+    geometry: Any = None
 
 
 CORE_RGBA = (0.3, 0.3, 0.8, 1.0)

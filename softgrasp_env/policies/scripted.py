@@ -15,13 +15,15 @@ from __future__ import annotations
 import numpy as np
 
 from ..fingers.tactile import TAXEL_CHANNELS
-from ..observation import CARRY_OBS_NAMES, OBS_NAMES
+from ..observation import CARRY_OBS_NAMES, OBS_NAMES, SHAPE_OBS_NAMES
+from ..scene.config import grasp_height
 from ..validation import retired_choice
 
 _I = {name: k for k, name in enumerate(OBS_NAMES)}
-_SIZES = (len(OBS_NAMES), len(CARRY_OBS_NAMES))
-"""Without and with the carry test's clock (``carry=False`` / ``True``); the policy does not read the clock:
-it holds on from the grasp to the episode's end either way."""
+_SIZES = tuple(n + k for n in (len(OBS_NAMES), len(CARRY_OBS_NAMES)) for k in (0, len(SHAPE_OBS_NAMES)))
+"""Without and with the carry test's clock (``carry=False`` / ``True``), each without and with the
+object's shape description (``observe_shape``); the policy reads neither: it holds on from the
+grasp to the episode's end either way, and finds the object by its centre."""
 _PER_TAXEL = 2 * len(TAXEL_CHANNELS)
 """An env made with ``tactile=(rows, cols)`` appends 2 x rows x cols x channels entries, which this
 policy does not read."""
@@ -44,11 +46,15 @@ class ScriptedGraspPolicy:
     distance left, so it does not overshoot (:meth:`for_env` reads these from an env).
     ``grip_force`` is the per-finger normal force [N] above which the cylinder counts
     as gripped; ``lift_to`` the lift height it holds [m]; ``descend_tolerance`` how near the
-    cylinder's axis the grip must be horizontally before it comes down from above [m]."""
+    cylinder's axis the grip must be horizontally before it comes down from above [m];
+    ``min_grip_height`` the lowest the grip point goes [m] (None: no limit): a low object (a sphere,
+    a capsule on its side) is gripped there rather than at its centre, so the fingertips stay off
+    the ground (:meth:`for_env` sets the env's, scene.config.grasp_height's)."""
 
     def __init__(self, *, speed: float = 0.15, arm_acceleration: float = 1.5, control_period: float = 0.05,
                  grip_force: float = 0.5, lift_to: float = 0.065, align_tolerance: float = 0.004,
-                 descend_tolerance: float = 0.01, **retired: str) -> None:  # fmt: skip
+                 descend_tolerance: float = 0.01, min_grip_height: float | None = None,
+                 **retired: str) -> None:  # fmt: skip
         # arm="smooth" (before 0.7, when the arm had two kinds) warns; arm="jump" names 0.6.0
         retired_choice(retired, "arm", kept="smooth", gone=("jump",), release="0.6.0", owner="ScriptedGraspPolicy",
                        stacklevel=3)  # fmt: skip
@@ -61,6 +67,7 @@ class ScriptedGraspPolicy:
         self.grip_force = float(grip_force)
         self.lift_to = float(lift_to)
         self.align_tolerance = float(align_tolerance)
+        self.min_grip_height = None if min_grip_height is None else float(min_grip_height)
 
     @classmethod
     def for_env(cls, env, **kwargs) -> ScriptedGraspPolicy:
@@ -70,6 +77,9 @@ class ScriptedGraspPolicy:
         if args is None:
             raise TypeError(f"ScriptedGraspPolicy.for_env needs a SoftGrasp env, got {env!r}")
         c = args.control
+        plan = env.unwrapped.plan
+        if "min_grip_height" not in kwargs and plan.scene.object is not None:
+            kwargs["min_grip_height"] = grasp_height(plan.scene)
         return cls(speed=c.arm_speed, arm_acceleration=c.arm_acceleration, control_period=1.0 / c.frequency,
                    **kwargs)  # fmt: skip
 
@@ -103,11 +113,14 @@ class ScriptedGraspPolicy:
             action[:3] = self.toward(np.array([0.0, 0.0, self.lift_to - lift]))
             action[3] = 1.0
             return action
-        move = rel.copy()
-        if np.hypot(rel[0], rel[1]) > self.descend_tolerance and rel[2] < 0.0:
+        target = rel.copy()  # where the grip point goes, relative to it
+        if self.min_grip_height is not None:
+            target[2] = max(rel[2], self.min_grip_height - obs[_I["grip_z"]])
+        move = target.copy()
+        if np.hypot(rel[0], rel[1]) > self.descend_tolerance and target[2] < 0.0:
             move[2] = 0.0  # above it and not yet over it: no lower until over it
         action[:3] = self.toward(move)
-        aligned = bool(np.abs(rel).max() <= self.align_tolerance)
+        aligned = bool(np.abs(target).max() <= self.align_tolerance)
         action[3] = 1.0 if aligned or (forces > 0.0).any() else -1.0
         return action
 
