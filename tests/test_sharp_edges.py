@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from softgrasp_env.env import OBS_BOUNDS, observation_box
-from softgrasp_env.observation import CARRY_OBS_NAMES, OBS_GROUPS, OBS_NAMES
+from softgrasp_env.observation import CARRY_OBS_NAMES, OBS_GROUPS, OBS_NAMES, SHAPE_OBS_NAMES
 from softgrasp_env.registration import steps_to_succeed
 
 
@@ -50,12 +50,14 @@ def test_steps_to_succeed_is_the_first_step_the_carry_is_over():
 
 
 def test_the_observation_box_is_bounded_where_bounds_hold():
-    box = observation_box(CARRY_OBS_NAMES)
+    names = CARRY_OBS_NAMES + SHAPE_OBS_NAMES
+    box = observation_box(names)
     for group, (lo, hi) in OBS_BOUNDS.items():
         for name in OBS_GROUPS[group]:
-            k = CARRY_OBS_NAMES.index(name)
+            k = names.index(name)
             assert (box.low[k], box.high[k]) == (np.float32(lo), np.float32(hi)), name
     assert np.isinf(box.low[CARRY_OBS_NAMES.index("finger_gap")])  # soft joint limits: no bound
+    box = observation_box(CARRY_OBS_NAMES)
     env = gym.make("SoftGrasp-v3")
     goal = gym.make("SoftGraspGoal-v5")
     try:
