@@ -6,6 +6,7 @@ object at U(+-1 cm)), seeds 0..N-1.
 
     PYTHONPATH=. python benchmarks/objects.py                       # 10 seeds, soft and rigid
     PYTHONPATH=. python benchmarks/objects.py --seeds 3 --objects sphere,cone --kinds soft
+    PYTHONPATH=. python benchmarks/objects.py --task carry --kinds soft,rigid,rigid_torsion
 """
 
 from __future__ import annotations
@@ -23,6 +24,9 @@ from softgrasp_env.policies import ScriptedGraspPolicy
 from softgrasp_env.scene.objects import PRESETS
 
 KINDS = {"soft": "SoftGraspEasy-v4", "rigid": "SoftGraspEasyRigid-v3", "rigid_torsion": "SoftGraspEasyRigidTorsion-v3"}
+CARRY = {"soft": "SoftGrasp-v4", "rigid": "SoftGraspRigid-v3", "rigid_torsion": "SoftGraspRigidTorsion-v3"}
+"""--task carry: the ids' own task - the reach from a misaligned start (yaw, jaw wedge, offset), the
+lift and the carry's sway."""
 INDEX = {n: k for k, n in enumerate(OBS_NAMES)}
 
 
@@ -49,14 +53,18 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--objects", default=",".join(PRESETS))
     ap.add_argument("--kinds", default="soft,rigid")
+    ap.add_argument("--task", choices=("easy", "carry"), default="easy",
+                    help="easy: the gentle start, no carry (the Easy ids); carry: the ids' reach and carry")  # fmt: skip
     a = ap.parse_args()
-    print(f"scripted grasp per object, {a.seeds} seeds, the gentle start")
+    ids = KINDS if a.task == "easy" else CARRY
+    print(f"scripted grasp per object, {a.seeds} seeds, " + ("the gentle start" if a.task == "easy" else
+                                                            "the reach from a misaligned start and the carry"))  # fmt: skip
     print("| object | kind | held | lift at the end [mm] | peak tilt [deg] | mean squeeze [N] | wall s |")
     print("|---|---|---|---|---|---|---|")
     for obj in a.objects.split(","):
         for kind in a.kinds.split(","):
             t0 = time.perf_counter()
-            rows = [episode(KINDS[kind], obj, s) for s in range(a.seeds)]
+            rows = [episode(ids[kind], obj, s) for s in range(a.seeds)]
             wall = time.perf_counter() - t0
             held = sum(r["ok"] for r in rows)
             lifts = [r["lift"] * 1000 for r in rows]

@@ -163,7 +163,8 @@ KEYWORDS: tuple[Keyword, ...] = (
     _kw("object", "cylinder", "str or ObjectShape", None,
         "What is grasped, if not the cylinder of cylinder_radius and cylinder_height: a named object "
         "('sphere', 'cube', 'slab', 'capsule', 'cone', 'rod', 'elliptic', 'pebble-0', 'pebble-1', 'pebble-2'; "
-        "softgrasp_env.scene.objects.PRESETS) or an ObjectShape; it has the cylinder_mass and its friction"),
+        "softgrasp_env.scene.objects.PRESETS) or an ObjectShape, or a list of them: one drawn per episode, each as "
+        "likely; it has the cylinder_mass and its friction"),
     # control
     _kw("control_frequency", "control", "float", 20.0,
         "Env steps per second [Hz]; must divide the physics rate 1 / sim.dt"),
@@ -644,7 +645,8 @@ class EnvArguments:
                           _tuple(v["approach_range"]))  # fmt: skip
         defaults = STARTS[lift.start].defaults  # None: the start's
         ranges = StartRanges(**{name: _real(_given(v[f"{name}_range"], defaults.get(name))) for name in (
-            "cylinder_position", "lateral_offset", "yaw", "jaw_wedge", "friction", "cylinder_radius", "cylinder_mass")})
+            "cylinder_position", "lateral_offset", "yaw", "jaw_wedge", "friction", "cylinder_radius", "cylinder_mass")},
+            objects=_object_set(v["object"], kwargs))
         carry = CarryConfig(_given(v["carry"], defaults["carry"]), v["carry_start"], v["carry_duration"],
                             _tuple(v["carry_frequency"]), _tuple(v["carry_acceleration"]), v["carry_slide_limit"])  # fmt: skip
         return cls(
@@ -697,7 +699,7 @@ def _cylinder_or_object(v: dict[str, Any], given: dict[str, Any]) -> CylinderCon
     """The ``cylinder`` group of the keywords ``v`` (``given``: those the caller gave): ``object``
     a cylinder sets radius and height, another shape stands instead of the cylinder, and neither
     may come with the cylinder's own size keywords."""
-    if v["object"] is None:
+    if v["object"] is None or isinstance(v["object"], (tuple, list)):  # a set: drawn per episode (StartRanges)
         return CylinderConfig(v["cylinder_radius"], v["cylinder_height"], v["cylinder_mass"])
     shape = object_shape(v["object"])
     clash = sorted(k for k in ("cylinder_radius", "cylinder_height", "cylinder_radius_range")
@@ -708,6 +710,24 @@ def _cylinder_or_object(v: dict[str, Any], given: dict[str, Any]) -> CylinderCon
     if shape.kind == "cylinder":
         return CylinderConfig(shape.size[0], shape.size[1], v["cylinder_mass"])
     return CylinderConfig(mass=v["cylinder_mass"], object=shape)
+
+
+def _object_set(value: Any, given: dict[str, Any]) -> tuple[ObjectShape, ...]:
+    """The objects of ``object=`` given as a list or tuple (names or ObjectShapes), drawn one per
+    episode; () for one object or none."""
+    if not isinstance(value, (tuple, list)):
+        return ()
+    if len(value) < 2:
+        raise ValueError(f"object= as a set needs at least two objects, got {value!r} (give one object by itself)")
+    shapes = tuple(object_shape(x) for x in value)
+    if len(set(shapes)) != len(shapes):
+        raise ValueError(f"object= names an object twice: {value!r}")
+    clash = sorted(k for k in ("cylinder_radius", "cylinder_height", "cylinder_radius_range")
+                   if k in given and given[k] != KEYWORD[k].default)  # fmt: skip
+    if clash:
+        raise ValueError(f"object={value!r} with {', '.join(f'{k}={given[k]!r}' for k in clash)}: the objects have "
+                         "their own sizes")  # fmt: skip
+    return shapes
 
 
 def _given(value: Any, default: Any) -> Any:
@@ -769,17 +789,26 @@ class EnvPlan:
             kind=phys.fingers.kind)  # fmt: skip
         if error is not None:
             raise ValueError(error)
-        if cyl.object is None:
+        objects = args.ranges.objects or ((cyl.object,) if cyl.object is not None else ())
+        if not objects:
             height, grasp_z = cyl.height, 0.5 * cyl.height
+            start_height = start.start_height(height, fh[2], pad)
         else:
-            geo = object_geometry(cyl.object)
-            # gripped at its centre of mass or just above the ground (scene.config.grasp_height),
-            # it stands as a cylinder whose mid height that is and whose top is the object's
-            grasp_z = max(geo.rest_height, lowest_grip(fh[2], phys.tissue.extrude))
-            height = 2.0 * (geo.top - grasp_z)
-        start_height = start.start_height(height, fh[2], pad)
+            # each gripped at its centre of mass or just above the ground (scene.config.grasp_height)
+            # stands as a cylinder whose mid height that is and whose top is the object's; a set
+            # starts as high above each as its tallest needs
+            start_height, grasp_z = -math.inf, -math.inf
+            for shape in objects:
+                geo = object_geometry(shape)
+                z = max(geo.rest_height, lowest_grip(fh[2], phys.tissue.extrude))
+                start_height = max(start_height, start.start_height(2.0 * (geo.top - z), fh[2], pad))
+                grasp_z = max(grasp_z, z)
         top = GRIP_TOP - GRIP_TOP_MARGIN
         grip_z = grasp_z + start_height
+        if objects and grip_z > top:
+            raise ValueError(f"object={args.ranges.objects or cyl.object!r} is too tall for start={args.lift.start!r}: "
+                             f"the grip would start {grip_z:.3f} m up, too near the top of the arm's workspace "
+                             f"({GRIP_TOP:g} m)")  # fmt: skip
         if grip_z > top:
             raise ValueError(f"cylinder_height={cyl.height:g} m is too tall for start={args.lift.start!r}: the grip "
                              f"would start {grip_z:.3f} m up, too near the top of the arm's workspace ({GRIP_TOP:g} "
@@ -788,7 +817,8 @@ class EnvPlan:
                             cylinder_mass=cyl.mass, finger_force=args.control.finger_force, tissue=phys.tissue,
                             sim=phys.sim, start_height=start_height, arm_speed=args.control.arm_speed,
                             arm_acceleration=args.control.arm_acceleration, object=cyl.object)  # fmt: skip
-        _check_range_corners(args, scene)
+        for shape in args.ranges.objects or (None,):
+            _check_range_corners(args, scene if shape is None else replace(scene, object=shape))
         names = CARRY_OBS_NAMES if args.carry_test.on else OBS_NAMES
         if not args.observation.observe_object:
             names = without_object(names)

@@ -16,7 +16,6 @@ import numpy as np
 
 from ..fingers.tactile import TAXEL_CHANNELS
 from ..observation import CARRY_OBS_NAMES, OBS_NAMES, SHAPE_OBS_NAMES
-from ..scene.config import grasp_height
 from ..validation import retired_choice
 
 _I = {name: k for k, name in enumerate(OBS_NAMES)}
@@ -78,8 +77,9 @@ class ScriptedGraspPolicy:
             raise TypeError(f"ScriptedGraspPolicy.for_env needs a SoftGrasp env, got {env!r}")
         c = args.control
         plan = env.unwrapped.plan
-        if "min_grip_height" not in kwargs and plan.scene.object is not None:
-            kwargs["min_grip_height"] = grasp_height(plan.scene)
+        if "min_grip_height" not in kwargs and (plan.scene.object is not None or args.ranges.objects):
+            # the workspace's floor: a low object is gripped there, another at its centre
+            kwargs["min_grip_height"] = float(plan.workspace.low[2])
         return cls(speed=c.arm_speed, arm_acceleration=c.arm_acceleration, control_period=1.0 / c.frequency,
                    **kwargs)  # fmt: skip
 

@@ -62,6 +62,9 @@ class StartRanges:
     """Cylinder radius: base +- U(cylinder_radius) [m]."""
     cylinder_mass: float
     """Cylinder mass: base x U(1 +- cylinder_mass) [-]."""
+    objects: tuple = ()
+    """The objects (scene.objects.ObjectShape) an episode's object is drawn from, each as likely,
+    after the draws above; () keeps the base scene's."""
 
     def __post_init__(self) -> None:
         # each named by its gym.make keyword (``yaw_range``), the only place these come from
@@ -125,6 +128,8 @@ class LiftTask(Task):
             "cylinder_mass": float(base.cylinder_mass * (1.0 + u[7] * rg.cylinder_mass)),
             "gripper_xy": self.gripper_xy((float(u[8]), float(u[9]))),
         }
+        if rg.objects:  # a draw of its own, after the others: the ids without a set draw as before
+            vals["object"] = rg.objects[int(rng.integers(len(rg.objects)))]
         vals.update(options)  # checked and converted by check_option
         fs = vals.pop("friction_scale")
         if not 0.0 < fs <= 10.0:
