@@ -77,6 +77,10 @@ class SoftGraspEnv(gym.Env):
     holds the action for ``240 / control_frequency`` physics steps. The package's documentation
     (Results: the env's design, measured) has the measurements behind these choices.
 
+    ``object=`` grasps another shape instead of the cylinder, or draws one per episode from a list
+    (a sphere, a cube, a slab, a capsule, a cone, a rod, an elliptic cylinder, convex pebbles: the
+    documentation's Objects page); the observation then describes it (``observe_shape``).
+
     ## Action space
     ``Box(-1, 1, (4,), float32)``:
 
