@@ -129,6 +129,8 @@ while not done:
 out.update(env=env_id, steps=steps, success=bool(info["is_success"]), in_space=bool(env.observation_space.contains(obs)))
 env.close()
 out["baselines"] = len(list_baselines())
+from softgrasp_env.scene.objects import PRESETS, object_geometry  # the shipped meshes load from the install
+out["pebble_cm3"] = round(object_geometry(PRESETS["pebble-0"]).volume * 1e6, 1)
 try:
     load_baseline("SoftGrasp-v3_sac_1")  # the id's best: in the wheel
     out["load_error"] = None
@@ -163,6 +165,9 @@ def test_the_wheel_works_in_a_fresh_venv_without_extras(tmp_path):
     with zipfile.ZipFile(wheel) as z:
         names = z.namelist()
     assert "softgrasp_env/py.typed" in names and any(n.endswith(".dist-info/licenses/LICENSE") for n in names)
+    from softgrasp_env.scene.objects import MESHES
+
+    assert {f"softgrasp_env/scene/meshes/{m}.obj" for m in MESHES} <= set(names)  # the pebbles' meshes
     # the wheel carries the best baseline of each id; the others stay in the repository
     current = set(_best().values())
     assert len(current) >= 3
@@ -197,6 +202,7 @@ def test_the_wheel_works_in_a_fresh_venv_without_extras(tmp_path):
     assert newest == "SoftGrasp-v4"
     assert result["env"] == newest and result["steps"] == 100 and result["success"] and result["in_space"]
     assert result["baselines"] == len(current)
+    assert result["pebble_cm3"] == 112.7, result  # pebble-0's volume, from the installed mesh
     assert "softgrasp-env[train]" in result["load_error"]
     assert "best baseline of each id" in result["other_error"] and "source repository" in result["other_error"], result
     assert not any(result[m] for m in ("agents", "torch", "stable_baselines3", "matplotlib")), result
