@@ -331,6 +331,13 @@ class FemFingers(FingerKind):
         self.pads: FemPads | None = None
 
     @classmethod
+    def check(cls, scene_config) -> None:
+        """The pads' penetration measure (FemPads.penetration) knows only the cylinder."""
+        if scene_config.object is not None:
+            raise ValueError(f"fingers='fem' grasps only the cylinder: its pads' penetration measure is the "
+                             f"cylinder's, not a {scene_config.object.kind}'s (object={scene_config.object.name!r})")  # fmt: skip
+
+    @classmethod
     def pad_thickness(cls, config: FingerConfig, tissue: TissueConfig) -> float:
         """The pad's depth: the tissue's extrude (the same 8 mm by default)."""
         return tissue.extrude

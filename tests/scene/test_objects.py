@@ -173,6 +173,10 @@ def test_bad_shapes_get_clear_errors():
         SceneConfig(object="sphere", cylinder_radius=0.02)
     with pytest.raises(ValueError, match="both describe the cylinder"):
         SceneConfig(object="rod", cylinder_height=0.08)
+    # the FEM pads' penetration measure is the cylinder's
+    with pytest.raises(ValueError, match="fingers='fem' grasps only the cylinder"):
+        SceneConfig(fingers="fem", object="sphere")
+    SceneConfig(fingers="fem", object="rod")  # a cylinder is a cylinder
 
 
 def test_a_cylinder_given_as_object_is_the_cylinder():
