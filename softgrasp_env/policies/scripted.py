@@ -48,7 +48,8 @@ class ScriptedGraspPolicy:
     cylinder's axis the grip must be horizontally before it comes down from above [m];
     ``min_grip_height`` the lowest the grip point goes [m] (None: no limit): a low object (a sphere,
     a capsule on its side) is gripped there rather than at its centre, so the fingertips stay off
-    the ground (:meth:`for_env` sets the env's, scene.config.grasp_height's)."""
+    the ground (:meth:`for_env` sets the arm workspace's floor when the env grasps another object
+    than the cylinder: where scene.config.grasp_height puts a low object)."""
 
     def __init__(self, *, speed: float = 0.15, arm_acceleration: float = 1.5, control_period: float = 0.05,
                  grip_force: float = 0.5, lift_to: float = 0.065, align_tolerance: float = 0.004,
