@@ -209,7 +209,10 @@ KEYWORDS: tuple[Keyword, ...] = (
     _kw("cylinder_radius_range", "ranges", "float", 0.0,
         "Cylinder radius ± U(range) [m]"),
     _kw("cylinder_mass_range", "ranges", "float", 0.0,
-        "Cylinder mass × U(1 ± range)"),
+        "Cylinder mass × U(1 ± range) (the object's, when ``object`` is another shape)"),
+    _kw("object_scale_range", "ranges", "float", 0.0,
+        "The object's size, every dimension, × U(1 ± range), 0 to 0.5 (the cylinder's too: then radius and height "
+        "together, instead of cylinder_radius_range)"),
     # carry_test
     _kw("carry", "carry_test", "bool", None,
         "The carry test (None: on for start 'reach', off for 'easy')"),
@@ -353,8 +356,12 @@ class CylinderConfig:
     object: ObjectShape | None = None
     """Another shape to grasp instead (``object``; a cylinder given there becomes radius and
     height), or None: the cylinder."""
+    name: str = "cylinder"
+    """What the object is called (``info["object"]``): the named object's name ('rod' for the rod,
+    which is radius and height here), or the shape's."""
 
     def __post_init__(self) -> None:
+        check_type("name", self.name, str)
         check_range("cylinder_height", self.height, 0.01, 0.5)
         check_range("cylinder_radius", self.radius, 0.005, 0.2)
         check_range("cylinder_mass", self.mass, 0.001, 10.0)
@@ -645,8 +652,12 @@ class EnvArguments:
                           _tuple(v["approach_range"]))  # fmt: skip
         defaults = STARTS[lift.start].defaults  # None: the start's
         ranges = StartRanges(**{name: _real(_given(v[f"{name}_range"], defaults.get(name))) for name in (
-            "cylinder_position", "lateral_offset", "yaw", "jaw_wedge", "friction", "cylinder_radius", "cylinder_mass")},
+            "cylinder_position", "lateral_offset", "yaw", "jaw_wedge", "friction", "cylinder_radius", "cylinder_mass",
+            "object_scale")},
             objects=_object_set(v["object"], kwargs))
+        if ranges.object_scale and ranges.cylinder_radius:
+            raise ValueError(f"object_scale_range={ranges.object_scale!r} and cylinder_radius_range="
+                             f"{ranges.cylinder_radius!r} both draw the cylinder's size; give one")  # fmt: skip
         carry = CarryConfig(_given(v["carry"], defaults["carry"]), v["carry_start"], v["carry_duration"],
                             _tuple(v["carry_frequency"]), _tuple(v["carry_acceleration"]), v["carry_slide_limit"])  # fmt: skip
         return cls(
@@ -659,7 +670,8 @@ class EnvArguments:
             carry_test=carry,
             grip_force=GripForceConfig(v["squeeze_weight"], v["squeeze_factor"]),
             observation=ObservationConfig(v["observe_object"], _tuple(v["tactile"], integers=True),
-                                          _given(v["observe_shape"], v["object"] is not None)),
+                                          _given(v["observe_shape"], v["object"] is not None or
+                                                 bool(ranges.object_scale))),
             camera=CameraConfig(v["render_width"], v["render_height"], v["render_camera"], v["camera_distance"],
                                 v["camera_yaw"], v["camera_pitch"], _tuple(v["camera_target"])),
         )  # fmt: skip
@@ -708,8 +720,8 @@ def _cylinder_or_object(v: dict[str, Any], given: dict[str, Any]) -> CylinderCon
         raise ValueError(f"object={v['object']!r} with {', '.join(f'{k}={given[k]!r}' for k in clash)}: the object "
                          "has its own size (give an ObjectShape for another size)")  # fmt: skip
     if shape.kind == "cylinder":
-        return CylinderConfig(shape.size[0], shape.size[1], v["cylinder_mass"])
-    return CylinderConfig(mass=v["cylinder_mass"], object=shape)
+        return CylinderConfig(shape.size[0], shape.size[1], v["cylinder_mass"], name=shape.name)
+    return CylinderConfig(mass=v["cylinder_mass"], object=shape, name=shape.name)
 
 
 def _object_set(value: Any, given: dict[str, Any]) -> tuple[ObjectShape, ...]:
@@ -790,6 +802,12 @@ class EnvPlan:
         if error is not None:
             raise ValueError(error)
         objects = args.ranges.objects or ((cyl.object,) if cyl.object is not None else ())
+        scale = args.ranges.object_scale
+        if scale and not objects:  # the cylinder, scaled as an object
+            objects = (ObjectShape("cylinder", (cyl.radius, cyl.height), label=cyl.name),)
+        if scale:  # each object at both ends of its size range: the largest decides the start
+            objects = tuple(_scaled(shape, f, "object_scale_range", scale) for shape in objects
+                            for f in (1.0 - scale, 1.0 + scale))  # fmt: skip
         if not objects:
             height, grasp_z = cyl.height, 0.5 * cyl.height
             start_height = start.start_height(height, fh[2], pad)
@@ -816,9 +834,10 @@ class EnvPlan:
         scene = SceneConfig(fingers=phys.fingers, cylinder_radius=cyl.radius, cylinder_height=cyl.height,
                             cylinder_mass=cyl.mass, finger_force=args.control.finger_force, tissue=phys.tissue,
                             sim=phys.sim, start_height=start_height, arm_speed=args.control.arm_speed,
-                            arm_acceleration=args.control.arm_acceleration, object=cyl.object)  # fmt: skip
-        for shape in args.ranges.objects or (None,):
-            _check_range_corners(args, scene if shape is None else replace(scene, object=shape))
+                            arm_acceleration=args.control.arm_acceleration, object=cyl.object,
+                            object_name=cyl.name)  # fmt: skip
+        for shape in (objects if scale else args.ranges.objects) or (None,):
+            _check_range_corners(args, scene if shape is None else _with_object(scene, shape))
         names = CARRY_OBS_NAMES if args.carry_test.on else OBS_NAMES
         if not args.observation.observe_object:
             names = without_object(names)
@@ -854,6 +873,23 @@ class EnvPlan:
         c = self.args.control
         return VelocityActions(c.arm_speed, c.frequency, self.workspace, self.scene.finger_travel,
                                finger=c.finger_action, finger_force=self.scene.finger_force)  # fmt: skip
+
+
+def _scaled(shape: ObjectShape, factor: float, keyword: str, value: float) -> ObjectShape:
+    """``shape`` at ``factor`` of its size, or a ValueError naming the range (``keyword=value``) that
+    reaches a size the shape cannot have."""
+    try:
+        return shape.scaled(factor)
+    except ValueError as e:
+        raise ValueError(f"{keyword}={value!r} reaches a {shape.name} {factor:g} times its size: {e}") from None
+
+
+def _with_object(scene: SceneConfig, shape: ObjectShape) -> SceneConfig:
+    """``scene`` grasping ``shape`` instead (the cylinder's own fields back at their defaults, the
+    object describing it)."""
+    fields = SceneConfig.__dataclass_fields__
+    return replace(scene, object=shape, cylinder_radius=fields["cylinder_radius"].default,
+                   cylinder_height=fields["cylinder_height"].default)  # fmt: skip
 
 
 def _check_range_corners(args: EnvArguments, base: SceneConfig) -> None:

@@ -23,6 +23,20 @@ observation (a gripper's own sensors do not give them; the documentation's Tacti
 what a learner does with them)."""
 _ENV, _GOAL = "softgrasp_env.env:SoftGraspEnv", "softgrasp_env.env:SoftGraspGoalEnv"
 
+OBJECT_SET: tuple[str, ...] = ("cylinder", "rod", "sphere", "cube", "slab", "capsule", "cone", "elliptic", "pebble-0",
+                               "pebble-1", "pebble-2")  # fmt: skip
+"""The object-set ids' objects (softgrasp_env.scene.objects.PRESETS, all of them), one drawn per
+episode, each as likely."""
+OBJECTS_TASK: dict[str, object] = {"object": OBJECT_SET, "object_scale_range": 0.15, "cylinder_mass_range": 0.5,
+                                   "friction_range": 0.2}  # fmt: skip
+"""The object-set task's draws on top of the carry task's start: the object, its size x U(1 +-
+0.15), its mass 0.05-0.15 kg, every friction coefficient x U(1 +- 0.2); the observation names its
+kind and extents (``observe_shape``)."""
+OBJECTS_GRIP_TASK: dict[str, object] = {"object": OBJECT_SET}
+"""The object-set grip-force task: the grip-force task's draws (:data:`GRIP_TASK`: mass and friction)
+on every object at its own size (the gentle start's open fingers leave the cone and the elliptic
+cylinder about a millimetre: a larger one would not fit between them)."""
+
 TISSUE_V4: dict[str, object] = dict(presets.TISSUE_V4)
 """The v4 tissue, as the soft ids' ``gym.make`` keywords (softgrasp_env.presets.TISSUE_V4): the
 continuum group energy (a shear modulus that means the same pad at every particle density) with
@@ -53,6 +67,17 @@ _SPECS: dict[str, tuple[str, dict]] = {
     **{f"SoftGraspGrip{name}-v3": (_ENV, {"fingers": kind, "reward_type": "dense", "start": "easy", "carry": True,
                                           **GRIP_TASK})
        for name, kind in (("", "tissue"), ("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion"))},
+    # the object-set family: the carry task and the grip-force task on every object
+    "SoftGraspObjects-v1": (_ENV, {"fingers": "tissue", "reward_type": "dense", "carry": True, **OBJECTS_TASK,
+                                   **TISSUE_V4}),
+    "SoftGraspObjectsRigid-v1": (_ENV, {"fingers": "rigid", "reward_type": "dense", "carry": True, **OBJECTS_TASK}),
+    "SoftGraspObjectsRigidTorsion-v1": (_ENV, {"fingers": "rigid_torsion", "reward_type": "dense", "carry": True,
+                                               **OBJECTS_TASK}),
+    "SoftGraspObjectsGrip-v1": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", "carry": True,
+                                       **GRIP_TASK, **OBJECTS_GRIP_TASK, **TISSUE_V4}),
+    **{f"SoftGraspObjectsGrip{name}-v1": (_ENV, {"fingers": kind, "reward_type": "dense", "start": "easy",
+                                                 "carry": True, **GRIP_TASK, **OBJECTS_GRIP_TASK})
+       for name, kind in (("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion"))},
 }
 
 ENV_IDS: tuple[str, ...] = tuple(_SPECS)
@@ -66,7 +91,9 @@ a knocked-over cylinder does not end its episode since SoftGraspGoal-v4) and the
 the physics; the grip-force task (SoftGraspGrip, soft / rigid / torsional: the gentle start with
 the carry, the squeeze as the action, mass and friction drawn and not observed, the squeeze charged
 and success within 2 x the least that holds, 4 x 4 taxels per pad, the cylinder's pose and motion
-not observed: softgrasp_env/tasks/grip.py). The arm moves the palm at the action's velocity along a
+not observed: softgrasp_env/tasks/grip.py); the object set (SoftGraspObjects, soft / rigid /
+torsional, and its grip-force variants: one of :data:`OBJECT_SET` drawn per episode, at a drawn
+size, mass and friction, its kind and extents observed). The arm moves the palm at the action's velocity along a
 smooth path (at most 0.15 m/s and 1.5 m/s^2). The soft ids' v4 (the goal's v5) is the same task on
 the v4 tissue (:data:`TISSUE_V4`); v3 (the goal's v4) keeps the thesis' shape matching with a
 friction law per patch. The rigid kinds have no tissue and stay v3. Older versions live in the

@@ -80,7 +80,7 @@ def test_the_shape_description_is_observed_when_an_object_is_given():
     plain = gym.make("SoftGraspEasyRigid-v3")
     assert plain.unwrapped.obs_names == OBS_NAMES
     for obj, kind, extent in (("cube", "box", (0.025, 0.025, 0.025)), ("slab", "box", (0.0125, 0.04, 0.03)),
-                              ("rod", "cylinder", (0.005, 0.005, 0.05)), ("sphere", "sphere", (0.03, 0.03, 0.03))):  # fmt: skip
+                              ("rod", "cylinder", (0.006, 0.006, 0.05)), ("sphere", "sphere", (0.03, 0.03, 0.03))):  # fmt: skip
         env = gym.make("SoftGraspEasyRigid-v3", object=obj)
         names = env.unwrapped.obs_names
         assert names == OBS_NAMES + SHAPE_OBS_NAMES

@@ -6,8 +6,8 @@ rewards, starting state, episode end, arguments, version history). The sources:
 - the env cards, the class docstrings of ``SoftGraspEnv`` and ``SoftGraspGoalEnv``
   (softgrasp_env/env.py), split at their ``## `` headings; the argument table is regenerated from
   ``softgrasp_env.arguments.argument_table()`` (the keywords' table, ``KEYWORDS``) on every build;
-  a lift-card section that belongs to one family (``FAMILY_SECTIONS``: the grip-force task) goes
-  on that family's page only;
+  a lift-card section that belongs to some families (``FAMILY_SECTIONS``: the grip-force task,
+  the object set) goes on those families' pages only;
 - the registered ids and their keywords (``softgrasp_env.registration.ENV_IDS``, gymnasium's
   registry): which family each id is in, the registered-ids table, the versions;
 - the observation names (``EnvPlan.of(args).obs_names``, built from softgrasp_env/observation.py's
@@ -41,14 +41,19 @@ FAMILY_PAGES: dict[str, tuple[str, str]] = {
              "rewards, the reach and the gentle (Easy) start."),
     "grip": ("Grip force", "Hold the cylinder with the least squeeze: the squeeze as the action, mass and friction "
              "drawn and not observed, taxels on each pad."),
+    "objects": ("Object set", "Grasp a shape drawn per episode from eleven - sphere, boxes, capsule, cone, rod, "
+                "elliptic cylinder, pebbles, the cylinder - at a drawn size, mass and friction, its kind and "
+                "extents observed: soft, rigid and torsional fingers, the carry and the grip-force tasks."),
     "goal": ("Goal", "Goal-conditioned lift for hindsight experience replay: dict observations and "
              "`compute_reward`."),
 }
 """Each family's page name (``envs/<key>``), title and one-line summary, in the order of the index."""
 
-FAMILY_SECTIONS: dict[str, str] = {"grip": "grip-force task"}
-"""A section of the lift card (``SoftGraspEnv``) that belongs to one family (by its lower-cased
-heading): that family's page shows it right after the description, the other pages leave it out."""
+FAMILY_SECTIONS: dict[str, tuple[str, ...]] = {"grip": ("grip-force task",),
+                                                "objects": ("object set", "grip-force task")}
+"""Sections of the lift card (``SoftGraspEnv``) that belong to some families only (by their
+lower-cased headings): those families' pages show them right after the description, the other
+pages leave them out."""
 
 
 @dataclass
@@ -129,8 +134,9 @@ def goal_sections(text: str) -> tuple[str, dict[str, str]]:
 
 
 def family_of(env_id: str) -> str:
-    """The family an id is in, from its registration: the goal env class; the grip-force task's
-    settings (``registration.GRIP_TASK``); else the lift family."""
+    """The family an id is in, from its registration: the goal env class; the object set
+    (``registration.OBJECT_SET``); the grip-force task's settings (``registration.GRIP_TASK``);
+    else the lift family."""
     import gymnasium as gym
 
     from softgrasp_env import env as env_module
@@ -143,6 +149,8 @@ def family_of(env_id: str) -> str:
         cls = getattr(env_module, name, None) if module == env_module.__name__ else None
     if cls is not None and issubclass(cls, env_module.SoftGraspGoalEnv):
         return "goal"
+    if spec.kwargs.get("object") == registration.OBJECT_SET:
+        return "objects"
     grip = getattr(registration, "GRIP_TASK", {})
     if grip and all(spec.kwargs.get(k) == v for k, v in grip.items()):
         return "grip"
@@ -295,7 +303,7 @@ def render_family(fam: Family) -> str:
     base_pre, base = split_sections(card_text(SoftGraspEnv))
     base["arguments"] = fill_arguments(base.get("arguments", "<arguments>"))
     gym_keys = {a for _, keys in GYM_SECTIONS for a in keys}
-    family_sections = set(FAMILY_SECTIONS.values())
+    family_sections = {name for names in FAMILY_SECTIONS.values() for name in names}
     if fam.key == "goal":
         goal_pre, goal = goal_sections(card_text(fam.card))
         own = {"description": (goal_pre + "\n\n" + goal.get("description", "")).strip()}
@@ -330,9 +338,9 @@ def render_family(fam: Family) -> str:
            f"{fam.summary}", "", _summary_table(fam), ""]  # fmt: skip
     if fam.key != "goal" and own["description"]:
         out += [own["description"], ""]
-    family_section = FAMILY_SECTIONS.get(fam.key)
-    if family_section and family_section in sections:
-        out += [f"## {family_section[:1].upper()}{family_section[1:]}", "", sections[family_section], ""]
+    for family_section in FAMILY_SECTIONS.get(fam.key, ()):
+        if family_section in sections:
+            out += [f"## {family_section[:1].upper()}{family_section[1:]}", "", sections[family_section], ""]
     for title, keys in GYM_SECTIONS:
         body = next((sections[k] for k in keys if k in sections), "")
         out += [f"## {title}", "", body, ""]

@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..observation import tactile_view
+from ..tasks.easy import EASY_START_HEIGHT
 from ..tasks.lift import MIN_GRIP_FORCE
 from ..validation import check_int, check_range
 from .scripted import ScriptedGraspPolicy
@@ -77,7 +78,13 @@ class _GripPolicy:
         i = self.index
         z, vz = float(obs[i["grip_z"]]), float(obs[i["grip_vz"]])
         if self.grasp_z is None:
-            self.grasp_z = z - self.descend
+            if "shape_extent_z" in i:
+                # another object (the grip starts above the tallest of a set): as far above its
+                # middle as the cylinder's grip, or at the arm's lowest grip for a low one
+                above = EASY_START_HEIGHT - self.descend
+                self.grasp_z = max(float(obs[i["shape_extent_z"]]) + above, self.mover.min_grip_height or -np.inf)
+            else:
+                self.grasp_z = z - self.descend
         self.down = self.down or (abs(z - self.grasp_z) < 0.002 and abs(vz) < 0.005)
         self.gripped = self.gripped or (self.down and min(obs[i["force_left"]], obs[i["force_right"]]) >= MIN_GRIP_FORCE)
         action = np.zeros(4, dtype=np.float32)

@@ -78,7 +78,8 @@ class ScriptedGraspPolicy:
             raise TypeError(f"ScriptedGraspPolicy.for_env needs a SoftGrasp env, got {env!r}")
         c = args.control
         plan = env.unwrapped.plan
-        if "min_grip_height" not in kwargs and (plan.scene.object is not None or args.ranges.objects):
+        if "min_grip_height" not in kwargs and (plan.scene.object is not None or args.ranges.objects
+                                            or args.ranges.object_scale):
             # the workspace's floor: a low object is gripped there, another at its centre
             kwargs["min_grip_height"] = float(plan.workspace.low[2])
         return cls(speed=c.arm_speed, arm_acceleration=c.arm_acceleration, control_period=1.0 / c.frequency,

@@ -124,6 +124,11 @@ class SceneConfig:
     :class:`~softgrasp_env.scene.objects.ObjectShape`. It has the mass ``cylinder_mass`` and the
     friction ``cylinder_friction``. A cylinder given here becomes ``cylinder_radius`` and
     ``cylinder_height`` (and ``object`` None), so a scene has one description of its cylinder."""
+    object_name: str = field(default="", compare=False)
+    """What the object is called ('rod', 'cube', 'pebble-1', ...): its
+    :attr:`~softgrasp_env.scene.objects.ObjectShape.name` when ``object`` is given (a preset's
+    name, kept when a cylinder folds into ``cylinder_radius``), else the name given, or
+    'cylinder'. A label, no part of the scene: configs that differ only in it are equal."""
 
     @property
     def object_shape(self) -> ObjectShape:
@@ -144,6 +149,7 @@ class SceneConfig:
         object.__setattr__(self, "fingers", finger_config(self.fingers, owner=o))
         if self.object is not None:
             shape = object_shape(self.object)
+            object.__setattr__(self, "object_name", shape.name)
             if shape.kind == "cylinder":
                 default = SceneConfig.__dataclass_fields__
                 for name in ("cylinder_radius", "cylinder_height"):
@@ -160,6 +166,9 @@ class SceneConfig:
                         raise ValueError(f"SceneConfig: {name}={getattr(self, name)!r} is the cylinder's, but the "
                                          f"object is a {shape.kind} ({shape.name}); give its size in the object")  # fmt: skip
             object.__setattr__(self, "object", shape)
+        elif not self.object_name:
+            object.__setattr__(self, "object_name", "cylinder")
+        check_type("object_name", self.object_name, str, owner=o)
         check_range("cylinder_radius", self.cylinder_radius, 0.005, 0.2, owner=o)
         check_range("cylinder_height", self.cylinder_height, 0.01, 0.5, owner=o)
         check_range("cylinder_mass", self.cylinder_mass, 0.001, 10.0, owner=o)

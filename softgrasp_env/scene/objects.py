@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from importlib import resources
 
 import numpy as np
@@ -72,6 +72,9 @@ class ObjectShape:
     kind: str
     size: tuple[float, ...]
     mesh: str | None = None
+    label: str | None = field(default=None, compare=False)
+    """What :attr:`name` calls it (a preset's name, kept by :meth:`scaled`); no part of the shape:
+    shapes that differ only in it are equal."""
 
     def __post_init__(self) -> None:
         if self.kind not in OBJECT_KINDS:
@@ -84,6 +87,8 @@ class ObjectShape:
             if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v):
                 raise ValueError(f"ObjectShape: the {self.kind}'s {name} must be a finite number, got {v!r}")
         object.__setattr__(self, "size", tuple(float(v) for v in size))
+        if self.label is not None and (not isinstance(self.label, str) or not self.label):
+            raise ValueError(f"ObjectShape.label must be a non-empty string or None, got {self.label!r}")
         if self.kind == "hull":
             if self.mesh not in MESHES:
                 raise ValueError(f"ObjectShape: a hull needs mesh= one of {MESHES}, got {self.mesh!r}")
@@ -111,13 +116,22 @@ class ObjectShape:
 
     @property
     def name(self) -> str:
-        """A short label: the kind, or the mesh's name for a hull."""
-        return self.mesh if self.kind == "hull" else self.kind
+        """A short label: :attr:`label` if given (a preset's name), else the kind, or the mesh's name
+        for a hull."""
+        return self.label or (self.mesh if self.kind == "hull" else self.kind)
+
+    def scaled(self, factor: float) -> ObjectShape:
+        """The same shape ``factor`` times as large in every dimension (a hull's scale times
+        ``factor``); a size it takes out of range is the error :class:`ObjectShape` raises, naming it."""
+        if not isinstance(factor, (int, float)) or isinstance(factor, bool) or not math.isfinite(factor) \
+                or factor <= 0.0:  # fmt: skip
+            raise ValueError(f"ObjectShape.scaled: the factor must be a finite number > 0, got {factor!r}")
+        return ObjectShape(self.kind, tuple(float(factor) * v for v in self.size), mesh=self.mesh, label=self.label)
 
 
 PRESETS: dict[str, ObjectShape] = {
     "cylinder": ObjectShape("cylinder", (0.03, 0.10)),
-    "rod": ObjectShape("cylinder", (0.005, 0.10)),
+    "rod": ObjectShape("cylinder", (0.006, 0.10)),
     "sphere": ObjectShape("sphere", (0.03,)),
     "cube": ObjectShape("box", (0.05, 0.05, 0.05)),
     "slab": ObjectShape("box", (0.025, 0.08, 0.06)),
@@ -126,8 +140,9 @@ PRESETS: dict[str, ObjectShape] = {
     "elliptic": ObjectShape("elliptic", (0.035, 0.02, 0.09)),
     **{m: ObjectShape("hull", (1.0,), mesh=m) for m in MESHES},
 }
-"""The named objects (``object="sphere"``): the default cylinder; a rod (1 cm across: narrower than
-a default tissue particle); a 5 cm cube; a slab gripped across its 2.5 cm; a capsule lying along the
+PRESETS = {name: replace(shape, label=name) for name, shape in PRESETS.items()}
+"""The named objects (``object="sphere"``): the default cylinder; a rod (12 mm across: narrower than
+a default tissue particle, and still 5 mm in radius at 0.85 of its size); a 5 cm cube; a slab gripped across its 2.5 cm; a capsule lying along the
 fingers' faces; a frustum tapering from 35 to 20 mm; an elliptic cylinder with its long axis
 along the closing direction; the three shipped pebbles."""
 

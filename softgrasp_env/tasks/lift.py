@@ -23,6 +23,7 @@ import numpy as np
 
 from ..scene.config import scale_friction
 from ..scene.gripper import WORKSPACE_HALF_WIDTH
+from ..scene.objects import ObjectShape
 from ..validation import check_range, is_real
 from .base import Outcome, Task
 
@@ -40,7 +41,7 @@ HIGHEST = 0.5
 """A cylinder centre above this height has left the workspace [m]."""
 
 RESET_OPTIONS = ("cylinder_xy", "lateral_offset", "yaw", "jaw_wedge", "friction_scale", "cylinder_radius",
-                 "cylinder_mass", "gripper_xy")  # fmt: skip
+                 "cylinder_mass", "gripper_xy", "object_scale")  # fmt: skip
 """Keys ``reset(options=...)`` accepts: each fixes a quantity that is otherwise randomised."""
 
 
@@ -65,12 +66,15 @@ class StartRanges:
     objects: tuple = ()
     """The objects (scene.objects.ObjectShape) an episode's object is drawn from, each as likely,
     after the draws above; () keeps the base scene's."""
+    object_scale: float = 0.0
+    """The object's size (every dimension) scaled by U(1 +- object_scale) [-], a draw of its own
+    after the object's (none when 0, so a start without it draws as before)."""
 
     def __post_init__(self) -> None:
         # each named by its gym.make keyword (``yaw_range``), the only place these come from
         for name, hi in (("cylinder_position", 0.08), ("lateral_offset", 0.05), ("yaw", math.pi / 4),
                          ("jaw_wedge", math.pi / 6), ("friction", 0.9), ("cylinder_radius", 0.02),
-                         ("cylinder_mass", 0.9)):  # fmt: skip
+                         ("cylinder_mass", 0.9), ("object_scale", 0.5)):  # fmt: skip
             check_range(f"{name}_range", getattr(self, name), 0.0, hi)
 
 
@@ -130,10 +134,21 @@ class LiftTask(Task):
         }
         if rg.objects:  # a draw of its own, after the others: the ids without a set draw as before
             vals["object"] = rg.objects[int(rng.integers(len(rg.objects)))]
+        if rg.object_scale:  # likewise, after the object's
+            vals["object_scale"] = float(1.0 + rng.uniform(-1.0, 1.0) * rg.object_scale)
         vals.update(options)  # checked and converted by check_option
         fs = vals.pop("friction_scale")
         if not 0.0 < fs <= 10.0:
             raise ValueError(f"friction_scale must be in (0, 10], got {fs!r}")
+        scale = vals.pop("object_scale", None)
+        if scale is not None:
+            # the episode's object (or the base's, the cylinder included) at that size; the
+            # cylinder's own fields go back to their defaults, the object now describing it
+            shape = vals.get("object") or base.object or ObjectShape(
+                "cylinder", (vals["cylinder_radius"], base.cylinder_height), label=base.object_name)
+            fields = type(base).__dataclass_fields__
+            vals.update(object=shape.scaled(scale), cylinder_radius=fields["cylinder_radius"].default,
+                        cylinder_height=fields["cylinder_height"].default)  # fmt: skip
         return scale_friction(replace(base, **vals), fs)  # the task's start height is base's
 
     # --- the verdict -----------------------------------------------------------------------------
