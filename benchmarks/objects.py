@@ -7,6 +7,12 @@ object at U(+-1 cm)), seeds 0..N-1.
     PYTHONPATH=. python benchmarks/objects.py                       # 10 seeds, soft and rigid
     PYTHONPATH=. python benchmarks/objects.py --seeds 3 --objects sphere,cone --kinds soft
     PYTHONPATH=. python benchmarks/objects.py --task carry --kinds soft,rigid,rigid_torsion
+    PYTHONPATH=. python benchmarks/objects.py --kinds rigid_torsion_patch,segmented --seeds 5
+    PYTHONPATH=. python benchmarks/objects.py --task carry --finger-force 1 --mass 0.05   # a light squeeze
+
+rigid_torsion_patch: the torsional peer with the tissue's lever of each object following the load
+(``TorsionalRigidConfig(spinning_friction="patch")``); segmented: the sprung segments on the v3
+ids (``fingers="segmented"``).
 """
 
 from __future__ import annotations
@@ -19,19 +25,24 @@ import gymnasium as gym
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
+from softgrasp_env.fingers import TorsionalRigidConfig
 from softgrasp_env.observation import OBS_NAMES
 from softgrasp_env.policies import ScriptedGraspPolicy
 from softgrasp_env.scene.objects import PRESETS
 
-KINDS = {"soft": "SoftGraspEasy-v4", "rigid": "SoftGraspEasyRigid-v3", "rigid_torsion": "SoftGraspEasyRigidTorsion-v3"}
-CARRY = {"soft": "SoftGrasp-v4", "rigid": "SoftGraspRigid-v3", "rigid_torsion": "SoftGraspRigidTorsion-v3"}
+KINDS = {"soft": "SoftGraspEasy-v4", "rigid": "SoftGraspEasyRigid-v3", "rigid_torsion": "SoftGraspEasyRigidTorsion-v3",
+         "rigid_torsion_patch": "SoftGraspEasyRigidTorsion-v3", "segmented": "SoftGraspEasy-v3"}  # fmt: skip
+CARRY = {"soft": "SoftGrasp-v4", "rigid": "SoftGraspRigid-v3", "rigid_torsion": "SoftGraspRigidTorsion-v3",
+         "rigid_torsion_patch": "SoftGraspRigidTorsion-v3", "segmented": "SoftGrasp-v3"}  # fmt: skip
 """--task carry: the ids' own task - the reach from a misaligned start (yaw, jaw wedge, offset), the
 lift and the carry's sway."""
+FINGERS = {"rigid_torsion_patch": TorsionalRigidConfig(spinning_friction="patch"), "segmented": "segmented"}
+"""The kinds that are an id with other fingers (gym.make's ``fingers=``)."""
 INDEX = {n: k for k, n in enumerate(OBS_NAMES)}
 
 
-def episode(env_id: str, obj: str, seed: int) -> dict:
-    env = gym.make(env_id, object=obj)
+def episode(env_id: str, obj: str, seed: int, **kwargs) -> dict:
+    env = gym.make(env_id, object=obj, **kwargs)
     policy = ScriptedGraspPolicy.for_env(env)
     obs, _ = env.reset(seed=seed)
     tilt, squeeze = 0.0, []
@@ -55,16 +66,21 @@ def main() -> None:
     ap.add_argument("--kinds", default="soft,rigid")
     ap.add_argument("--task", choices=("easy", "carry"), default="easy",
                     help="easy: the gentle start, no carry (the Easy ids); carry: the ids' reach and carry")  # fmt: skip
+    ap.add_argument("--finger-force", type=float, default=None, help="each finger's squeeze [N] (default: the ids' 3)")
+    ap.add_argument("--mass", type=float, default=None, help="the object's mass [kg] (default: the ids' 0.1)")
     a = ap.parse_args()
+    extra = {k: v for k, v in (("finger_force", a.finger_force), ("cylinder_mass", a.mass)) if v is not None}
     ids = KINDS if a.task == "easy" else CARRY
     print(f"scripted grasp per object, {a.seeds} seeds, " + ("the gentle start" if a.task == "easy" else
-                                                            "the reach from a misaligned start and the carry"))  # fmt: skip
+                                                            "the reach from a misaligned start and the carry")
+          + (f", {extra}" if extra else ""))  # fmt: skip
     print("| object | kind | held | lift at the end [mm] | peak tilt [deg] | mean squeeze [N] | wall s |")
     print("|---|---|---|---|---|---|---|")
     for obj in a.objects.split(","):
         for kind in a.kinds.split(","):
             t0 = time.perf_counter()
-            rows = [episode(ids[kind], obj, s) for s in range(a.seeds)]
+            kw = ({"fingers": FINGERS[kind]} if kind in FINGERS else {}) | extra
+            rows = [episode(ids[kind], obj, s, **kw) for s in range(a.seeds)]
             wall = time.perf_counter() - t0
             held = sum(r["ok"] for r in rows)
             lifts = [r["lift"] * 1000 for r in rows]
