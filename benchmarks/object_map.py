@@ -42,9 +42,9 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-from stability_map import AimedPolicy, Cell, policy_for
 
 import softgrasp_env  # noqa: F401  (registers the ids)
+from benchmarks.stability_map import AimedPolicy, Cell, policy_for
 from softgrasp_env.registration import OBJECT_SET, TISSUE_V4
 
 OUT = Path(__file__).resolve().parent / "out"
@@ -101,11 +101,12 @@ def episode(env, options: dict, aim: float) -> Cell:
     return Cell(2 if info["is_success"] else (1 if ever else 0), **extra)
 
 
-def cells(objects: list[str]):
+def cells(objects: list[str], maps: tuple[str, ...] = tuple(MAPS), squeezes: tuple[float, ...] = SQUEEZES):
     """(object, map, column value label, squeeze, reset options, aim) of every cell."""
     for obj in objects:
-        for name, (param, values) in MAPS.items():
-            for squeeze in SQUEEZES:
+        for name in maps:
+            param, values = MAPS[name]
+            for squeeze in squeezes:
                 for v in values:
                     options, aim = {**ALIGNED, **SWAY}, 0.0
                     if param == "band":
@@ -156,7 +157,9 @@ def run(args) -> None:
         for method in names:
             t_method, n = time.perf_counter(), 0
             env, made = None, None
-            for obj, mname, value, squeeze, options, aim in cells(args.objects.split(",")):
+            squeezes = tuple(float(x) for x in args.squeezes.split(","))
+            for obj, mname, value, squeeze, options, aim in cells(args.objects.split(","), tuple(args.maps.split(",")),
+                                                                  squeezes):  # fmt: skip
                 k = (obj, mname, value, f"{squeeze:g}")
                 if (k, method) in done or (wanted is not None and k not in wanted):
                     continue
@@ -217,6 +220,8 @@ def summary(args) -> None:
             diffs.append(str(d))
             if cheapest is None and d <= spread:
                 cheapest = m
+        if not ref:
+            cheapest = "- (no tissue run)"
         cheapest = cheapest or "tissue"  # the default tissue differs from the converged by the spread itself
         print(f"| {o} | {ref_name} ({len(ref)}) | {spread if conv else '-'} | " + " | ".join(diffs) +
               f" | {cheapest} |")
@@ -227,6 +232,8 @@ def main() -> None:
     ap.add_argument("--objects", default=",".join(OBJECT_SET))
     ap.add_argument("--methods", default="", help="';'-separated (default: every method but the converged tissue)")
     ap.add_argument("--cells", choices=("all", "differ"), default="all")
+    ap.add_argument("--maps", default=",".join(MAPS))
+    ap.add_argument("--squeezes", default=",".join(f"{f:g}" for f in SQUEEZES))
     ap.add_argument("--name", default="object_map")
     ap.add_argument("--out", type=Path, default=OUT)
     ap.add_argument("--summary", action="store_true")
