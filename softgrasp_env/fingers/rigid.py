@@ -75,9 +75,12 @@ benchmarks/patch_levers.py on the default v4 tissue (SoftGraspEasy-v4, 4,000 par
 the default finger face and pad): the scripted grasp, aligned and centred, with the squeeze as the
 action at 0.5, 1, 3 and 6 N per finger, N and l = sum N_i |r_i - c| / sum N_i the two fingers'
 mean over the hold (lifted; at 0.5 N, where that squeeze does not hold the object aloft, squeezed
-standing on the ground). N is the tissue's measured normal force, not the command (the rod's 6 N
-reads 4.3 N). Measured, not tuned; the package's documentation (Finger kinds, "The rigid kinds'
-contact model") gives the table with the converged tissue's beside it."""
+standing on the ground; the sphere lifts). N is the tissue's measured normal force, not the
+command (the rod's 6 N reads 4.3 N: the fingers reach their stop). The rod was measured 12 mm
+across; a 10 mm rod reads within 0.2 mm of it at every squeeze. The shapes are matched by value:
+an object scaled from a preset is not the preset and has no entry. Measured, not tuned; the
+package's documentation (Finger kinds, "The lever per object, following the load") gives the
+table with the converged tissue's beside it."""
 
 LEVER_QUANTUM = 1e-5
 """Resolution of the load-following lever [m]: the table's own (0.01 mm). l(N) is rounded to it, so
