@@ -247,7 +247,8 @@ def patch_object(scene_config) -> str:
             return name
     owner = type(scene_config.fingers).__name__
     raise ValueError(f"{owner}.spinning_friction='patch' takes the tissue's measured lever of a named object, one of "
-                     f"{tuple(PATCH_LEVERS)}; the scene's object {shape!r} has none: give the lever in metres")  # fmt: skip
+                     f"{tuple(PATCH_LEVERS)} at its own size; the scene's object {shape!r} has none (a preset scaled is "
+                     "another shape): give the lever in metres")  # fmt: skip
 
 
 class TorsionalRigidFingers(RigidFingers):

@@ -66,6 +66,8 @@ def test_an_object_without_a_measured_lever_is_refused_at_construction():
         SceneConfig(fingers=PATCH, object=custom)
     with pytest.raises(ValueError, match=r"spinning_friction='patch'.*has none"):
         SceneConfig(fingers=PATCH, cylinder_radius=0.02)  # a cylinder that is no preset
+    with pytest.raises(ValueError, match=r"has none \(a preset scaled is another shape\)"):
+        SceneConfig(fingers=PATCH, object=PRESETS["sphere"].scaled(1.1))  # its label kept, its patch not
     with pytest.raises(ValueError, match=r"spinning_friction='patch'"):
         gym.make("SoftGraspEasyRigidTorsion-v3", fingers=PATCH, object=custom)
     # the named ones are taken, the rod given as the cylinder's own size too
