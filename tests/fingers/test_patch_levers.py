@@ -13,7 +13,7 @@ import softgrasp_env  # noqa: F401  (registers the ids)
 from softgrasp_env.fingers import PATCH_SPINNING_FRICTION, RigidConfig, TorsionalRigidConfig
 from softgrasp_env.fingers.rigid import LEVER_QUANTUM, PATCH_LEVERS, RigidFingers
 from softgrasp_env.policies import ScriptedGraspPolicy
-from softgrasp_env.scene import SceneConfig
+from softgrasp_env.scene import GraspScene, SceneConfig
 from softgrasp_env.scene.objects import PRESETS, ObjectShape
 from tests.helpers import run_episode
 
@@ -88,6 +88,20 @@ def test_the_lever_is_linear_in_the_table_and_holds_its_ends():
 
 
 # --- in pybullet ------------------------------------------------------------------------------------
+
+
+def test_before_contact_the_cores_carry_the_lowest_loads_lever():
+    """At mount, before any contact, both cores have mu_core * l(lowest load) (the end value held
+    below it), the palm and the object none."""
+    sc = GraspScene(SceneConfig(fingers=PATCH, object="cone"))
+    try:
+        c, g = sc.client, sc.gripper.body
+        want = SceneConfig().tissue.friction_static * PATCH_LEVERS["cone"][0][1]
+        for link in sc.gripper.core_links:
+            assert c.getDynamicsInfo(g, link)[7] == pytest.approx(want, rel=1e-9)
+        assert c.getDynamicsInfo(g, -1)[7] == c.getDynamicsInfo(sc.cylinder, -1)[7] == 0.0
+    finally:
+        sc.close()
 
 
 def _squeeze(force: float, obj: str = "sphere") -> tuple[list[float], list[float], list[float], int]:
