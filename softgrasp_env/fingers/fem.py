@@ -3,7 +3,7 @@ FEM soft bodies (``resetSimulation(RESET_USE_DEFORMABLE_WORLD)``, ``loadSoftBody
 mesh, NeoHookean material, ``createSoftBodyAnchor`` to pin it to the core link).
 
 It stands in for the oriented-particle tissue (the thesis' method) as the "fully deformable
-fingers" anchor the thesis calls too costly for real time: same cores, same motors, same cylinder,
+fingers" anchor the thesis calls too costly for real time: same cores, same motors, same objects,
 so the cost and the grasp can be measured side by side instead of asserted.
 
 The pad
@@ -49,6 +49,7 @@ import os
 import tempfile
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 import pybullet as p
 from pybullet_utils.bullet_client import BulletClient
@@ -56,6 +57,7 @@ from pybullet_utils.bullet_client import BulletClient
 from ..config import TissueConfig
 from ..sim.bullet import _quiet_c_stdout
 from ..sim.world import World
+from ..tissue.collision import SHAPE_CODES, shape_distance_array
 from ..validation import check_choice, check_int
 from .base import FingerConfig, FingerKind, Visual
 
@@ -210,6 +212,31 @@ def vtk_file(mesh: PadMesh) -> str:
     return path
 
 
+@nb.njit(cache=True)
+def _deepest_inside(kind: int, params: np.ndarray, local: np.ndarray) -> float:
+    """The largest -signed distance (collision.shape_distance_array) of the rows of ``local`` (N, 3)
+    from the shape, 0 if none is inside [m]."""
+    deepest = 0.0
+    for i in range(local.shape[0]):
+        d = -shape_distance_array(kind, params, local[i])[0]
+        if d > deepest:
+            deepest = d
+    return deepest
+
+
+def object_depth(x: np.ndarray, pos, rot: np.ndarray, kind: str, params, local_x=(0.0, 0.0, 0.0)) -> float:
+    """How deep the deepest of the points ``x`` (N, 3) [m, world] lies inside an object's shape,
+    0 if none is inside [m].
+
+    The object's body frame is at ``pos`` (3,) [m] turned by ``rot`` (3, 3, body to world: its
+    principal frame, as pybullet reports the base); its shape, a ``kind`` of
+    collision.SHAPE_CODES with ``params`` (the kind's three, or a hull's whole row), sits at
+    ``local_x`` [m] in that frame, unturned (objects.ObjectGeometry.tissue_*)."""
+    local = (np.asarray(x, dtype=np.float64) - np.asarray(pos, dtype=np.float64)) @ rot
+    local = np.ascontiguousarray(local - np.asarray(local_x, dtype=np.float64))
+    return float(_deepest_inside(SHAPE_CODES[kind], np.asarray(params, dtype=np.float64), local))
+
+
 class FemPads:
     """The two finger pads of a GraspScene with ``fingers='fem'``: loading, anchoring, and what the
     scene reads back (squeeze force, node positions, penetration)."""
@@ -219,6 +246,15 @@ class FemPads:
         self.client = c = client
         self.gripper, self.cylinder, self.links = gripper, cylinder, links
         self.cylinder_radius, self.cylinder_half_height = cfg.cylinder_radius, 0.5 * cfg.cylinder_height
+        # the scene package imports the finger kinds: import from it once a scene config exists
+        from ..scene.objects import object_geometry
+
+        self.object_geometry = None if cfg.object is None else object_geometry(cfg.object)
+        """The grasped object's geometry (objects.ObjectGeometry), None for the cylinder."""
+        if self.object_geometry is not None:
+            g = self.object_geometry
+            self._object_shape = (g.tissue_kind, np.asarray(g.tissue_params, dtype=np.float64),
+                                  np.asarray(g.tissue_local_x, dtype=np.float64))  # fmt: skip
         self.core_half_extents = tuple(cfg.finger_half_extents)
         c.setPhysicsEngineParameter(sparseSdfVoxelSize=FEM_SDF_VOXEL)
         fh = cfg.finger_half_extents
@@ -258,7 +294,7 @@ class FemPads:
         return [np.asarray(c.getMeshData(b, -1, flags=p.MESH_DATA_SIMULATION_MESH)[1]) for b in self.bodies]
 
     def contact_normal_force(self) -> np.ndarray:
-        """Normal force each pad (left, right) pressed on the cylinder with in the last step [N]."""
+        """Normal force each pad (left, right) pressed on the object with in the last step [N]."""
         c = self.client
         f = np.zeros(2)
         for k, b in enumerate(self.bodies):
@@ -267,18 +303,24 @@ class FemPads:
         return f
 
     def penetration(self) -> tuple[float, float]:
-        """(deepest pad node inside the cylinder or below the ground's top face, deepest node inside
+        """(deepest pad node inside the object or below the ground's top face, deepest node inside
         its own core's box) now [m], 0 where none is; the same measure GraspScene.penetration takes
-        for the tissue's particles (whose centres it checks, as here the nodes)."""
+        for the tissue's particles (whose centres it checks, as here the nodes). The object's shape
+        is the one the tissue collides with (objects.ObjectGeometry.tissue_*: exact for the round
+        kinds, where pybullet's mesh is an inscribed polygon)."""
         c = self.client
         pos, orn = c.getBasePositionAndOrientation(self.cylinder)
         rot = np.asarray(c.getMatrixFromQuaternion(orn)).reshape(3, 3)
         pen = intrusion = 0.0
         for link, mesh, x in zip(self.links, self.meshes, self.node_positions(), strict=True):
-            local = (x - np.asarray(pos)) @ rot
-            radial = self.cylinder_radius - np.hypot(local[:, 0], local[:, 1])
-            axial = self.cylinder_half_height - np.abs(local[:, 2])
-            pen = max(pen, float(np.minimum(radial, axial).max(initial=0.0)), float((-x[:, 2]).max(initial=0.0)))
+            if self.object_geometry is None:
+                local = (x - np.asarray(pos)) @ rot
+                radial = self.cylinder_radius - np.hypot(local[:, 0], local[:, 1])
+                axial = self.cylinder_half_height - np.abs(local[:, 2])
+                inside = float(np.minimum(radial, axial).max(initial=0.0))
+            else:
+                inside = object_depth(x, pos, rot, *self._object_shape)
+            pen = max(pen, inside, float((-x[:, 2]).max(initial=0.0)))
             lpos, lorn = c.getLinkState(self.gripper, link)[4:6]
             lrot = np.asarray(c.getMatrixFromQuaternion(lorn)).reshape(3, 3)
             inside = np.min(np.asarray(self.core_half_extents) - np.abs((x - np.asarray(lpos)) @ lrot), axis=1)
@@ -331,13 +373,6 @@ class FemFingers(FingerKind):
         self.pads: FemPads | None = None
 
     @classmethod
-    def check(cls, scene_config) -> None:
-        """The pads' penetration measure (FemPads.penetration) knows only the cylinder."""
-        if scene_config.object is not None:
-            raise ValueError(f"fingers='fem' grasps only the cylinder: its pads' penetration measure is the "
-                             f"cylinder's, not a {scene_config.object.kind}'s (object={scene_config.object.name!r})")  # fmt: skip
-
-    @classmethod
     def pad_thickness(cls, config: FingerConfig, tissue: TissueConfig) -> float:
         """The pad's depth: the tissue's extrude (the same 8 mm by default)."""
         return tissue.extrude
@@ -376,5 +411,5 @@ class FemFingers(FingerKind):
                                            positions=lambda: np.concatenate(pads.node_positions()))]  # fmt: skip
 
 
-__all__ = ["FEM_CELLS_THROUGH", "FemConfig", "FemFingers", "FemPads", "PadMesh", "fem_ground_shape", "pad_mesh",
-           "vtk_file", "write_vtk"]  # fmt: skip
+__all__ = ["FEM_CELLS_THROUGH", "FemConfig", "FemFingers", "FemPads", "PadMesh", "fem_ground_shape", "object_depth",
+           "pad_mesh", "vtk_file", "write_vtk"]  # fmt: skip

@@ -173,9 +173,8 @@ def test_bad_shapes_get_clear_errors():
         SceneConfig(object="sphere", cylinder_radius=0.02)
     with pytest.raises(ValueError, match="both describe the cylinder"):
         SceneConfig(object="rod", cylinder_height=0.08)
-    # the FEM pads' penetration measure is the cylinder's
-    with pytest.raises(ValueError, match="fingers='fem' grasps only the cylinder"):
-        SceneConfig(fingers="fem", object="sphere")
+    # the FEM pads grasp any object (their penetration measure is the object's own shape)
+    assert SceneConfig(fingers="fem", object="sphere").object == PRESETS["sphere"]
     SceneConfig(fingers="fem", object="rod")  # a cylinder is a cylinder
 
 
