@@ -2,7 +2,7 @@
 kind, over squeeze x misalignment and squeeze x carry band.
 
     PYTHONPATH=. python benchmarks/object_map.py                               # every object, the cheap methods
-    PYTHONPATH=. python benchmarks/object_map.py --methods "tissue, converged" --cells differ
+    PYTHONPATH=. python benchmarks/object_map.py --methods "tissue, converged" --cells reference
     PYTHONPATH=. python benchmarks/object_map.py --summary                     # the tables from the CSV
 
 Every cell is one 5 s episode from the gentle start (``SoftGraspEasy-v4``'s physics for the tissue,
@@ -16,9 +16,11 @@ at most 5 mm) and the object of the row (``object=``, its own size). The maps, e
 - ``offset``: where along the faces the grasp lands (the policy aims 0, 1, 2 cm off the object's
   centre: stability_map.AimedPolicy);
 - ``band``: the carry's sway (1.2 Hz at 0.5 m/s^2 across the jaw, 1.9 Hz at 1 m/s^2 across - the
-  two-point grasp's pendulum - and 3 Hz at 1 m/s^2 along the closing axis), aligned.
+  two-point grasp's pendulum - and 3 Hz at 1 m/s^2 along the closing axis), aligned;
+- ``mass``: the object's mass, 0.1 to 0.4 kg (the reset option ``cylinder_mass``), aligned:
+  Coulomb's bound for two fingers, m (g + a) / (2 mu), is 0.55-2.2 N at rest.
 
-The misalignment maps carry at 1.9 Hz, 1 m/s^2, across the jaw. Outcomes as the stability maps':
+The misalignment and mass maps carry at 1.9 Hz, 1 m/s^2, across the jaw. Outcomes as the stability maps':
 2 held (through the carry), 1 slipped (lifted, then lost or slid > 5 mm), 0 dropped (never
 lifted), -1 diverged, -2 refused (the scene cannot start there: the object does not fit between the
 open fingers at that wedge or yaw). Writes benchmarks/out/<name>.csv, appending: a method run
@@ -59,7 +61,20 @@ MAPS: dict[str, tuple[str, list]] = {
     "yaw": ("yaw", [0.0, 0.2, 0.4, math.pi / 4]),
     "offset": ("aim_offset", [0.0, 0.01, 0.02]),
     "band": ("band", list(BANDS)),
+    "mass": ("cylinder_mass", [0.1, 0.2, 0.3, 0.4]),
 }  # fmt: skip
+REFERENCE: dict[str, tuple[tuple[str, ...], tuple[float, ...]]] = {
+    "wedge": (("-0.3", "0", "0.3"), (1.0, 3.0)),
+    "yaw": (("0.7854",), (1.0, 3.0)),
+    "offset": (("0.02",), (1.0, 3.0)),
+    "band": (tuple(BANDS), (1.0,)),
+    "mass": (("0.2", "0.4"), (3.0,)),
+}
+"""``--cells reference``: the cells the converged tissue runs on (15 per object, about 30 s each on
+one core): where a grasp is near a limit - 1 N (twice Coulomb's least for 0.1 kg) and 3 N, the
+widest wedge both ways and none, the widest yaw, the grasp 2 cm along the faces, each band at
+1 N, and the heavier objects at 3 N. 0.5 N holds nothing (below Coulomb's 0.55 N) and 6 N
+everything the peers hold, so neither is run there."""
 COST = ("rigid", "rigid_torsion", "rigid_torsion, patch", "segmented", "tissue", "tissue, converged")
 """The methods from the cheapest (wall time per env step) to the dearest."""
 
@@ -142,6 +157,9 @@ def run(args) -> None:
     path = args.out / f"{args.name}.csv"
     done = {(key(r), r["method"]) for r in read(path)}
     wanted = None
+    if args.cells == "reference":
+        wanted = {(o, m, v, f"{q:g}") for o in args.objects.split(",") for m, (vals, qs) in REFERENCE.items()
+                  for v in vals for q in qs}  # fmt: skip
     if args.cells == "differ":  # the cells where the methods already run disagree, and the diagonal
         by = defaultdict(dict)
         for r in read(path):
@@ -231,7 +249,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--objects", default=",".join(OBJECT_SET))
     ap.add_argument("--methods", default="", help="';'-separated (default: every method but the converged tissue)")
-    ap.add_argument("--cells", choices=("all", "differ"), default="all")
+    ap.add_argument("--cells", choices=("all", "reference", "differ"), default="all")
     ap.add_argument("--maps", default=",".join(MAPS))
     ap.add_argument("--squeezes", default=",".join(f"{f:g}" for f in SQUEEZES))
     ap.add_argument("--name", default="object_map")

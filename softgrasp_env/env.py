@@ -251,7 +251,10 @@ class SoftGraspEnv(gym.Env):
     carries every object 10 times in 10 seeds on the tissue, and 59 of 110 on the bare rigid
     fingers; on the grip-force variants the tactile grip (``TactileGripPolicy``, made for the
     cylinder) holds 86 of 110 on the tissue, 40 of them within twice the least squeeze (the
-    documentation's Objects page has the tables per object).
+    documentation's Objects page has the tables per object). The torsional peer of this family
+    takes its lever from the tissue's own patch on each object, following the load
+    (``TorsionalRigidConfig(spinning_friction="patch")``), where the other torsional ids keep
+    the cylinder's 16.7 mm.
 
     ## Rendering
     ``render_mode="rgb_array"`` draws the scene with pybullet's CPU renderer in a viewer server of

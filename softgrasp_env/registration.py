@@ -8,6 +8,7 @@ import gymnasium as gym
 from gymnasium.envs.registration import WrapperSpec
 
 from . import presets
+from .fingers import TorsionalRigidConfig
 
 MAX_EPISODE_STEPS = 100
 """5 s at the default 20 Hz control frequency."""
@@ -32,6 +33,9 @@ OBJECTS_TASK: dict[str, object] = {"object": OBJECT_SET, "object_scale_range": 0
 """The object-set task's draws on top of the carry task's start: the object, its size x U(1 +-
 0.15), its mass 0.05-0.15 kg, every friction coefficient x U(1 +- 0.2); the observation names its
 kind and extents (``observe_shape``)."""
+PATCH_TORSION = TorsionalRigidConfig(spinning_friction="patch")
+"""The object-set ids' torsional peer: its lever the tissue's own patch on each object, following
+the load (softgrasp_env.fingers.rigid.PATCH_LEVERS), not the cylinder's 16.7 mm."""
 OBJECTS_GRIP_TASK: dict[str, object] = {"object": OBJECT_SET}
 """The object-set grip-force task: the grip-force task's draws (:data:`GRIP_TASK`: mass and friction)
 on every object at its own size (the gentle start's open fingers leave the cone and the elliptic
@@ -71,13 +75,13 @@ _SPECS: dict[str, tuple[str, dict]] = {
     "SoftGraspObjects-v1": (_ENV, {"fingers": "tissue", "reward_type": "dense", "carry": True, **OBJECTS_TASK,
                                    **TISSUE_V4}),
     "SoftGraspObjectsRigid-v1": (_ENV, {"fingers": "rigid", "reward_type": "dense", "carry": True, **OBJECTS_TASK}),
-    "SoftGraspObjectsRigidTorsion-v1": (_ENV, {"fingers": "rigid_torsion", "reward_type": "dense", "carry": True,
+    "SoftGraspObjectsRigidTorsion-v1": (_ENV, {"fingers": PATCH_TORSION, "reward_type": "dense", "carry": True,
                                                **OBJECTS_TASK}),
     "SoftGraspObjectsGrip-v1": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", "carry": True,
                                        **GRIP_TASK, **OBJECTS_GRIP_TASK, **TISSUE_V4}),
     **{f"SoftGraspObjectsGrip{name}-v1": (_ENV, {"fingers": kind, "reward_type": "dense", "start": "easy",
                                                  "carry": True, **GRIP_TASK, **OBJECTS_GRIP_TASK})
-       for name, kind in (("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion"))},
+       for name, kind in (("Rigid", "rigid"), ("RigidTorsion", PATCH_TORSION))},
 }
 
 ENV_IDS: tuple[str, ...] = tuple(_SPECS)

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import softgrasp_env  # noqa: F401  (registers the ids)
+from softgrasp_env.fingers import TorsionalRigidConfig
 from softgrasp_env.policies import ScriptedGraspPolicy
 from softgrasp_env.registration import ENV_IDS, GRIP_TASK, OBJECT_SET, OBJECTS_TASK
 from softgrasp_env.scene.objects import PRESETS
@@ -21,7 +22,7 @@ def test_the_family_is_soft_rigid_and_torsional_on_the_carry_and_the_grip_force_
                    "SoftGraspObjectsGrip-v1", "SoftGraspObjectsGripRigid-v1", "SoftGraspObjectsGripRigidTorsion-v1")
     assert OBJECT_SET == tuple(PRESETS)  # every named object, the cylinder included
     kinds = [gym.spec(i).kwargs["fingers"] for i in IDS]
-    assert kinds == ["tissue", "rigid", "rigid_torsion"] * 2
+    assert kinds == ["tissue", "rigid", TorsionalRigidConfig(spinning_friction="patch")] * 2
     for env_id in IDS:
         kw = gym.spec(env_id).kwargs
         assert kw["object"] == OBJECT_SET and kw["carry"] is True

@@ -78,9 +78,14 @@ mean over the hold (lifted; at 0.5 N, where that squeeze does not hold the objec
 standing on the ground; the sphere lifts). N is the tissue's measured normal force, not the
 command (the rod's 6 N reads 4.3 N: the fingers reach their stop). The rod was measured 12 mm
 across; a 10 mm rod reads within 0.2 mm of it at every squeeze. The shapes are matched by value:
-an object scaled from a preset is not the preset and has no entry. Measured, not tuned; the
+an object scaled from a preset by at most :data:`PATCH_SCALE_RANGE` takes the preset's (not
+re-measured at its size), one scaled further has none. Measured, not tuned; the
 package's documentation (Finger kinds, "The lever per object, following the load") gives the
 table with the converged tissue's beside it."""
+
+PATCH_SCALE_RANGE = 0.15
+"""A named object scaled by at most this either way (every dimension alike: the object-set ids'
+``object_scale_range``) takes its own size's table [-]; beyond it there is no measured lever."""
 
 LEVER_QUANTUM = 1e-5
 """Resolution of the load-following lever [m]: the table's own (0.01 mm). l(N) is rounded to it, so
@@ -245,10 +250,19 @@ def patch_object(scene_config) -> str:
     for name, preset in PRESETS.items():
         if name in PATCH_LEVERS and preset == shape:
             return name
+    # a preset drawn at another size (object_scale_range; the name is kept): its own table, not
+    # re-measured there. Over +-15 % a sphere's Hertzian patch a ~ sqrt(R delta) moves by at most
+    # 7.5 %, a face-long contact's lever (set by the pad's height) hardly at all.
+    name = scene_config.object_name
+    preset = PRESETS.get(name)
+    if name in PATCH_LEVERS and preset is not None and (preset.kind, preset.mesh) == (shape.kind, shape.mesh):
+        ratios = np.asarray(shape.size) / np.asarray(preset.size)
+        if np.allclose(ratios, ratios[0], rtol=1e-9, atol=0.0) and abs(ratios[0] - 1.0) <= PATCH_SCALE_RANGE + 1e-12:
+            return name
     owner = type(scene_config.fingers).__name__
     raise ValueError(f"{owner}.spinning_friction='patch' takes the tissue's measured lever of a named object, one of "
-                     f"{tuple(PATCH_LEVERS)} at its own size; the scene's object {shape!r} has none (a preset scaled is "
-                     "another shape): give the lever in metres")  # fmt: skip
+                     f"{tuple(PATCH_LEVERS)}, at its own size or scaled by at most {PATCH_SCALE_RANGE:g} either way; "
+                     f"the scene's object {shape!r} has none: give the lever in metres")  # fmt: skip
 
 
 class TorsionalRigidFingers(RigidFingers):
@@ -257,5 +271,5 @@ class TorsionalRigidFingers(RigidFingers):
     description = "the bare cores with torsional friction of the tissue's contact patch (the faithful rigid twin)"
 
 
-__all__ = ["LEVER_QUANTUM", "PATCH", "PATCH_LEVERS", "PATCH_SPINNING_FRICTION", "SPINNING_FRICTION_MAX", "RigidConfig", "RigidFingers", "TorsionalRigidConfig",
+__all__ = ["LEVER_QUANTUM", "PATCH", "PATCH_LEVERS", "PATCH_SCALE_RANGE", "PATCH_SPINNING_FRICTION", "SPINNING_FRICTION_MAX", "RigidConfig", "RigidFingers", "TorsionalRigidConfig",
            "TorsionalRigidFingers"]  # fmt: skip

@@ -17,7 +17,7 @@ def _args(tmp_path, **kw) -> argparse.Namespace:
 def test_the_grid_is_every_object_map_squeeze_and_value():
     every = list(cells(["sphere", "cone"]))
     per_object = sum(len(values) for _, values in MAPS.values()) * len(SQUEEZES)
-    assert len(every) == 2 * per_object == 120
+    assert len(every) == 2 * per_object == 152
     # each cell carries: the misalignment maps at the 1.9 Hz sway, the band map at its own
     for _obj, name, value, _squeeze, options, aim in every:
         assert options["carry_frequency"] in (1.2, 1.9, 3.0)

@@ -66,8 +66,13 @@ def test_an_object_without_a_measured_lever_is_refused_at_construction():
         SceneConfig(fingers=PATCH, object=custom)
     with pytest.raises(ValueError, match=r"spinning_friction='patch'.*has none"):
         SceneConfig(fingers=PATCH, cylinder_radius=0.02)  # a cylinder that is no preset
-    with pytest.raises(ValueError, match=r"has none \(a preset scaled is another shape\)"):
-        SceneConfig(fingers=PATCH, object=PRESETS["sphere"].scaled(1.1))  # its label kept, its patch not
+    # a preset scaled within +-15 % (the object-set ids' draw) takes its own table; further, none
+    sphere = RigidFingers(SceneConfig(fingers=PATCH, object=PRESETS["sphere"].scaled(1.15)))
+    assert sphere.lever(3.0) == RigidFingers(SceneConfig(fingers=PATCH, object="sphere")).lever(3.0)
+    with pytest.raises(ValueError, match=r"scaled by at most 0.15 either way; the scene's object .* has none"):
+        SceneConfig(fingers=PATCH, object=PRESETS["sphere"].scaled(1.2))
+    with pytest.raises(ValueError, match=r"has none"):  # the same kind, another shape, the name kept
+        SceneConfig(fingers=PATCH, object=ObjectShape("box", (0.05, 0.05, 0.06), label="cube"))
     with pytest.raises(ValueError, match=r"spinning_friction='patch'"):
         gym.make("SoftGraspEasyRigidTorsion-v3", fingers=PATCH, object=custom)
     # the named ones are taken, the rod given as the cylinder's own size too
