@@ -360,12 +360,16 @@ def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True,
     rows = []
     if scripted:
         for env_id in ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspGoal-v4",
-                       "SoftGraspGrip-v3", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3"):  # fmt: skip
+                       "SoftGraspGrip-v3", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3",
+                       "SoftGraspObjects-v1", "SoftGraspObjectsRigid-v1", "SoftGraspObjectsRigidTorsion-v1",
+                       "SoftGraspObjectsGrip-v1", "SoftGraspObjectsGripRigid-v1",
+                       "SoftGraspObjectsGripRigidTorsion-v1"):  # fmt: skip
             if versions is not None and int(env_id.rsplit("-v", 1)[1]) not in versions:
                 continue
             env = gym.make(env_id)
-            # The grip ids' scripted policy reads the taxels; the others the scripted grasp.
-            grip = env_id.startswith("SoftGraspGrip")
+            # The grip ids' scripted policy (the squeeze as the action) reads the taxels; the
+            # others the scripted grasp.
+            grip = env.unwrapped.args.control.finger_action == "force"
             try:
                 policy = TactileGripPolicy(env) if grip else ScriptedGraspPolicy.for_env(env)
                 ev = evaluate(env, policy, episodes=episodes, seed=seed)

@@ -157,7 +157,10 @@ def run(args) -> None:
     path = args.out / f"{args.name}.csv"
     done = {(key(r), r["method"]) for r in read(path)}
     wanted = None
-    if args.cells == "reference":
+    if args.only:  # object:map:value:squeeze, ';'-separated
+        wanted = {tuple(part.split(":")) for part in args.only.split(";")}
+        wanted = {(o, m, v, f"{float(q):g}") for o, m, v, q in wanted}
+    elif args.cells == "reference":
         wanted = {(o, m, v, f"{q:g}") for o in args.objects.split(",") for m, (vals, qs) in REFERENCE.items()
                   for v in vals for q in qs}  # fmt: skip
     if args.cells == "differ":  # the cells where the methods already run disagree, and the diagonal
@@ -220,29 +223,34 @@ def summary(args) -> None:
     for o in objects:
         counts = [str(held[o][m]) if any(k[0] == o and m in v for k, v in cell.items()) else "-" for m in present]
         print(f"| {o} | " + " | ".join(counts) + " |")
-    print("\nwhich model does this scene need: cells whose verdict (held or not) differs from the reference")
-    print("| object | reference (cells) | spread: tissue vs converged | " + " | ".join(
-        m for m in present if not m.startswith("tissue")) + " | cheapest within the spread |")
-    print("|---|---|---|" + "---|" * (sum(not m.startswith("tissue") for m in present) + 1))
+    peers = [m for m in present if not m.startswith("tissue")]
+    print("\nwhich model does this scene need: per peer, the cells whose verdict (held through the carry or "
+          "not) differs from the default tissue's over the whole map, then from the converged tissue's on the "
+          "cells it ran; the spread is where the default tissue itself differs from the converged")
+    print("| object | " + " | ".join(f"{m}: vs tissue / vs converged" for m in peers) +
+          " | spread (converged cells) | only the tissue holds | only the peers hold | cheapest within the spread |")
+    print("|---|" + "---|" * (len(peers) + 4))
     for o in objects:
         mine = {k: v for k, v in cell.items() if k[0] == o}
-        conv = {k: v for k, v in mine.items() if "tissue, converged" in v}
-        ref_name = "tissue, converged" if conv else "tissue"
-        ref = conv or {k: v for k, v in mine.items() if "tissue" in v}
-        spread = sum((v["tissue"] == 2) != (v["tissue, converged"] == 2) for v in conv.values() if "tissue" in v)
-        diffs, cheapest = [], None
-        for m in present:
-            if m.startswith("tissue"):
-                continue
-            d = sum((v[m] == 2) != (v[ref_name] == 2) for v in ref.values() if m in v)
-            diffs.append(str(d))
-            if cheapest is None and d <= spread:
+        dflt = {k: v for k, v in mine.items() if "tissue" in v}
+        conv = {k: v for k, v in mine.items() if "tissue, converged" in v and "tissue" in v}
+        spread = sum((v["tissue"] == 2) != (v["tissue, converged"] == 2) for v in conv.values())
+        parts, cheapest = [], None
+        for m in peers:
+            d = sum((v[m] == 2) != (v["tissue"] == 2) for v in dflt.values() if m in v)
+            dc = sum((v[m] == 2) != (v["tissue, converged"] == 2) for v in conv.values() if m in v)
+            parts.append(f"{d if dflt else '-'} / {dc if conv else '-'}")
+            if cheapest is None and conv and dc <= spread:
                 cheapest = m
-        if not ref:
-            cheapest = "- (no tissue run)"
-        cheapest = cheapest or "tissue"  # the default tissue differs from the converged by the spread itself
-        print(f"| {o} | {ref_name} ({len(ref)}) | {spread if conv else '-'} | " + " | ".join(diffs) +
-              f" | {cheapest} |")
+        best = "rigid_torsion, patch" if "rigid_torsion, patch" in peers else (peers[-1] if peers else None)
+        # cells the tissue (either resolution) holds and no peer does, and the other way round
+        only_t = sum(any(v.get(t) == 2 for t in ("tissue", "tissue, converged")) and
+                     not any(v.get(m) == 2 for m in peers) for v in dflt.values())  # fmt: skip
+        only_p = sum(best is not None and v.get(best) == 2 and v["tissue"] != 2 and v.get("tissue, converged", 0) != 2
+                     for v in dflt.values())  # fmt: skip
+        verdict = (cheapest or "tissue") if conv else "- (no converged run)"
+        print(f"| {o} | " + " | ".join(parts) + f" | {spread if conv else '-'} ({len(conv)}) | {only_t} | {only_p} | "
+              f"{verdict} |")
 
 
 def main() -> None:
@@ -250,6 +258,7 @@ def main() -> None:
     ap.add_argument("--objects", default=",".join(OBJECT_SET))
     ap.add_argument("--methods", default="", help="';'-separated (default: every method but the converged tissue)")
     ap.add_argument("--cells", choices=("all", "reference", "differ"), default="all")
+    ap.add_argument("--only", default="", help="these cells only: object:map:value:squeeze, ';'-separated")
     ap.add_argument("--maps", default=",".join(MAPS))
     ap.add_argument("--squeezes", default=",".join(f"{f:g}" for f in SQUEEZES))
     ap.add_argument("--name", default="object_map")
