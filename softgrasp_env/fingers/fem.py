@@ -246,10 +246,7 @@ class FemPads:
         self.client = c = client
         self.gripper, self.cylinder, self.links = gripper, cylinder, links
         self.cylinder_radius, self.cylinder_half_height = cfg.cylinder_radius, 0.5 * cfg.cylinder_height
-        # the scene package imports the finger kinds: import from it once a scene config exists
-        from ..scene.objects import object_geometry
-
-        self.object_geometry = None if cfg.object is None else object_geometry(cfg.object)
+        self.object_geometry = cfg.object_geometry
         """The grasped object's geometry (objects.ObjectGeometry), None for the cylinder."""
         if self.object_geometry is not None:
             g = self.object_geometry

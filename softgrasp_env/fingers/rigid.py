@@ -242,23 +242,16 @@ def _is_patch(lever) -> bool:
 def patch_object(scene_config) -> str:
     """The name of the scene's object in :data:`PATCH_LEVERS` (the preset whose shape it is), or
     ValueError naming the objects that have a measured lever."""
-    # scene.objects sits above the finger kinds (it is imported here when a scene config exists, so
-    # already loaded): the table is keyed by the presets' names, a shape is matched by its value.
-    from ..scene.objects import PRESETS
-
+    # the scene's config knows which named object it holds and at what size (SceneConfig.preset_scale)
+    named = scene_config.preset_scale()
+    if named is not None:
+        name, factor = named
+        # a preset drawn at another size (object_scale_range): its own table, not re-measured
+        # there. Over +-15 % a sphere's Hertzian patch a ~ sqrt(R delta) moves by at most 7.5 %, a
+        # face-long contact's lever (set by the pad's height) hardly at all.
+        if name in PATCH_LEVERS and abs(factor - 1.0) <= PATCH_SCALE_RANGE + 1e-12:
+            return name
     shape = scene_config.object_shape
-    for name, preset in PRESETS.items():
-        if name in PATCH_LEVERS and preset == shape:
-            return name
-    # a preset drawn at another size (object_scale_range; the name is kept): its own table, not
-    # re-measured there. Over +-15 % a sphere's Hertzian patch a ~ sqrt(R delta) moves by at most
-    # 7.5 %, a face-long contact's lever (set by the pad's height) hardly at all.
-    name = scene_config.object_name
-    preset = PRESETS.get(name)
-    if name in PATCH_LEVERS and preset is not None and (preset.kind, preset.mesh) == (shape.kind, shape.mesh):
-        ratios = np.asarray(shape.size) / np.asarray(preset.size)
-        if np.allclose(ratios, ratios[0], rtol=1e-9, atol=0.0) and abs(ratios[0] - 1.0) <= PATCH_SCALE_RANGE + 1e-12:
-            return name
     owner = type(scene_config.fingers).__name__
     raise ValueError(f"{owner}.spinning_friction='patch' takes the tissue's measured lever of a named object, one of "
                      f"{tuple(PATCH_LEVERS)}, at its own size or scaled by at most {PATCH_SCALE_RANGE:g} either way; "

@@ -16,7 +16,7 @@ from typing import Any
 from ..config import SimConfig, TissueConfig
 from ..fingers import FINGERS, FemConfig, FingerConfig, SegmentedConfig, TissueFingerConfig, finger_config
 from ..validation import accept_old_names, check_choice, check_range, check_type, deprecated, retired_choice
-from .objects import ObjectShape, object_geometry, object_shape
+from .objects import PRESETS, ObjectGeometry, ObjectShape, object_geometry, object_shape
 
 PALM_HALF_EXTENTS = (0.09, 0.03, 0.01)
 """Half extents of the gripper's palm box [m]."""
@@ -136,6 +136,28 @@ class SceneConfig:
         if self.object is not None:
             return self.object  # type: ignore[return-value]
         return ObjectShape("cylinder", (self.cylinder_radius, self.cylinder_height))
+
+    @property
+    def object_geometry(self) -> ObjectGeometry | None:
+        """The object's :class:`~softgrasp_env.scene.objects.ObjectGeometry` (shape, mass properties,
+        the tissue's collision kind), None for the cylinder."""
+        return None if self.object is None else object_geometry(self.object)
+
+    def preset_scale(self) -> tuple[str, float] | None:
+        """(name, factor) when the object is a named object (softgrasp_env.scene.objects.PRESETS):
+        one of them itself (factor 1.0, whatever :attr:`object_name` says), or :attr:`object_name`'s
+        preset at ``factor`` times its size, every dimension alike; else None."""
+        shape = self.object_shape
+        for name, preset in PRESETS.items():  # a preset by value, whatever it is called
+            if preset == shape:
+                return name, 1.0
+        preset = PRESETS.get(self.object_name)
+        if preset is None or (preset.kind, preset.mesh) != (shape.kind, shape.mesh):
+            return None
+        ratios = [a / b for a, b in zip(shape.size, preset.size, strict=True)]
+        if max(ratios) - min(ratios) > 1e-9 * max(ratios):
+            return None
+        return self.object_name, ratios[0]
 
     @property
     def finger_travel(self) -> float:

@@ -236,3 +236,17 @@ def test_tilt_is_the_objects_own(name):
             assert sc.object_tilt(np.array(rolled)) == pytest.approx(0.0, abs=1e-9)
     finally:
         sc.close()
+
+
+def test_a_scene_config_names_its_preset_and_the_scale_it_is_drawn_at():
+    """SceneConfig.preset_scale: a named object itself (by value, whatever it is called), a preset
+    scaled alike in every dimension (its name kept by ObjectShape.scaled), and None for any other
+    shape; object_geometry is the object's (None for the cylinder)."""
+    assert SceneConfig().preset_scale() == ("cylinder", 1.0) and SceneConfig().object_geometry is None
+    assert SceneConfig(object="rod").preset_scale() == ("rod", 1.0)
+    assert SceneConfig(object=ObjectShape("box", (0.05, 0.05, 0.05))).preset_scale() == ("cube", 1.0)
+    name, factor = SceneConfig(object=PRESETS["pebble-1"].scaled(0.9)).preset_scale()
+    assert name == "pebble-1" and factor == pytest.approx(0.9, rel=1e-12)
+    assert SceneConfig(object=ObjectShape("box", (0.05, 0.05, 0.06), label="cube")).preset_scale() is None
+    assert SceneConfig(object=ObjectShape("sphere", (0.02,))).preset_scale() == ("sphere", pytest.approx(2 / 3))
+    assert SceneConfig(object="cone").object_geometry.tissue_kind == "cone"
