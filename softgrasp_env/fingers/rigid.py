@@ -25,7 +25,7 @@ contact model") follows Bullet's source to this rule and gives the measurements.
 the object and the squeeze: on the upright cylinder the pad wraps the whole face and l hardly
 moves, on a sphere the patch is a disc growing with the indentation, on a cone's slanted side a
 strip. :data:`PATCH_LEVERS` is the tissue's own l against its normal force per named object
-(benchmarks/patch_levers.py); with "patch" each core's lever is l(N) of its own normal force on
+(measured: the package's documentation, Finger kinds); with "patch" each core's lever is l(N) of its own normal force on
 the object in the last physics step, interpolated linearly in that table, and set before every
 step (Ciocarlie, Lackner & Allen 2007 make the soft-finger contact's torsion limit a function of
 the normal load the same way). Bullet stores the combined coefficient on a contact point when its
@@ -70,8 +70,8 @@ PATCH_LEVERS: dict[str, tuple[tuple[float, float], ...]] = {
     "pebble-2": ((0.43, 0.00733), (1.02, 0.00936), (2.66, 0.01020), (5.41, 0.00807)),
 }
 """The tissue's own torsional lever per named object (softgrasp_env.scene.objects.PRESETS) against
-its normal force: object -> ((N [N], l [m]), ...), N increasing. Measured by
-benchmarks/patch_levers.py on the default v4 tissue (SoftGraspEasy-v4, 4,000 particles per m^2,
+its normal force: object -> ((N [N], l [m]), ...), N increasing. Measured on
+the default v4 tissue (SoftGraspEasy-v4, 4,000 particles per m^2,
 the default finger face and pad): the scripted grasp, aligned and centred, with the squeeze as the
 action at 0.5, 1, 3 and 6 N per finger, N and l = sum N_i |r_i - c| / sum N_i the two fingers'
 mean over the hold (lifted; at 0.5 N, where that squeeze does not hold the object aloft, squeezed
