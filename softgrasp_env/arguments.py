@@ -249,7 +249,7 @@ KEYWORDS: tuple[Keyword, ...] = (
     _kw("observe_shape", "observation", "bool", None,
         "True: the observation describes the object after the clock - its kind one-hot (shape_cylinder, "
         "shape_sphere, ..., shape_hull) and its half extents at rest (shape_extent_x/y/z [m]); None: on when "
-        "`object` is given"),
+        "`object` or `object_scale_range` is given"),
     # camera
     _kw("render_width", "camera", "int", 480,
         "Width of an rgb_array frame [px]"),

@@ -118,7 +118,7 @@ class SoftGraspEnv(gym.Env):
     | 21 | lift | cylinder centre above its resting height [m] |
     | 22 | gripper_yaw | palm yaw (the misalignment the agent cannot command) [rad] |
     | 23 | time | time since reset [s] (only with the carry test, which starts at a fixed time) |
-    | then | shape_<kind> | only with ``observe_shape`` (on when ``object=`` is given): the object's kind, one-hot over cylinder, sphere, box, capsule, cone, elliptic, hull |
+    | then | shape_<kind> | only with ``observe_shape`` (on when ``object=`` or ``object_scale_range`` is given): the object's kind, one-hot over cylinder, sphere, box, capsule, cone, elliptic, hull |
     | then | shape_extent_x/y/z | only with ``observe_shape``: the object's half extents at rest (half its bounding box) [m] |
     | then | tactile_<left/right>_r<row>_c<col>_<channel> | only with ``tactile=(rows, cols)``: each pad's taxels over its core's inner face, row 0 at the top, columns from -y to +y, five channels per taxel - pressure, traction_y, traction_z [Pa] and the tissue's shear_y, shear_z [m] (0 for rigid pads; core frame); ``softgrasp_env.observation.tactile_view`` gives the (2, rows, cols, 5) grid; unbounded |
 
