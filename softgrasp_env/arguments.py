@@ -837,7 +837,7 @@ class EnvPlan:
                             arm_acceleration=args.control.arm_acceleration, object=cyl.object,
                             object_name=cyl.name)  # fmt: skip
         for shape in (objects if scale else args.ranges.objects) or (None,):
-            _check_range_corners(args, scene if shape is None else _with_object(scene, shape))
+            _check_range_corners(args, scene if shape is None else scene.with_object(shape))
         names = CARRY_OBS_NAMES if args.carry_test.on else OBS_NAMES
         if not args.observation.observe_object:
             names = without_object(names)
@@ -882,14 +882,6 @@ def _scaled(shape: ObjectShape, factor: float, keyword: str, value: float) -> Ob
         return shape.scaled(factor)
     except ValueError as e:
         raise ValueError(f"{keyword}={value!r} reaches a {shape.name} {factor:g} times its size: {e}") from None
-
-
-def _with_object(scene: SceneConfig, shape: ObjectShape) -> SceneConfig:
-    """``scene`` grasping ``shape`` instead (the cylinder's own fields back at their defaults, the
-    object describing it)."""
-    fields = SceneConfig.__dataclass_fields__
-    return replace(scene, object=shape, cylinder_radius=fields["cylinder_radius"].default,
-                   cylinder_height=fields["cylinder_height"].default)  # fmt: skip
 
 
 def _check_range_corners(args: EnvArguments, base: SceneConfig) -> None:

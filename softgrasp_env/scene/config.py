@@ -137,6 +137,13 @@ class SceneConfig:
             return self.object  # type: ignore[return-value]
         return ObjectShape("cylinder", (self.cylinder_radius, self.cylinder_height))
 
+    def with_object(self, shape: ObjectShape) -> SceneConfig:
+        """This scene grasping ``shape`` instead: the cylinder's own fields back at their defaults,
+        the object describing it (a cylinder ``shape`` folds into them again)."""
+        fields = SceneConfig.__dataclass_fields__
+        return replace(self, object=shape, cylinder_radius=fields["cylinder_radius"].default,
+                       cylinder_height=fields["cylinder_height"].default)  # fmt: skip
+
     @property
     def object_geometry(self) -> ObjectGeometry | None:
         """The object's :class:`~softgrasp_env.scene.objects.ObjectGeometry` (shape, mass properties,

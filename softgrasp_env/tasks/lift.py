@@ -23,7 +23,6 @@ import numpy as np
 
 from ..scene.config import scale_friction
 from ..scene.gripper import WORKSPACE_HALF_WIDTH
-from ..scene.objects import ObjectShape
 from ..validation import check_range, is_real
 from .base import Outcome, Task
 
@@ -141,15 +140,10 @@ class LiftTask(Task):
         if not 0.0 < fs <= 10.0:
             raise ValueError(f"friction_scale must be in (0, 10], got {fs!r}")
         scale = vals.pop("object_scale", None)
-        if scale is not None:
-            # the episode's object (or the base's, the cylinder included) at that size; the
-            # cylinder's own fields go back to their defaults, the object now describing it
-            shape = vals.get("object") or base.object or ObjectShape(
-                "cylinder", (vals["cylinder_radius"], base.cylinder_height), label=base.object_name)
-            fields = type(base).__dataclass_fields__
-            vals.update(object=shape.scaled(scale), cylinder_radius=fields["cylinder_radius"].default,
-                        cylinder_height=fields["cylinder_height"].default)  # fmt: skip
-        return scale_friction(replace(base, **vals), fs)  # the task's start height is base's
+        cfg = replace(base, **vals)
+        if scale is not None:  # the episode's object (the cylinder included) at that size
+            cfg = cfg.with_object(replace(cfg.object_shape, label=cfg.object_name).scaled(scale))
+        return scale_friction(cfg, fs)  # the task's start height is base's
 
     # --- the verdict -----------------------------------------------------------------------------
 
