@@ -4,6 +4,7 @@ run there with its model card, reading the cards back, and the results table.
 
     python -m agents.cards publish runs/SoftGrasp-v3_ppo_0 runs/SoftGraspRigid-v3_ppo_0 ...
     python -m agents.cards table                 # the results table (scripted measured live)
+    python -m agents.cards objects --versions 1  # success per object on the object-set ids
 
 ``publish`` evaluates each run over 100 seeded episodes (seeds 1000-1099, the seeds
 ``agents.evaluate`` uses, so scripted and learned policies meet the same starts), then copies into
@@ -263,6 +264,8 @@ def publish(run_dir: Path, *, episodes: int = EPISODES, seed: int = SEED, dest: 
             "mean_return": round(ev.mean_return, 4),
             "mean_final_lift_m": round(ev.mean_final_lift, 5),
             "diverged": ev.diverged,
+            **({"by_object": {name: list(ev.by_object[name]) for name in sorted(ev.by_object)}}
+               if ev.by_object else {}),
         },
         "convergence": convergence(progress, int(loaded.model.num_timesteps)),
         **({"demonstrations": meta["demonstrations"]} if meta.get("demonstrations") else {}),
@@ -313,6 +316,11 @@ def _card_extras(card: dict[str, Any]) -> list[str]:
     if "wilson95" in ev:
         lo, hi = ev["wilson95"]
         rows.append(f"| 95 % interval | {lo:.0%} - {hi:.0%} (Wilson, {ev['successes']} of {ev['episodes']}) |")
+    if ev.get("by_object"):
+        from agents.evaluate import object_line
+
+        rows.append(f"| success per object | {object_line({k: tuple(v) for k, v in ev['by_object'].items()})} "
+                    "(successes/episodes of the evaluation's episodes, each object as drawn) |")  # fmt: skip
     conv = card.get("convergence")
     if conv:
         if conv["converged"] is None:
@@ -344,38 +352,80 @@ def env_label(card: dict[str, Any]) -> str:
     return " ".join([card["env"], *(f"{k}={v!r}" for k, v in sorted(kwargs.items()))])
 
 
-def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True,
-          versions: tuple[int, ...] | None = None) -> str:  # fmt: skip
-    """The results table (markdown): the scripted policy, measured now on the same seeds, and every
-    shipped model from its card; per algo and env, mean and range over seeds; only the ids of
-    ``versions`` if given (e.g. ``(3,)``)."""
+SCRIPTED_IDS = ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspGoal-v4",
+                "SoftGraspGrip-v3", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3",
+                "SoftGraspObjects-v1", "SoftGraspObjectsRigid-v1", "SoftGraspObjectsRigidTorsion-v1",
+                "SoftGraspObjectsGrip-v1", "SoftGraspObjectsGripRigid-v1", "SoftGraspObjectsGripRigidTorsion-v1")
+"""The ids whose scripted policy the tables measure live."""
+
+
+def scripted_evaluations(*, episodes: int = EPISODES, seed: int = SEED, versions: tuple[int, ...] | None = None,
+                         ids: tuple[str, ...] = SCRIPTED_IDS) -> list[tuple[str, str, Any]]:  # fmt: skip
+    """The scripted policy of each of ``ids`` (of ``versions`` if given) on the cards' episodes:
+    ``(label, env id, Evaluation)``. The grip ids' policy (the squeeze as the action) reads the
+    taxels ('scripted tactile'); the others run the scripted grasp."""
     import gymnasium as gym
-    import numpy as np
 
     import softgrasp_env  # noqa: F401
     from agents.evaluate import evaluate
     from softgrasp_env.policies import ScriptedGraspPolicy
     from softgrasp_env.policies.grip import TactileGripPolicy
 
+    out = []
+    for env_id in ids:
+        if versions is not None and int(env_id.rsplit("-v", 1)[1]) not in versions:
+            continue
+        env = gym.make(env_id)
+        grip = env.unwrapped.args.control.finger_action == "force"
+        try:
+            policy = TactileGripPolicy(env) if grip else ScriptedGraspPolicy.for_env(env)
+            ev = evaluate(env, policy, episodes=episodes, seed=seed)
+        finally:
+            env.close()
+        out.append(("scripted tactile" if grip else "scripted", env_id, ev))
+    return out
+
+
+def objects_table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True,
+                  versions: tuple[int, ...] | None = None) -> str:  # fmt: skip
+    """Success per object (markdown) on the object-set ids: the scripted policy measured now on the
+    cards' episodes, and every shipped model of those ids from its card, its seeds pooled
+    (successes / episodes that drew the object)."""
+    rows: list[tuple[str, str, dict[str, tuple[int, int]]]] = []
+    if scripted:
+        ids = tuple(i for i in SCRIPTED_IDS if "Objects" in i)
+        for label, env_id, ev in scripted_evaluations(episodes=episodes, seed=seed, versions=versions, ids=ids):
+            rows.append((label, env_id, dict(ev.by_object)))
+    groups: dict[tuple[str, str], dict[str, tuple[int, int]]] = {}
+    for model_dir in shipped():
+        card = read_card(model_dir)
+        by_object = card["evaluation"].get("by_object")
+        if not by_object or (versions is not None and card["env_version"] not in versions):
+            continue
+        pooled = groups.setdefault((policy_label(card), env_label(card)), {})
+        for name, (won, met) in by_object.items():
+            w, m = pooled.get(name, (0, 0))
+            pooled[name] = (w + won, m + met)
+    rows += [(label, env, pooled) for (label, env), pooled in sorted(groups.items())]
+    names = sorted({name for _, _, by_object in rows for name in by_object})
+    out = ["| policy | env | " + " | ".join(names) + " |", "|---|---|" + "---|" * len(names)]
+    for label, env_id, by_object in rows:
+        cells = [f"{by_object[n][0]}/{by_object[n][1]}" if n in by_object else "-" for n in names]
+        out.append(f"| {label} | {env_id} | " + " | ".join(cells) + " |")
+    return "\n".join(out)
+
+
+def table(*, episodes: int = EPISODES, seed: int = SEED, scripted: bool = True,
+          versions: tuple[int, ...] | None = None) -> str:  # fmt: skip
+    """The results table (markdown): the scripted policy, measured now on the same seeds, and every
+    shipped model from its card; per algo and env, mean and range over seeds; only the ids of
+    ``versions`` if given (e.g. ``(3,)``)."""
+    import numpy as np
+
     rows = []
     if scripted:
-        for env_id in ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspGoal-v4",
-                       "SoftGraspGrip-v3", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3",
-                       "SoftGraspObjects-v1", "SoftGraspObjectsRigid-v1", "SoftGraspObjectsRigidTorsion-v1",
-                       "SoftGraspObjectsGrip-v1", "SoftGraspObjectsGripRigid-v1",
-                       "SoftGraspObjectsGripRigidTorsion-v1"):  # fmt: skip
-            if versions is not None and int(env_id.rsplit("-v", 1)[1]) not in versions:
-                continue
-            env = gym.make(env_id)
-            # The grip ids' scripted policy (the squeeze as the action) reads the taxels; the
-            # others the scripted grasp.
-            grip = env.unwrapped.args.control.finger_action == "force"
-            try:
-                policy = TactileGripPolicy(env) if grip else ScriptedGraspPolicy.for_env(env)
-                ev = evaluate(env, policy, episodes=episodes, seed=seed)
-            finally:
-                env.close()
-            rows.append(("scripted tactile" if grip else "scripted", env_id, "-", "-", [ev.success_rate], "-"))
+        for label, env_id, ev in scripted_evaluations(episodes=episodes, seed=seed, versions=versions):
+            rows.append((label, env_id, "-", "-", [ev.success_rate], "-"))
     groups: dict[tuple[str, str], list[dict[str, Any]]] = {}
     for model_dir in shipped():
         card = read_card(model_dir)
@@ -437,10 +487,17 @@ def main(argv: list[str] | None = None) -> int:
     tab.add_argument("--no-scripted", action="store_true")
     tab.add_argument("--versions", type=int, nargs="+", default=None, metavar="N",
                      help="only the ids of these versions (default: every shipped one)")  # fmt: skip
+    objs = sub.add_parser("objects", help="print success per object on the object-set ids (scripted measured live)")
+    objs.add_argument("--no-scripted", action="store_true")
+    objs.add_argument("--versions", type=int, nargs="+", default=None, metavar="N",
+                      help="only the ids of these versions (default: every shipped one)")  # fmt: skip
     per_run = sub.add_parser("runs", help="print the per-run table (steps, success, convergence, wall time)")
     per_run.add_argument("--versions", type=int, nargs="+", default=None, metavar="N",
                          help="only the ids of these versions (default: every shipped one)")  # fmt: skip
     ns = parser.parse_args(argv)
+    if ns.command == "objects":
+        print(objects_table(scripted=not ns.no_scripted, versions=None if ns.versions is None else tuple(ns.versions)))
+        return 0
     if ns.command == "runs":
         print(runs_table(versions=None if ns.versions is None else tuple(ns.versions)))
         return 0

@@ -14,7 +14,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import gymnasium as gym
 import numpy as np
@@ -87,6 +87,9 @@ class Evaluation:
     mean_final_lift: float
     """Cylinder lift at the end of the episode [m]."""
     diverged: int
+    by_object: dict[str, tuple[int, int]] = field(default_factory=dict)
+    """Per object named by ``info["object"]`` (the object-set ids, or an ``object`` given):
+    (successes, episodes), in the order first met; empty where the env names no object."""
 
 
 def evaluate(env: gym.Env, policy: Callable[[object], np.ndarray], *, episodes: int = 10, seed: int = 0) -> Evaluation:
@@ -95,13 +98,23 @@ def evaluate(env: gym.Env, policy: Callable[[object], np.ndarray], *, episodes: 
     if episodes < 1:
         raise ValueError(f"episodes must be >= 1, got {episodes}")
     successes, returns, lifts, diverged = [], [], [], 0
+    by_object: dict[str, tuple[int, int]] = {}
     for k in range(episodes):
         ep = run_episode(env, policy, seed=seed + k)
         successes.append(ep.success)
         returns.append(ep.total_reward)
         lifts.append(float(ep.info["lift_height"]))
         diverged += ep.diverged
-    return Evaluation(episodes, float(np.mean(successes)), float(np.mean(returns)), float(np.mean(lifts)), diverged)
+        if "object" in ep.info:
+            won, met = by_object.get(ep.info["object"], (0, 0))
+            by_object[ep.info["object"]] = (won + ep.success, met + 1)
+    return Evaluation(episodes, float(np.mean(successes)), float(np.mean(returns)), float(np.mean(lifts)), diverged,
+                      by_object)  # fmt: skip
+
+
+def object_line(by_object: dict[str, tuple[int, int]]) -> str:
+    """``by_object`` as one line, objects by name: ``cone 8/9, cube 10/10, ...``."""
+    return ", ".join(f"{name} {won}/{met}" for name, (won, met) in sorted(by_object.items()))
 
 
 def resolve(spec: str) -> str:
@@ -185,6 +198,8 @@ def main(argv: list[str] | None = None) -> int:
             env.close()
     print(f"{ns.env} / {ns.policy}: success {ev.success_rate:.0%} over {ev.episodes} episodes, mean return "
           f"{ev.mean_return:.2f}, mean final lift {ev.mean_final_lift * 100:.2f} cm, diverged {ev.diverged}")  # fmt: skip
+    if ev.by_object:
+        print("per object: " + object_line(ev.by_object))
     return 0
 
 

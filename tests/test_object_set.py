@@ -147,6 +147,44 @@ def test_the_scripted_grasp_carries_every_object_in_nine_seeds_of_ten():
     assert min(rates.values()) >= 9, rates
 
 
+def _first_seed_per_object(env) -> dict[str, int]:
+    """The first seed from 1000 (the cards' first) that draws each object of the set."""
+    first, seed = {}, 1000
+    while len(first) < len(OBJECT_SET):
+        first.setdefault(env.reset(seed=seed)[1]["object"], seed)
+        seed += 1
+    return first
+
+
+@pytest.mark.parametrize("env_id", [pytest.param("SoftGraspObjects-v1", marks=pytest.mark.slow),
+                                    "SoftGraspObjectsRigidTorsion-v1",
+                                    pytest.param("SoftGraspObjectsRigid-v1", marks=pytest.mark.slow)])  # fmt: skip
+def test_a_carried_object_stays_held_six_episodes_long(env_id, make_env):
+    """A soak six episodes long: the scripted grasp, each object at its first drawn size, mass and
+    friction, through the carry and on to 30 s. What is held at 5 s is still held at 30 s and has
+    not slid down the pads (measured over the set: the object's height at 30 s within 0.04 mm of
+    its height at 5 s on the tissue, 0.07 on the peer and the rigid twin, the rod's pads settling
+    it 0.07 mm up on the tissue). The tissue and the torsional peer hold all 11 at 5 s; the rigid
+    twin drops the cone, rod and two pebbles in the reach (7 of 11)."""
+    env = make_env(env_id, max_episode_steps=600)
+    held_at_5 = {}
+    for obj, seed in _first_seed_per_object(env).items():
+        policy = ScriptedGraspPolicy.for_env(env)
+        obs, _ = env.reset(seed=seed)
+        for k in range(600):
+            obs, _, term, trunc, info = env.step(policy(obs))
+            if k == 99:
+                held_at_5[obj] = info["lift_height"] if info["is_success"] else None
+            if term or trunc:
+                break
+        if held_at_5.get(obj) is None:
+            continue
+        assert k == 599 and info["held"] and info["lift_height"] > 0.06, (obj, k, info)
+        assert abs(held_at_5[obj] - info["lift_height"]) < 0.25e-3, (obj, held_at_5[obj], info["lift_height"])
+    held = sorted(o for o, lift in held_at_5.items() if lift is not None)
+    assert len(held) >= (6 if env_id == "SoftGraspObjectsRigid-v1" else 11), held
+
+
 @pytest.mark.parametrize("obj", ["sphere", "cone"])
 def test_the_tactile_grip_holds_a_low_and_a_tapered_object(obj):
     """The grip-force variant: the tactile policy grips an object at its middle from the observed

@@ -52,6 +52,25 @@ def test_evaluate_resets_a_stateful_policy_at_every_episode():
     assert policy.resets == 2 and policy.longest == env.spec.max_episode_steps and ev.episodes == 2
 
 
+def test_evaluate_counts_success_per_object():
+    """On an object-set id the evaluation splits its episodes by the object each drew (the card's
+    per-object row); on a cylinder id it names none."""
+    env = gym.make("SoftGraspObjectsRigidTorsion-v1")
+    try:
+        ev = evaluate(env, ScriptedGraspPolicy.for_env(env), episodes=3, seed=1000)
+        drawn = [env.reset(seed=1000 + k)[1]["object"] for k in range(3)]
+    finally:
+        env.close()
+    assert sum(met for _, met in ev.by_object.values()) == 3
+    assert sum(won for won, _ in ev.by_object.values()) == round(ev.success_rate * 3)
+    assert {name: drawn.count(name) for name in drawn} == {name: met for name, (_, met) in ev.by_object.items()}
+    env = gym.make("SoftGraspEasyRigid-v3")
+    try:
+        assert evaluate(env, ScriptedGraspPolicy(), episodes=1, seed=0).by_object == {}
+    finally:
+        env.close()
+
+
 def test_default_algos_and_presets():
     assert default_algo("SoftGraspGoal-v4") == "her-sac"
     assert default_algo("SoftGrasp-v3") == "sac"

@@ -118,6 +118,11 @@ def test_card_agrees_with_the_files(model_dir):
     if "wilson95" in ev:
         assert ev["successes"] == round(ev["success_rate"] * ev["episodes"])
         assert ev["wilson95"] == [round(v, 4) for v in cards.wilson(ev["successes"], ev["episodes"])]
+    # an object-set card splits its episodes per object; a cylinder card has no such row
+    assert ("by_object" in ev) == ("Objects" in card["env"])
+    if "by_object" in ev:
+        assert sum(met for _, met in ev["by_object"].values()) == ev["episodes"]
+        assert sum(won for won, _ in ev["by_object"].values()) == ev["successes"]
     if "convergence" in card:
         with open(model_dir / "progress.csv", newline="") as f:
             assert card["convergence"] == cards.convergence(list(csv.DictReader(f)), card["timesteps"])
