@@ -7,6 +7,7 @@
     python train.py --resume runs/SoftGrasp-v3_sac_0 --timesteps 50000   # 50k more steps
     python train.py --env SoftGrasp-v3 --force       # start runs/SoftGrasp-v3_sac_0 anew (deletes the old run)
     python train.py --env SoftGrasp-v3 --torch-threads 2   # the learner on 2 torch threads (default 1)
+    python train.py --env SoftGraspGrip-v4 --asymmetric     # the critic also reads the object's mass, friction, pose
 
 Writes ``<out>/<env>_<algo>_<seed>/``: ``model.zip``, ``vecnormalize.pkl`` (observation statistics,
 except for HER), ``replay_buffer.pkl`` (off-policy algos, for --resume), ``run.json`` (the
@@ -45,7 +46,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNorm
 from tqdm import tqdm
 
 import softgrasp_env
-from agents.baselines import ALGOS, default_algo, make_model, model_class
+from agents.baselines import ALGOS, ASYMMETRIC_ALGOS, default_algo, make_model, model_class
 from agents.cards import hyperparameters, quote_arg
 from agents.cli import kwargs_dict as _kwargs_dict
 from agents.cli import parse_kwarg
@@ -54,6 +55,7 @@ from agents.evaluate import evaluate
 from agents.runs import CHECKPOINT_PREFIX, deterministic_policy, load_model, make_env, run_files
 from agents.threads import DEFAULT_TORCH_THREADS, set_threads, threads_error
 from softgrasp_env.policies._sb3 import saved_timesteps
+from softgrasp_env.wrappers import PrivilegedObservation
 
 EVAL_EVERY = 10_000  # timesteps between a fresh run's evaluations
 EVAL_EPISODES = 10
@@ -226,6 +228,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--eval-episodes", type=int, default=None,
                         help=f"episodes per evaluation (default {EVAL_EPISODES}; with --resume: the run's)")
     parser.add_argument("--learning-starts", type=int, default=None, help="override the preset (off-policy algos)")
+    parser.add_argument("--asymmetric", action="store_true",
+                        help="an asymmetric actor-critic (sac, ppo): the critic also reads what the simulator "
+                             "knows (the object's pose, mass, friction: softgrasp_env.wrappers.PrivilegedObservation), "
+                             "the actor only the env's observation (softgrasp_env.policies.asymmetric); the run is "
+                             "named <env>_<algo>-asymmetric_<seed>")  # fmt: skip
     parser.add_argument("--demos", type=int, default=None, metavar="N",
                         help="start an off-policy learner's replay buffer with N episodes of the scripted grasp "
                              "(agents/demos.py: HER on the goal id never lifts the cylinder by itself)")
@@ -279,9 +286,9 @@ def main(argv: list[str] | None = None) -> int:
             parser.error("--demos fills a new run's replay buffer before it trains; a resumed run keeps its buffer")
         given = {"env": ns.env, "algo": ns.algo, "env_kwargs": ns.env_kwargs and env_kwargs,
                  "algo_kwargs": ns.algo_kwargs and algo_kwargs, "n_envs": ns.n_envs,
-                 "learning_starts": ns.learning_starts}  # fmt: skip
+                 "learning_starts": ns.learning_starts, "asymmetric": ns.asymmetric or None}  # fmt: skip
         for name, value in given.items():
-            if value is not None and value != meta.get(name):
+            if value is not None and value != meta.get(name, False if name == "asymmetric" else None):
                 parser.error(f"--{name.replace('_', '-')} {value!r} differs from the resumed run's "
                              f"{meta.get(name)!r}: a resumed run keeps its settings")  # fmt: skip
         env_id, algo, n_envs = meta["env"], meta["algo"], meta["n_envs"]
@@ -304,15 +311,23 @@ def main(argv: list[str] | None = None) -> int:
         meta = {"env": env_id, "env_kwargs": env_kwargs, "algo": algo, "algo_kwargs": algo_kwargs, "seed": seed,
                 "n_envs": n_envs, "timesteps": ns.timesteps, "eval_every": ns.eval_every,
                 "eval_episodes": ns.eval_episodes, "learning_starts": ns.learning_starts,
-                "checkpoint_every": ns.checkpoint_every, "demos": ns.demos, "out": str(ns.out),
+                "checkpoint_every": ns.checkpoint_every, "demos": ns.demos, "asymmetric": ns.asymmetric,
+                "out": str(ns.out),
                 "normalized_observations": default_algo(env_id) != "her-sac",  # the goal env runs raw (HER)
                 "softgrasp_env": softgrasp_env.__version__}  # fmt: skip
-        run = ns.out / (ns.name or f"{env_id}_{algo}_{seed}")
+        run = ns.out / (ns.name or f"{env_id}_{algo}{'-asymmetric' if ns.asymmetric else ''}_{seed}")
     goal = default_algo(env_id) == "her-sac"  # the goal-conditioned ids
     if algo == "her-sac" and not goal:
         parser.error("--algo her-sac needs a goal-conditioned env (SoftGraspGoal-v5 or -v4)")
     if algo == "her-sac" and n_envs != 1:
         parser.error("--algo her-sac runs with --n-envs 1")
+    asymmetric = bool(meta.get("asymmetric"))
+    if asymmetric and algo not in ASYMMETRIC_ALGOS:
+        parser.error(f"--asymmetric is built for {', '.join(ASYMMETRIC_ALGOS)}, not {algo} (the goal env's dict "
+                     "observations are HER's)")  # fmt: skip
+    if asymmetric and ns.demos is not None:
+        parser.error("--demos records the scripted grasp's observations without the privileged state; "
+                     "not with --asymmetric")  # fmt: skip
     if ns.demos is not None and algo == "ppo":
         parser.error("--demos fills a replay buffer; ppo has none (an off-policy algo: sac, her-sac)")
     if ns.demos is not None and n_envs != 1:
@@ -366,7 +381,8 @@ def main(argv: list[str] | None = None) -> int:
         eval_env.close()
         parser.error(f"--resume: {exc}")
     venv = make_vec_env(f"softgrasp_env:{env_id}", n_envs=n_envs, seed=meta["seed"], vec_env_cls=vec_cls, env_kwargs=env_kwargs,
-                        monitor_dir=str(monitor_dir), monitor_kwargs={"info_keywords": ("is_success",)})  # fmt: skip
+                        monitor_dir=str(monitor_dir), monitor_kwargs={"info_keywords": ("is_success",)},
+                        wrapper_class=PrivilegedObservation if asymmetric else None)  # fmt: skip
     # Positions (cm), velocities and forces (N) differ by orders of magnitude: normalise the
     # observations. HER relabels goals inside its buffer, so the goal env runs unnormalised.
     norm: VecNormalize | None = None
@@ -378,7 +394,7 @@ def main(argv: list[str] | None = None) -> int:
         if ns.learning_starts is not None and algo != "ppo":
             overrides["learning_starts"] = ns.learning_starts
         try:
-            model = make_model(algo, venv, seed=seed, **overrides)
+            model = make_model(algo, venv, seed=seed, asymmetric=asymmetric, **overrides)
         except (TypeError, ValueError, AssertionError) as exc:  # a value SB3 refuses (the keys are checked)
             venv.close()
             eval_env.close()

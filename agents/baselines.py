@@ -65,15 +65,35 @@ def default_algo(env_id: str) -> str:
     return "her-sac" if isinstance(space, str) and space.endswith("GoalEnv") else "sac"
 
 
-def make_model(algo: str, env: gym.Env | VecEnv, *, seed: int | None = None, **overrides: Any) -> BaseAlgorithm:
+ASYMMETRIC_ALGOS = ("ppo", "sac")
+"""The algos with an asymmetric actor-critic policy (softgrasp_env.policies.asymmetric)."""
+
+
+def asymmetric_policy(algo: str) -> type:
+    """The asymmetric actor-critic policy class of ``algo`` (the critic reads the privileged state
+    of ``softgrasp_env.wrappers.PrivilegedObservation``, the actor only the env's observation)."""
+    from softgrasp_env.policies.asymmetric import AsymmetricActorCriticPolicy, AsymmetricSACPolicy
+
+    if algo not in ASYMMETRIC_ALGOS:
+        raise ValueError(f"an asymmetric actor-critic is built for {ASYMMETRIC_ALGOS}, not {algo!r} "
+                         "(HER's goal env has dict observations of its own)")  # fmt: skip
+    return AsymmetricActorCriticPolicy if algo == "ppo" else AsymmetricSACPolicy
+
+
+def make_model(algo: str, env: gym.Env | VecEnv, *, seed: int | None = None, asymmetric: bool = False,
+               **overrides: Any) -> BaseAlgorithm:  # fmt: skip
     """An SB3 model of ``algo`` (one of :data:`ALGOS`) on ``env`` with the preset, updated by
-    ``overrides`` (any keyword of the SB3 class)."""
+    ``overrides`` (any keyword of the SB3 class). ``asymmetric``: the preset's policy becomes the
+    algo's :func:`asymmetric_policy` (``env`` then gives PrivilegedObservation's dict observations)."""
     if algo not in PRESETS:
         raise ValueError(f"algo must be one of {ALGOS}, got {algo!r}")
+    if asymmetric and "policy" in overrides:
+        raise ValueError(f"asymmetric=True sets the policy; got policy={overrides['policy']!r} too")
     # A deep copy: SB3 writes into the policy_kwargs it is given (use_sde), which would change the
     # preset for every later model and the hyperparameters a run records.
     kwargs = copy.deepcopy({**PRESETS[algo], **overrides})
-    policy = kwargs.pop("policy")
+    policy = asymmetric_policy(algo) if asymmetric else kwargs.pop("policy")
+    kwargs.pop("policy", None)
     cls = PPO if algo == "ppo" else SAC
     return cls(policy, env, seed=seed, device="cpu", verbose=0, **kwargs)
 

@@ -111,6 +111,10 @@ def hyperparameters(meta: dict[str, Any]) -> dict[str, Any]:
     if meta.get("hyperparameters"):  # recorded by train.py since the baselines were shipped
         return meta["hyperparameters"]
     out = {**PRESETS[meta["algo"]], **meta.get("algo_kwargs", {})}
+    if meta.get("asymmetric"):
+        from agents.baselines import asymmetric_policy
+
+        out["policy"] = asymmetric_policy(meta["algo"])
     if meta.get("learning_starts") is not None and meta["algo"] != "ppo":
         out["learning_starts"] = meta["learning_starts"]
     return _jsonable(out)
@@ -269,6 +273,7 @@ def publish(run_dir: Path, *, episodes: int = EPISODES, seed: int = SEED, dest: 
         },
         "convergence": convergence(progress, int(loaded.model.num_timesteps)),
         **({"demonstrations": meta["demonstrations"]} if meta.get("demonstrations") else {}),
+        **({"asymmetric": True} if meta.get("asymmetric") else {}),
         "versions": {"softgrasp_env": softgrasp_env.__version__, "stable_baselines3": stable_baselines3.__version__,
                      "torch": torch.__version__, "numpy": np.__version__, "python": platform.python_version()},
         "machine": "2-core x86-64 CPU, no GPU; two runs trained at a time, one torch thread each",
@@ -330,6 +335,10 @@ def _card_extras(card: dict[str, Any]) -> list[str]:
                        f"{conv['change_points']:+.1f} ± {conv['stderr_points']:.1f} points "
                        f"over the window, {conv['evaluations']} evaluations")  # fmt: skip
         rows.append(f"| convergence | {verdict}; rule: {conv['rule']} |")
+    if card.get("asymmetric"):
+        rows.append("| critic | asymmetric: in training the critic also read the privileged state (the object's pose, "
+                    "mass and friction: `softgrasp_env.wrappers.PrivilegedObservation`); the actor reads the env's "
+                    "observation alone |")  # fmt: skip
     demos = card.get("demonstrations")
     if demos:
         rows.append(f"| demonstrations | {demos['episodes']} episodes of the scripted grasp (seeds {demos['seeds']}; "
@@ -339,10 +348,12 @@ def _card_extras(card: dict[str, Any]) -> list[str]:
 
 
 def policy_label(card: dict[str, Any]) -> str:
-    """The learner as the table names it: the algo, and the scripted demonstrations it started from
-    (``her-sac + 100 demos``: a group of its own)."""
+    """The learner as the table names it: the algo, whether its critic read privileged state
+    (``sac asymmetric``) and the scripted demonstrations it started from (``her-sac + 100 demos``):
+    each a group of its own."""
     demos = card.get("demonstrations")
-    return f"{card['algo']} + {demos['episodes']} demos" if demos else card["algo"]
+    algo = f"{card['algo']} asymmetric" if card.get("asymmetric") else card["algo"]
+    return f"{algo} + {demos['episodes']} demos" if demos else algo
 
 
 def env_label(card: dict[str, Any]) -> str:

@@ -25,6 +25,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecNormalize
 
 import softgrasp_env  # noqa: F401  (registers the ids)
 from softgrasp_env.policies._sb3 import frozen, load_model, load_stats, saved_algo
+from softgrasp_env.wrappers import PrivilegedObservation
 
 CHECKPOINT_PREFIX = "model"
 _CHECKPOINT = re.compile(rf"^{CHECKPOINT_PREFIX}_(\d+)_steps\.zip$")
@@ -89,8 +90,10 @@ def run_files(path: str | Path) -> RunFiles:
 def make_env(meta: dict[str, Any], *, env_id: str | None = None, **extra: Any) -> gym.Env:
     """The env a run trained on: ``gym.make(meta["env"], **meta["env_kwargs"])`` (``env_id``
     replaces the id, e.g. to try a soft-trained policy on the rigid fingers; ``extra`` adds kwargs
-    such as ``render_mode``)."""
-    return gym.make(env_id or meta["env"], **{**meta.get("env_kwargs", {}), **extra})
+    such as ``render_mode``); a run with an asymmetric actor-critic (``train.py --asymmetric``) gets
+    its env in ``PrivilegedObservation``, as it trained."""
+    env = gym.make(env_id or meta["env"], **{**meta.get("env_kwargs", {}), **extra})
+    return PrivilegedObservation(env) if meta.get("asymmetric") else env
 
 
 def check_env_matches(meta: dict[str, Any], env: gym.Env | VecEnv, run_json: Path | str, *,

@@ -18,7 +18,7 @@ from gymnasium import spaces
 
 from ._jit_cache import ensure_compiled
 from .arguments import EnvArguments, EnvPlan, GoalConfig, argument_table, check_reset_options
-from .observation import CARRY_OBS_NAMES, OBS_GROUPS, OBS_NAMES, Reading, read
+from .observation import CARRY_OBS_NAMES, OBS_GROUPS, OBS_NAMES, Reading, privileged, read
 from .scene import GraspScene
 from .sim.world import SimulationDiverged
 from .tasks import GoalTask, Outcome
@@ -451,6 +451,17 @@ class SoftGraspEnv(gym.Env):
             self._episode_over = True
             return True
         return False
+
+    def privileged_state(self) -> np.ndarray:
+        """The scene's state at the last observation that a gripper's own sensors do not give,
+        float64 in the order of ``softgrasp_env.observation.PRIVILEGED_NAMES``: the object's pose
+        and motion, its mass [kg] and the finger surface's friction coefficients as this episode
+        drew them. For a critic that learns from what the simulator knows while the actor reads
+        only the observation (``softgrasp_env.wrappers.PrivilegedObservation``); after a diverged
+        step, the last finite reading's."""
+        if self.scene is None:
+            raise RuntimeError("call reset() before privileged_state()")
+        return privileged(self._last, self.scene.config)
 
     def _read(self) -> Reading:
         return read(self.scene, self._forces, self.plan.taxel_grid)

@@ -18,7 +18,7 @@ from .fingers.tactile import TAXEL_CHANNELS, TaxelGrid
 from .scene.objects import OBJECT_KINDS
 
 if TYPE_CHECKING:
-    from .scene import GraspScene
+    from .scene import GraspScene, SceneConfig
 
 OBS_GROUPS: dict[str, tuple[str, ...]] = {
     "grip": ("grip_x", "grip_y", "grip_z"),
@@ -57,10 +57,29 @@ grip-force ids) leaves them out, keeping what a gripper's own sensors give - its
 its fingers' gap and forces, the clock, the taxels."""
 
 
+_OBJECT_NAMES: tuple[str, ...] = tuple(n for g in OBJECT_GROUPS for n in OBS_GROUPS[g])
+PRIVILEGED_NAMES: tuple[str, ...] = (*_OBJECT_NAMES,
+                                     "object_qx", "object_qy", "object_qz", "object_qw",
+                                     "object_mass", "friction_static", "friction_kinetic")  # fmt: skip
+"""What :func:`privileged` returns, in order: the object's own state (the entries of
+:data:`OBJECT_GROUPS`: its centre from the grip point [m], its up axis, velocities [m/s, rad/s], lift
+[m]), its orientation quaternion (x, y, z, w), its mass [kg] and the finger surface's friction
+coefficients mu_s, mu_k as this episode drew them. A simulator knows them; a gripper's own sensors
+do not: an asymmetric critic reads them in training, the actor never
+(``softgrasp_env.wrappers.PrivilegedObservation``)."""
+
+
+def privileged(reading: Reading, config: SceneConfig) -> np.ndarray:
+    """The :data:`PRIVILEGED_NAMES` entries of ``reading`` and the scene's ``config``, float64."""
+    mu_s = config.tissue.friction_static
+    mu_k = mu_s if config.tissue.friction_kinetic is None else config.tissue.friction_kinetic
+    return np.concatenate((reading.vector(_OBJECT_NAMES), reading.object_q,
+                           (config.cylinder_mass, mu_s, mu_k)))  # fmt: skip
+
+
 def without_object(names: tuple[str, ...]) -> tuple[str, ...]:
     """``names`` without the entries of :data:`OBJECT_GROUPS`."""
-    drop = {n for g in OBJECT_GROUPS for n in OBS_GROUPS[g]}
-    return tuple(n for n in names if n not in drop)
+    return tuple(n for n in names if n not in _OBJECT_NAMES)
 
 
 TACTILE_PREFIX = "tactile_"
@@ -131,6 +150,9 @@ class Reading:
     """(len(OBJECT_KINDS),) the object's kind, one-hot."""
     shape_extent: np.ndarray | None = None
     """(3,) the object's half extents at rest along x, y, z [m] (half its bounding box)."""
+    object_q: np.ndarray | None = None
+    """(4,) the object's orientation, a unit quaternion (x, y, z, w) from its rest frame (not
+    observed: :data:`PRIVILEGED_NAMES`)."""
     object_tilt: float | None = None
     """The tilt of an object other than the cylinder (scene.GraspScene.cylinder_tilt: a sphere
     has none, a lying capsule's is its axis from the horizontal); None: the cylinder's, from
@@ -190,9 +212,10 @@ def read(scene: GraspScene, force: np.ndarray, grid: TaxelGrid | None = None) ->
                    lift=float(cyl_x[2] - scene.cylinder_rest_z), gripper_yaw=yaw,
                    time=scene.steps * scene.config.sim.dt, cylinder_x=cyl_x.copy(),
                    tactile=None if grid is None else scene.fingers.tactile(grid), shape_kind=kind,
-                   shape_extent=extent, object_tilt=object_tilt)  # fmt: skip
+                   shape_extent=extent, object_q=np.array(cyl_q, dtype=np.float64),
+                   object_tilt=object_tilt)  # fmt: skip
 
 
-__all__ = ["CARRY_OBS_NAMES", "OBJECT_GROUPS", "OBS_GROUPS", "OBS_NAMES", "SHAPE_GROUPS", "SHAPE_OBS_NAMES",
+__all__ = ["CARRY_OBS_NAMES", "OBJECT_GROUPS", "OBS_GROUPS", "OBS_NAMES", "PRIVILEGED_NAMES", "SHAPE_GROUPS", "SHAPE_OBS_NAMES",
            "TACTILE_PREFIX", "Reading", "obs_slice",
-           "read", "tactile_names", "tactile_view", "without_object"]  # fmt: skip
+           "privileged", "read", "tactile_names", "tactile_view", "without_object"]  # fmt: skip

@@ -51,7 +51,8 @@ def test_the_core_install_is_lean_and_the_rest_are_extras():
 def test_the_package_imports_none_of_the_extras():
     """``import softgrasp_env`` and the policies package (what a core install runs) import neither
     torch, stable-baselines3, tensorboard nor matplotlib."""
-    code = ("import sys, softgrasp_env, softgrasp_env.policies, softgrasp_env.env, softgrasp_env.render; "
+    code = ("import sys, softgrasp_env, softgrasp_env.policies, softgrasp_env.env, softgrasp_env.render, "
+            "softgrasp_env.wrappers; "
             "bad = sorted(m for m in ('torch', 'stable_baselines3', 'tensorboard', 'matplotlib', 'moviepy', 'tqdm') "
             "if m in sys.modules); print(bad)")  # fmt: skip
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True)

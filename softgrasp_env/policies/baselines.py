@@ -135,12 +135,18 @@ class Baseline:
 
     def make_env(self, **extra: Any):
         """A new env as the baseline trained on it (same id and kwargs; ``extra`` adds some, such
-        as ``render_mode``)."""
+        as ``render_mode``); an asymmetric actor-critic's in ``PrivilegedObservation``, whose dict
+        the model takes (its actor reads the ``sensed`` part alone)."""
         import gymnasium as gym
 
         import softgrasp_env  # noqa: F401  (registers the ids)
 
-        return gym.make(self.env_id, **{**self.env_kwargs, **extra})
+        env = gym.make(self.env_id, **{**self.env_kwargs, **extra})
+        if self.card.get("asymmetric"):
+            from ..wrappers import PrivilegedObservation
+
+            env = PrivilegedObservation(env)
+        return env
 
     def close(self) -> None:
         """Close the env made for loading a HER model (if any)."""
