@@ -289,6 +289,44 @@ def tissue_shear(x, rest_x, footprint, surface, offsets, rig_x, rig_q, core_rigi
                     out[b, row, col, 4] /= counts[b, row, col]
 
 
+SLIP_RATIO = 0.9
+"""A taxel reads as sliding when its traction is at least this share of mu times its pressure
+(:func:`sliding_share`): under Coulomb's law a contact slides at the cone, and a taxel averages
+its contacts, so the edge of a partially slipping strip reads just under mu."""
+SLIP_SHARE = 0.1
+"""The share of a pad's pressure on sliding taxels at which :func:`slip_warning` warns."""
+
+
+def sliding_share(taxels: np.ndarray, mu: float, *, ratio: float = SLIP_RATIO) -> np.ndarray:
+    """Per pad, the share of its pressure that sits on taxels whose traction reaches ``ratio`` x
+    ``mu`` x their pressure: Cattaneo and Mindlin's slip annulus read through the taxels (Johnson,
+    Contact Mechanics, sec. 7.2: under a growing tangential load a contact's edges slide first and
+    the sliding zone grows inward until the whole contact slides at Q = mu P). ``taxels``: (2, rows,
+    cols, channels) as the pads read (:data:`TAXEL_CHANNELS`), or a batch (..., 2, rows, cols,
+    channels); ``mu``: the friction coefficient the detector assumes. Returns (..., 2); a pad
+    pressing nothing reads 0."""
+    if not (np.isfinite(mu) and mu > 0.0):
+        raise ValueError(f"mu must be a finite coefficient > 0, got {mu!r}")
+    if not (0.0 < ratio <= 1.0):
+        raise ValueError(f"ratio must be in (0, 1], got {ratio!r}")
+    taxels = np.asarray(taxels, dtype=np.float64)
+    if taxels.ndim < 4 or taxels.shape[-4] != 2 or taxels.shape[-1] != len(TAXEL_CHANNELS):
+        raise ValueError(f"taxels must be (..., 2, rows, cols, {len(TAXEL_CHANNELS)}), got shape {taxels.shape}")
+    pressure = np.maximum(taxels[..., 0], 0.0)
+    traction = np.hypot(taxels[..., 1], taxels[..., 2])
+    sliding = (pressure > 0.0) & (traction >= ratio * mu * pressure)
+    total = pressure.sum(axis=(-2, -1))
+    return np.where(total > 0.0, (pressure * sliding).sum(axis=(-2, -1)) / np.where(total > 0.0, total, 1.0), 0.0)
+
+
+def slip_warning(taxels: np.ndarray, mu: float, *, ratio: float = SLIP_RATIO, share: float = SLIP_SHARE) -> np.ndarray:
+    """True where either pad's :func:`sliding_share` reaches ``share``: part of the grip slides,
+    the rest still sticks. Shape (...) for taxels (..., 2, rows, cols, channels)."""
+    if not (0.0 < share <= 1.0):
+        raise ValueError(f"share must be in (0, 1], got {share!r}")
+    return (sliding_share(taxels, mu, ratio=ratio) >= share).any(axis=-1)
+
+
 def face_footprints(rest_x: np.ndarray, surface: np.ndarray, offsets: np.ndarray, half_width: float,
                     half_height: float) -> np.ndarray:  # fmt: skip
     """(N, 2) half extents along y and z of the face cell each particle stands for: the builder
@@ -313,5 +351,6 @@ def face_footprints(rest_x: np.ndarray, surface: np.ndarray, offsets: np.ndarray
     return out
 
 
-__all__ = ["INNER_NORMAL", "MAX_TAXELS", "TAXEL_CHANNELS", "TaxelGrid", "bin_contacts", "bin_loads", "face_footprints",
+__all__ = ["INNER_NORMAL", "MAX_TAXELS", "SLIP_RATIO", "SLIP_SHARE", "TAXEL_CHANNELS", "TaxelGrid", "bin_contacts",
+           "bin_loads", "face_footprints", "sliding_share", "slip_warning",
            "tissue_loads", "tissue_shear"]  # fmt: skip

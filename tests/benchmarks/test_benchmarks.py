@@ -209,6 +209,21 @@ def test_incipient_slip_compares_the_pads_with_coulomb(tmp_path):
     assert (tmp_path / "slip.png").stat().st_size > 10_000
 
 
+def test_slip_warning_tables_the_lead_per_kind_and_writes_every_run(tmp_path):
+    out = _run_plain("slip_warning.py", "--kinds", "tissue,rigid", "--rates", "2", "--squeezes", "2,4",
+                     "--frictions", "0.9", "--csv", str(tmp_path / "slip.csv"))  # fmt: skip
+    rows = {line.split(" | ")[0].lstrip("| "): line.split(" | ") for line in out.splitlines()
+            if line.startswith(("| tissue", "| rigid"))}  # fmt: skip
+    assert set(rows) == {"tissue", "rigid"}, out
+    assert rows["tissue"][2] == "2" and rows["tissue"][6].rstrip(" |") == "0", out  # warned twice, never far from slip
+    assert rows["rigid"][6].rstrip(" |") == "2", out  # on from the hold in both
+    with open(tmp_path / "slip.csv", newline="") as f:
+        runs = list(csv.DictReader(f))
+    assert len(runs) == 4 and {r["kind"] for r in runs} == {"tissue", "rigid"}
+    tissue = [r for r in runs if r["kind"] == "tissue"]
+    assert all(0.18 <= float(r["lead_share"]) <= 0.37 for r in tissue), tissue  # measured 0.36 and 0.20
+
+
 def test_taxel_field_pictures_the_hold_and_the_slip(tmp_path):
     out = _run_plain("taxel_field.py", "--rows", "4", "--cols", "3", "--plot", str(tmp_path / "field.png"))
     import re
