@@ -224,6 +224,16 @@ def test_slip_warning_tables_the_lead_per_kind_and_writes_every_run(tmp_path):
     assert all(0.18 <= float(r["lead_share"]) <= 0.37 for r in tissue), tissue  # measured 0.36 and 0.20
 
 
+def test_slip_warning_grip_reads_the_margin_of_a_held_tissue_grip():
+    out = _run_plain("slip_warning_grip.py", "--ids", "SoftGraspGrip-v4", "--seeds", "2", "--factors", "1.2,2")
+    rows = [line.split(" | ") for line in out.splitlines() if line.startswith("| SoftGraspGrip-v4")]
+    assert [r[1] for r in rows] == ["1.2", "2"], out
+    near, far = rows
+    # measured over 12 seeds: 9 of 9 holds at 1.2 x the least read "on", 1 of 12 at 2 x
+    assert near[6] == near[7].rstrip(" |") and int(near[6]) >= 1, out
+    assert far[7].rstrip(" |") == "0" and far[3] == "0", out
+
+
 def test_taxel_field_pictures_the_hold_and_the_slip(tmp_path):
     out = _run_plain("taxel_field.py", "--rows", "4", "--cols", "3", "--plot", str(tmp_path / "field.png"))
     import re
