@@ -6,8 +6,10 @@ soft fingers and the rigid peers, over the same seeds.
     PYTHONPATH=. python benchmarks/grip_force.py --models runs/SoftGraspGrip-v3_sac_0   # a learned policy
 
 Policies: the tactile one (softgrasp_env.policies.grip.TactileGripPolicy: lower the squeeze until
-the pads feel slip, then a margin), force-blind constant grips (ConstantGripPolicy at several
-forces), and open loop (the tactile policy's actions of the first seed, replayed on every seed).
+the pads feel slip, then a margin), the shear-lag one (ShearLagGripPolicy: lower it until the pads
+feel slip coming - the shear of the contact's edges lagging its centre's - then a margin over the
+least squeeze that the mu read off the sliding edges gives), force-blind constant grips
+(ConstantGripPolicy at several forces), and open loop (the tactile policy's actions of the first seed, replayed on every seed).
 ``--models`` evaluates runs saved by train.py instead (deterministic, on their own env and kwargs,
 the same seeds). Per id and policy it prints the success rate, how often the cylinder was held through the carry
 whatever the squeeze, and the carry's mean squeeze over the least that holds (median, and the
@@ -25,7 +27,7 @@ import gymnasium as gym
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
-from softgrasp_env.policies.grip import ConstantGripPolicy, TactileGripPolicy
+from softgrasp_env.policies.grip import ConstantGripPolicy, ShearLagGripPolicy, TactileGripPolicy
 from softgrasp_env.tasks import CarryTest
 
 GRIP_IDS = ("SoftGraspGrip-v4", "SoftGraspGrip-v3", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3")
@@ -68,8 +70,8 @@ def main() -> None:
     parser.add_argument("--seeds", type=int, default=50)
     parser.add_argument("--first-seed", type=int, default=1000)
     parser.add_argument("--ids", nargs="+", default=list(GRIP_IDS), choices=GRIP_IDS)
-    parser.add_argument("--policies", nargs="+", default=["tactile", "constant", "open-loop"],
-                        choices=["tactile", "constant", "open-loop"])  # fmt: skip
+    parser.add_argument("--policies", nargs="+", default=["tactile", "shear-lag", "constant", "open-loop"],
+                        choices=["tactile", "shear-lag", "constant", "open-loop"])  # fmt: skip
     parser.add_argument("--models", nargs="+", default=None, help="train.py runs to evaluate instead")
     parser.add_argument("--json", default=None, help="write every episode here")
     args = parser.parse_args()
@@ -94,6 +96,8 @@ def main() -> None:
         plans = []
         if "tactile" in args.policies or "open-loop" in args.policies:
             plans.append(("tactile", tactile, None))
+        if "shear-lag" in args.policies:
+            plans.append(("shear-lag", ShearLagGripPolicy(env), None))
         if "constant" in args.policies:
             plans += [(f"constant {f:g} N", ConstantGripPolicy(env, f), None) for f in CONSTANT_FORCES]
         for name, policy, _ in plans:

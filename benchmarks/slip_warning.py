@@ -16,8 +16,13 @@ slip load, where the grip holds with twice the margin it needs: a detector on th
 nothing, and the rigid pads' saturated contact points keep it on from the hold); "on far from
 slip" counts the runs where it was on anywhere below half the slip load (false alarms).
 
-The band: ramp rates x squeezes per finger x friction coefficients (mu_s = mu_k, the detector told
-the true mu). Kinds: ``tissue`` the v4 soft pads (Coulomb per contact: partial slip), ``peer`` the
+A second detector on the same readings does not need mu (fingers/tactile.py ``shear_lag_warning``:
+on either pad, the least sheared of the pressed taxels lags the most sheared by at least 25 %
+along the pad's mean shear - the slip annulus falling behind the stick zone); its columns are
+prefixed ``lag_``. It reads the tissue's shear, which rigid pads do not have.
+
+The band: ramp rates x squeezes per finger x friction coefficients (mu_s = mu_k, the mu detector
+told the true mu). Kinds: ``tissue`` the v4 soft pads (Coulomb per contact: partial slip), ``peer`` the
 rigid fingers with torsional friction (pybullet's contact points binned onto the same taxels),
 ``rigid`` the bare rigid twin.
 """
@@ -34,7 +39,7 @@ import numpy as np
 
 from softgrasp_env.accuracy import shear_under_load
 from softgrasp_env.fingers import TorsionalRigidConfig
-from softgrasp_env.fingers.tactile import SLIP_RATIO, SLIP_SHARE, slip_warning
+from softgrasp_env.fingers.tactile import SHEAR_LAG, SLIP_RATIO, SLIP_SHARE, shear_lag_warning, slip_warning
 from softgrasp_env.presets import v4_tissue
 from softgrasp_env.scene import GraspScene, SceneConfig
 
@@ -72,12 +77,14 @@ def measure(kind: str, rate: float, squeeze: float, mu: float) -> dict[str, floa
         rec = shear_under_load(scene, rate=rate, every=EVERY, rows=4, cols=4, max_load=3.0 * mu * squeeze)
     finally:
         scene.close()
-    warn = slip_warning(rec.fields, mu)
-    start, far = warning_lead(rec.load, warn, rec.slip_load)
-    lead = rec.slip_load - start
-    return {"kind": kind, "rate_N_s": rate, "squeeze_N": squeeze, "mu": mu, "coulomb_N": 2.0 * mu * squeeze,
-            "slip_load_N": rec.slip_load, "warning_load_N": start, "lead_share": lead / rec.slip_load,
-            "lead_s": lead / rate, "on_far_from_slip": far, "samples": len(rec.load)}  # fmt: skip
+    row: dict[str, float | str] = {"kind": kind, "rate_N_s": rate, "squeeze_N": squeeze, "mu": mu,
+                                   "coulomb_N": 2.0 * mu * squeeze, "slip_load_N": rec.slip_load}  # fmt: skip
+    for prefix, warn in (("", slip_warning(rec.fields, mu)), ("lag_", shear_lag_warning(rec.fields))):
+        start, far = warning_lead(rec.load, warn, rec.slip_load)
+        lead = rec.slip_load - start
+        row |= {f"{prefix}warning_load_N": start, f"{prefix}lead_share": lead / rec.slip_load,
+                f"{prefix}lead_s": lead / rate, f"{prefix}on_far_from_slip": far}  # fmt: skip
+    return row | {"samples": len(rec.load)}
 
 
 def _floats(text: str) -> list[float]:
@@ -99,7 +106,8 @@ def main(argv: list[str] | None = None) -> int:
     rates, squeezes, frictions = _floats(ns.rates), _floats(ns.squeezes), _floats(ns.frictions)
     if not all(v > 0 for v in rates + squeezes + frictions):
         parser.error("rates, squeezes and frictions must be > 0")
-    print(f"detector: either pad with >= {SLIP_SHARE:.0%} of its pressure on taxels at >= {SLIP_RATIO:g} mu; "
+    print(f"detectors: mu, either pad with >= {SLIP_SHARE:.0%} of its pressure on taxels at >= {SLIP_RATIO:g} mu; "
+          f"lag, either pad's shear lag >= {SHEAR_LAG:g}; "
           f"{len(rates)} rates x {len(squeezes)} squeezes x {len(frictions)} frictions per kind")  # fmt: skip
     rows = []
     for kind in kinds:
@@ -109,19 +117,21 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{kind:<7} {rate:>4g} N/s {squeeze:>4g} N mu {mu:<4g} slip {row['slip_load_N']:6.2f} N "
                   f"({row['slip_load_N'] / row['coulomb_N']:.2f} x Coulomb), warned at {row['warning_load_N']:6.2f} N: "
                   f"lead {row['lead_share']:6.1%} of the load, {row['lead_s'] * 1e3:6.0f} ms; "
-                  f"{'on far from slip' if row['on_far_from_slip'] else 'quiet far from slip'}", flush=True)  # fmt: skip
+                  f"{'on far from slip' if row['on_far_from_slip'] else 'quiet far from slip'}; lag detector: lead "
+                  f"{row['lag_lead_share']:6.1%}, {row['lag_lead_s'] * 1e3:6.0f} ms, "
+                  f"{'on far from slip' if row['lag_on_far_from_slip'] else 'quiet far from slip'}", flush=True)  # fmt: skip
     print()
-    print("| kind | runs | warned (lead >= 20 % of the load or >= 100 ms) | lead, share of the slip load: median "
+    print("| detector | kind | runs | warned (lead >= 20 % of the load or >= 100 ms) | lead, share of the slip load: median "
           "(min - max) | lead time [ms]: median (min - max) | missed | on far from slip |")
-    print("|---|---|---|---|---|---|---|")
-    for kind in kinds:
+    print("|---|---|---|---|---|---|---|---|")
+    for (p, name), kind in itertools.product((("", "mu"), ("lag_", "shear lag")), kinds):
         mine = [r for r in rows if r["kind"] == kind]
-        share = np.array([r["lead_share"] for r in mine])
-        ms = np.array([r["lead_s"] for r in mine]) * 1e3
-        ok = sum(1 for r in mine if r["lead_share"] >= 0.2 or r["lead_s"] >= 0.1)
-        missed = sum(1 for r in mine if r["lead_share"] == 0.0)
-        far = sum(1 for r in mine if r["on_far_from_slip"])
-        print(f"| {kind} | {len(mine)} | {ok} | {np.median(share):.0%} ({share.min():.0%} - {share.max():.0%}) | "
+        share = np.array([r[f"{p}lead_share"] for r in mine])
+        ms = np.array([r[f"{p}lead_s"] for r in mine]) * 1e3
+        ok = sum(1 for r in mine if r[f"{p}lead_share"] >= 0.2 or r[f"{p}lead_s"] >= 0.1)
+        missed = sum(1 for r in mine if r[f"{p}lead_share"] == 0.0)
+        far = sum(1 for r in mine if r[f"{p}on_far_from_slip"])
+        print(f"| {name} | {kind} | {len(mine)} | {ok} | {np.median(share):.0%} ({share.min():.0%} - {share.max():.0%}) | "
               f"{np.median(ms):.0f} ({ms.min():.0f} - {ms.max():.0f}) | {missed} | {far} |")
     if ns.csv is not None:
         ns.csv.parent.mkdir(parents=True, exist_ok=True)

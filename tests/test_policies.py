@@ -1,7 +1,9 @@
 """softgrasp_env.policies: the scripted grasp and the shipped baselines, from the package itself (the
 wheel test runs them from an install outside the checkout; here the loader's behaviour): names and
 cards without stable-baselines3, loading with it, a clear error without it, the old
-``agents.scripted`` spelling still the same class."""
+``agents.scripted`` spelling still the same class; the grip-force policy that feels slip coming
+(``ShearLagGripPolicy``: it holds, its settings are checked). The other grip policies' measures are in
+tests/tasks/test_grip.py."""
 
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ import pytest
 
 from softgrasp_env import policies
 from softgrasp_env.policies import ScriptedGraspPolicy, baseline_card, baseline_path, list_baselines, load_baseline
+from softgrasp_env.policies.grip import ShearLagGripPolicy
 from tests.helpers import run_episode
 
 
@@ -127,3 +130,58 @@ def test_the_scripted_policy_is_one_class_under_both_names():
         assert action.shape == (4,) and env.action_space.contains(action)
     finally:
         env.close()
+
+
+def _grip_episode(env, policy, seed: int) -> dict:
+    obs, info = env.reset(seed=seed)
+    policy.reset()
+    for _ in range(env.spec.max_episode_steps):
+        obs, _, terminated, truncated, info = env.step(policy(obs))
+        if terminated or truncated:
+            break
+    return info
+
+
+@pytest.mark.parametrize("seed", [1000, 1001])
+def test_the_shear_lag_grip_feels_slip_coming_and_holds_lightly(make_env, seed):
+    """On the v4 tissue the lag of the contact's edges warns while the grip still holds; the sliding
+    edges read mu (the policy is not told it) and the grip holds with 1.3 x the least that reading
+    gives. Measured: seed 1000 (mu 0.65, least 1.77 N) warned 1.75 s in, read 0.88 mu, carried at
+    1.52 x the least that holds; seed 1001 (mu 0.66, least 0.50 N) 2.00 s, 0.88 mu, 1.47 x
+    (benchmarks/grip_force.py: 44 of 50 seeds, median 1.45 x)."""
+    env = make_env("SoftGraspGrip-v4")
+    policy = ShearLagGripPolicy(env)
+    info = _grip_episode(env, policy, seed)
+    assert info["is_success"], info
+    assert policy.phase == "hold" and np.isfinite(policy.fired_lag) and policy.fired_lag >= policy.rise
+    mu = env.unwrapped.scene.config.tissue.friction_static
+    assert 0.75 < policy.mu_read / mu < 1.05, policy.mu_read / mu
+    assert 1.2 < info["carry_squeeze"] / info["least_squeeze"] < 1.8
+
+
+def test_the_shear_lag_grip_on_rigid_pads_falls_back_to_gross_slip(make_env):
+    """The rigid twin's pads do not shear: the lag never warns, and the policy holds 1.5 x the last
+    squeeze that held once the traction falls below the weight (measured: seed 1002 carried at
+    1.64 x the least)."""
+    env = make_env("SoftGraspGripRigid-v3")
+    policy = ShearLagGripPolicy(env)
+    info = _grip_episode(env, policy, 1002)
+    assert np.isnan(policy.fired_lag) and policy.phase == "hold"
+    assert info["is_success"], info
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"rise": 0.0}, "rise"), ({"rise": 1.5}, "rise"), ({"margin": 0.9}, "margin"),
+    ({"slip_margin": 0.5}, "slip_margin"), ({"wait": 0}, "wait"), ({"step": 1.0}, "step"),
+    ({"start_force": 7.0}, "start_force"),
+])  # fmt: skip
+def test_bad_shear_lag_grip_settings_are_named(make_env, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        ShearLagGripPolicy(make_env("SoftGraspGripRigid-v3"), **kwargs)
+
+
+def test_the_shear_lag_grip_needs_the_taxels_and_the_squeeze_action(make_env):
+    with pytest.raises(ValueError, match="tactile"):
+        ShearLagGripPolicy(make_env("SoftGraspGripRigid-v3", tactile=None))
+    with pytest.raises(ValueError, match="finger_action='force'"):
+        ShearLagGripPolicy(make_env("SoftGraspEasyRigid-v3"))

@@ -327,6 +327,94 @@ def slip_warning(taxels: np.ndarray, mu: float, *, ratio: float = SLIP_RATIO, sh
     return (sliding_share(taxels, mu, ratio=ratio) >= share).any(axis=-1)
 
 
+SHEAR_LAG = 0.25
+"""The :func:`shear_lag` at which :func:`shear_lag_warning` warns. Under a steady hold the
+v4 tissue's pads read at most 0.18 below half the slip load (the pad's own uneven shear near its
+boundary), and 0.27-0.54 at three quarters of it."""
+PRESSED_SHARE = 0.2
+"""A taxel takes part in :func:`shear_lag` when its pressure is at least this share of the pad's
+largest: the contact strip and its edges, not the bare face around it, whose shear only follows
+the tissue beside it."""
+
+
+def _check_taxels(taxels) -> np.ndarray:
+    taxels = np.asarray(taxels, dtype=np.float64)
+    if taxels.ndim < 4 or taxels.shape[-4] != 2 or taxels.shape[-1] != len(TAXEL_CHANNELS):
+        raise ValueError(f"taxels must be (..., 2, rows, cols, {len(TAXEL_CHANNELS)}), got shape {taxels.shape}")
+    if not np.isfinite(taxels).all():
+        raise ValueError("taxels must be finite (a reading with NaN or inf)")
+    return taxels
+
+
+def shear_lag(taxels: np.ndarray, *, pressed: float = PRESSED_SHARE) -> np.ndarray:
+    """Per pad, how far the least sheared of its pressed taxels lags behind the most sheared, along
+    the pad's mean shear: 1 - min / max of the taxels' shear projected on the direction of the
+    pad's summed shear, over the taxels pressed with at least ``pressed`` times the pad's largest
+    pressure; dimensionless, in [0, 1] (0: the pad shears as one; 1: a pressed taxel has not
+    sheared at all, or sheared backward). It needs neither the friction coefficient nor the load.
+
+    Why it reads slip before it happens (Cattaneo and Mindlin; Johnson, Contact Mechanics, sec.
+    7.2): under a tangential load Q below mu P, the stick zone at the contact's centre moves with
+    the object and the surface there is displaced by the whole tangential displacement, while in
+    the slip annulus at the edges, where the pressure is lowest, the surface slides back against
+    the object and is displaced less, by the slip accumulated there. The annulus grows inward as Q
+    nears mu P, so the shear field, even while the contact sticks (an elastic pad shears as one
+    layer), grows uneven across the contact: its edges lag its centre. Gross slip is Q = mu P.
+
+    ``taxels``: (2, rows, cols, channels) as the pads read (:data:`TAXEL_CHANNELS`), or a batch
+    (..., 2, rows, cols, channels). Returns (..., 2). A pad that presses nothing, or has not
+    sheared along its mean direction (the rigid kinds read no shear), reads 0: no signal, not
+    "no slip"."""
+    if not (np.isfinite(pressed) and 0.0 <= pressed <= 1.0):
+        raise ValueError(f"pressed must be a share of the pad's largest pressure in [0, 1], got {pressed!r}")
+    taxels = _check_taxels(taxels)
+    pressure = np.maximum(taxels[..., 0], 0.0)
+    shear = taxels[..., 3:5]
+    on = (pressure > 0.0) & (pressure >= pressed * pressure.max(axis=(-2, -1), keepdims=True))
+    total = (shear * on[..., None]).sum(axis=(-3, -2))
+    size = np.linalg.norm(total, axis=-1)
+    direction = total / np.where(size > 0.0, size, 1.0)[..., None]
+    along = (shear * direction[..., None, None, :]).sum(axis=-1)
+    most = np.where(on, along, -np.inf).max(axis=(-2, -1))
+    least = np.where(on, along, np.inf).min(axis=(-2, -1))
+    signal = on.any(axis=(-2, -1)) & (size > 0.0) & (most > 0.0)
+    return np.where(signal, np.clip(1.0 - least / np.where(signal, most, 1.0), 0.0, 1.0), 0.0)
+
+
+def shear_lag_warning(taxels: np.ndarray, *, lag: float = SHEAR_LAG, pressed: float = PRESSED_SHARE) -> np.ndarray:
+    """True where either pad's :func:`shear_lag` reaches ``lag`` (in (0, 1]): the edges of a
+    contact have begun to slide while its centre sticks. Unlike :func:`slip_warning` it does not
+    need mu, so a policy can use it; it reads the tissue's shear, which rigid pads do not have
+    (there it never warns). Shape (...) for taxels (..., 2, rows, cols, channels)."""
+    if not (np.isfinite(lag) and 0.0 < lag <= 1.0):
+        raise ValueError(f"lag must be in (0, 1], got {lag!r}")
+    return (shear_lag(taxels, pressed=pressed) >= lag).any(axis=-1)
+
+
+def edge_friction(taxels: np.ndarray, *, pressed: float = PRESSED_SHARE) -> np.ndarray:
+    """Per pad, the largest traction-to-pressure ratio over its pressed taxels (pressure at least
+    ``pressed`` times the pad's largest), the traction taken along the pad's summed traction;
+    dimensionless. While part of the contact slides (:func:`shear_lag_warning` on), its sliding
+    edge carries Coulomb's mu times its pressure, so this reads mu without being told it; while the
+    whole contact sticks it reads less (a lower bound). Taking the traction along the pad's net
+    traction leaves out the in-face part of the normal force on a curved contact's flanks (the
+    contact normals fan out across the strip and their in-face components cancel over the pad), which
+    would read as friction. Same ``taxels`` as :func:`shear_lag`; (..., 2), 0 for a pad that
+    presses nothing or carries no traction."""
+    if not (np.isfinite(pressed) and 0.0 <= pressed <= 1.0):
+        raise ValueError(f"pressed must be a share of the pad's largest pressure in [0, 1], got {pressed!r}")
+    taxels = _check_taxels(taxels)
+    pressure = np.maximum(taxels[..., 0], 0.0)
+    traction = taxels[..., 1:3]
+    on = (pressure > 0.0) & (pressure >= pressed * pressure.max(axis=(-2, -1), keepdims=True))
+    total = (traction * on[..., None]).sum(axis=(-3, -2))
+    size = np.linalg.norm(total, axis=-1)
+    direction = total / np.where(size > 0.0, size, 1.0)[..., None]
+    along = (traction * direction[..., None, None, :]).sum(axis=-1)
+    ratio = np.where(on, along / np.where(on, pressure, 1.0), 0.0).max(axis=(-2, -1))
+    return np.where(size > 0.0, np.maximum(ratio, 0.0), 0.0)
+
+
 def face_footprints(rest_x: np.ndarray, surface: np.ndarray, offsets: np.ndarray, half_width: float,
                     half_height: float) -> np.ndarray:  # fmt: skip
     """(N, 2) half extents along y and z of the face cell each particle stands for: the builder
@@ -351,6 +439,7 @@ def face_footprints(rest_x: np.ndarray, surface: np.ndarray, offsets: np.ndarray
     return out
 
 
-__all__ = ["INNER_NORMAL", "MAX_TAXELS", "SLIP_RATIO", "SLIP_SHARE", "TAXEL_CHANNELS", "TaxelGrid", "bin_contacts",
-           "bin_loads", "face_footprints", "sliding_share", "slip_warning",
+__all__ = ["INNER_NORMAL", "MAX_TAXELS", "PRESSED_SHARE", "SHEAR_LAG", "SLIP_RATIO", "SLIP_SHARE", "TAXEL_CHANNELS",
+           "TaxelGrid", "bin_contacts", "bin_loads", "edge_friction", "face_footprints", "shear_lag", "shear_lag_warning", "sliding_share",
+           "slip_warning",
            "tissue_loads", "tissue_shear"]  # fmt: skip

@@ -1,9 +1,9 @@
-"""Scripted policies for the grip-force task (SoftGraspGrip-v3 and its rigid twins).
+"""Scripted policies for the grip-force task (SoftGraspGrip-v4, v3 and their rigid twins).
 
-Both read only what the gripper senses (the grip ids observe neither the cylinder's pose nor its
+All read only what the gripper senses (the grip ids observe neither the cylinder's pose nor its
 motion): from the easy start around the cylinder's top they go down 3 cm with the fingers open,
 squeeze, lift the grip 6.5 cm once both fingers press, hold it there, and set the squeeze
-themselves:
+themselves (in the order of what they feel):
 
 - :class:`ConstantGripPolicy`, the force-blind baseline: one squeeze throughout. It holds every
   cylinder whose least force lies below it, and succeeds only where that least force is within
@@ -14,8 +14,11 @@ themselves:
   slip - and holds with ``margin`` times the last squeeze that held (Johansson & Westling
   1984: humans grip with a safety margin over the slip force they sense). It knows nothing of the
   episode's mass or friction: the weight it reads, the slip it feels.
+- :class:`ShearLagGripPolicy` reads the tissue pads' shear as well: it lowers the squeeze until
+  the edges of the contact lag its centre (slip on its way, before it happens), reads mu off the
+  sliding edges and holds with a margin over the least squeeze that gives.
 
-Both are stateful within an episode (``reset()`` between episodes; ``predict`` resets on SB3's
+All are stateful within an episode (``reset()`` between episodes; ``predict`` resets on SB3's
 ``episode_start``).
 """
 
@@ -23,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..fingers.tactile import edge_friction, shear_lag
 from ..observation import tactile_view
 from ..tasks.easy import EASY_START_HEIGHT
 from ..tasks.lift import MIN_GRIP_FORCE
@@ -190,4 +194,85 @@ class TactileGripPolicy(_GripPolicy):
         return self.force
 
 
-__all__ = ["ConstantGripPolicy", "TactileGripPolicy"]
+class ShearLagGripPolicy(TactileGripPolicy):
+    """Lower the squeeze until the pads feel slip coming, then hold with a margin over the least
+    squeeze the pads read (module docstring). It is told neither the cylinder's mass nor its
+    friction.
+
+    It lifts with ``start_force`` [N], reads the weight each pad carries, W, as their traction and
+    the shear lag of each pad (:func:`softgrasp_env.fingers.tactile.shear_lag`) once the lift is
+    still for ``settle`` env steps, then lowers the squeeze by ``fast`` per env step to W /
+    ``mu_min`` (no cylinder with friction at least ``mu_min`` slips above it) and by ``step`` below
+    it, judging ``wait`` env steps after each drop (after a drop the pads relax for a step and their
+    edge taxels overshoot the cone). The warning: either pad's lag has risen by ``rise`` of the way
+    from its level at the lift to 1 - the edges of the contact have begun to slide, its centre
+    still sticks (Cattaneo and Mindlin; Johnson, Contact Mechanics, sec. 7.2). The lag's level
+    carries the grasp's geometry (a contact strip off the pad's centre) and the partial slip the
+    lift locked in (a slip annulus does not stick back when the load falls: Mindlin and
+    Deresiewicz), so the policy reads its rise, not its level; a pad that lifted with a lag near 1
+    has no room to rise and does not warn. At the warning the sliding edges sit at the cone, so
+    their traction-to-pressure ratio reads mu
+    (:func:`softgrasp_env.fingers.tactile.edge_friction`, the larger of the pads'), and the squeeze
+    becomes ``margin`` x W / mu read (Coulomb's least for the weight the pad carries), at most
+    ``margin`` times the squeeze at the warning. If the traction falls ``tolerance`` (relative)
+    below W first - gross slip, the warning missed - it holds ``slip_margin`` times the last
+    squeeze that held, as :class:`TactileGripPolicy` does. At ``deadline`` [s] (default: just
+    before the carry) the search stops where it is. After the episode: ``fired_lag`` (the rise that
+    warned, NaN if none) and ``mu_read``.
+
+    On rigid pads, which do not shear, it never warns and falls back to the gross-slip rule."""
+
+    def __init__(self, env, *, start_force: float = 4.0, fast: float = 0.8, step: float = 0.85, wait: int = 1,
+                 settle: int = 2, rise: float = 0.4, margin: float = 1.3, slip_margin: float = 1.5,
+                 tolerance: float = 0.1, mu_min: float = 0.45, deadline: float | None = None, **kwargs) -> None:  # fmt: skip
+        owner = "ShearLagGripPolicy"
+        self.rise = check_range("rise", rise, 0.0, 1.0, lo_open=True, owner=owner)
+        self.slip_margin = check_range("slip_margin", slip_margin, 1.0, 10.0, owner=owner)
+        check_int("wait", wait, 1, 100, owner=owner)  # at least one step for the pads to settle after a drop
+        super().__init__(env, start_force=start_force, fast=fast, step=step, wait=wait, settle=settle,
+                         tolerance=tolerance, mu_min=mu_min, margin=margin, deadline=deadline, **kwargs)  # fmt: skip
+
+    def reset(self) -> None:
+        super().reset()
+        self.lifted_lag = np.zeros(2)
+        self.since_drop = 0
+        self.fired_lag = np.nan
+        self.mu_read = np.nan
+
+    def squeeze(self, obs: np.ndarray) -> float:
+        i = self.index
+        if self.phase == "lift":
+            self.still = self.still + 1 if self.lifted(obs) else 0
+            if self.still >= self.settle:
+                self.phase, self.weight = "lower", self.traction(obs)
+                self.floor = self.weight / self.mu_min
+                self.lifted_lag = shear_lag(tactile_view(obs, self.names))
+        elif self.phase == "lower":
+            self.since_drop += 1
+            if obs[i["time"]] >= self.deadline:
+                self.phase = "hold"
+            elif self.force > self.floor:  # above W / mu_min nothing of the task slips: no need to judge
+                self.force = max(self.force * self.fast, self.floor * (1.0 - 1e-9))
+                self.held, self.since_drop = self.force, 0
+            elif self.since_drop > self.wait:  # the pads have settled since the last drop: judge
+                taxels = tactile_view(obs, self.names)
+                # the lag's rise as a share of the way from its level at the lift to 1 (a pad that
+                # lifted near 1 has little left to rise and never warns)
+                rise = (shear_lag(taxels) - self.lifted_lag) / np.maximum(1.0 - self.lifted_lag, 1e-9)
+                if self.traction(obs) < (1.0 - self.tolerance) * self.weight:  # gross slip came first
+                    self.phase, self.force = "hold", min(self.slip_margin * self.held, self.finger_force)
+                elif (rise >= self.rise).any():  # the edges slide: slip is coming
+                    # the sliding edges sit at the cone: they read mu, and the least squeeze that
+                    # holds the weight a pad carries, W_pad, is W_pad / mu (Coulomb)
+                    self.mu_read = float(edge_friction(taxels).max())
+                    least = self.weight / self.mu_read if self.mu_read > 0.0 else np.inf
+                    self.phase, self.fired_lag = "hold", float(rise.max())
+                    self.force = min(self.margin * least, self.margin * self.force, self.finger_force)
+                else:  # this squeeze held: lower it
+                    self.held = self.force
+                    self.force *= self.step
+                    self.since_drop = 0
+        return self.force
+
+
+__all__ = ["ConstantGripPolicy", "ShearLagGripPolicy", "TactileGripPolicy"]

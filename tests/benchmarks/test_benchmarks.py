@@ -212,16 +212,20 @@ def test_incipient_slip_compares_the_pads_with_coulomb(tmp_path):
 def test_slip_warning_tables_the_lead_per_kind_and_writes_every_run(tmp_path):
     out = _run_plain("slip_warning.py", "--kinds", "tissue,rigid", "--rates", "2", "--squeezes", "2,4",
                      "--frictions", "0.9", "--csv", str(tmp_path / "slip.csv"))  # fmt: skip
-    rows = {line.split(" | ")[0].lstrip("| "): line.split(" | ") for line in out.splitlines()
-            if line.startswith(("| tissue", "| rigid"))}  # fmt: skip
-    assert set(rows) == {"tissue", "rigid"}, out
-    assert rows["tissue"][2] == "2" and rows["tissue"][6].rstrip(" |") == "0", out  # warned twice, never far from slip
-    assert rows["rigid"][6].rstrip(" |") == "2", out  # on from the hold in both
+    rows = {tuple(line.split(" | ")[:2]): line.split(" | ")[1:] for line in out.splitlines()
+            if line.startswith(("| mu |", "| shear lag |"))}  # fmt: skip
+    rows = {(d.lstrip("| "), k): r for (d, k), r in rows.items()}
+    assert set(rows) == {(d, k) for d in ("mu", "shear lag") for k in ("tissue", "rigid")}, out
+    assert rows["mu", "tissue"][2] == "2" and rows["mu", "tissue"][6].rstrip(" |") == "0", out  # warned twice, never far
+    assert rows["mu", "rigid"][6].rstrip(" |") == "2", out  # on from the hold in both
+    assert rows["shear lag", "tissue"][2] == "2" and rows["shear lag", "tissue"][6].rstrip(" |") == "0", out
+    assert rows["shear lag", "rigid"][5] == "2", out  # no shear to read: missed both
     with open(tmp_path / "slip.csv", newline="") as f:
         runs = list(csv.DictReader(f))
     assert len(runs) == 4 and {r["kind"] for r in runs} == {"tissue", "rigid"}
     tissue = [r for r in runs if r["kind"] == "tissue"]
     assert all(0.18 <= float(r["lead_share"]) <= 0.37 for r in tissue), tissue  # measured 0.36 and 0.20
+    assert all(0.24 <= float(r["lag_lead_share"]) <= 0.45 for r in tissue), tissue  # measured 0.38 and 0.27
 
 
 def test_slip_warning_grip_reads_the_margin_of_a_held_tissue_grip():
@@ -339,11 +343,12 @@ def test_grip_force_runs_every_policy_and_writes_each_episode(tmp_path):
                           timeout=900, env={"PYTHONPATH": str(ROOT), "PATH": ""}, check=False)  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-2000:]
     lines = [line for line in proc.stdout.splitlines() if line.startswith("SoftGraspGripRigid-v3")]
-    assert [line.split()[1] for line in lines] == ["tactile", "open", "constant", "constant", "constant", "constant"]
+    assert [line.split()[1] for line in lines] == ["tactile", "open", "shear-lag", "constant", "constant", "constant",
+                                                   "constant"]  # fmt: skip
     import json
 
     runs = json.loads(out.read_text())["runs"]
-    assert len(runs) == 6 and all(len(r) == 3 for r in runs.values())
+    assert len(runs) == 7 and all(len(r) == 3 for r in runs.values())
     # the tactile policy holds all three seeds within the factor; 3 N holds them all, and succeeds
     # exactly where that is within twice the least
     assert all(r["success"] for r in runs["SoftGraspGripRigid-v3 tactile"])
