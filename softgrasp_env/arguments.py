@@ -43,6 +43,7 @@ from .tasks.carry import (
     sway_limits_error,
 )
 from .tasks.goal import DISTANCE_THRESHOLD, GOAL_HEIGHT_RANGE
+from .tasks.grip import SQUEEZE_REFERENCES
 from .tasks.reach import APPROACH
 from .validation import (
     check_bool,
@@ -59,6 +60,8 @@ MAX_ARM_STEP = 1.0 / 120.0
 """Farthest the arm's target may move in one physics step, arm_speed * dt [m]: 3.3 cm tore
 the tissue in 2 of 5 probe episodes, 1.7 cm in 2 of 8 (1/60 s with the strongest fingers); the
 default moves 0.6 mm."""
+MAX_TACTILE_HISTORY = 16
+"""Most taxel frames an observation keeps (``tactile_history``): 0.8 s at the default 20 Hz."""
 GRIP_TOP_MARGIN = 0.01
 """The start's grip point stays this far below the top of the arm's workspace [m]."""
 MIN_CYLINDER_RADIUS = 0.005
@@ -231,10 +234,15 @@ KEYWORDS: tuple[Keyword, ...] = (
         "Success needs the cylinder held at every step of the carry and its in-hand slide at most this [m]"),
     # grip_force
     _kw("squeeze_weight", "grip_force", "float", 0.0,
-        "The grip-force task (SoftGraspGrip-v3: 0.5): the reward charges squeeze_weight * mean finger force / "
-        "finger_force per step (info['reward_terms']['squeeze']); needs carry=True"),
+        "The grip-force task (SoftGraspGrip-v5: 0.3, v4: 0.5): the reward charges squeeze_weight * mean finger "
+        "force / the reference of squeeze_reference per step (info['reward_terms']['squeeze']); needs carry=True"),
+    _kw("squeeze_reference", "grip_force", "str", "finger_force",
+        "What the squeeze charge measures the squeeze in: 'finger_force' (SoftGraspGrip-v4 and before: its share"
+        " of the finger's full force, the same for every cylinder) or 'least' (SoftGraspGrip-v5: in least "
+        "forces, m g / (2 mu_s) with this episode's mass and friction, so a squeeze 1.3 x the least costs the "
+        "same on a light cylinder as on a heavy one)"),
     _kw("squeeze_factor", "grip_force", "float", None,
-        "The grip-force task (SoftGraspGrip-v3: 2): success also needs the carry's mean squeeze at most this many"
+        "The grip-force task (SoftGraspGrip-v5: 2): success also needs the carry's mean squeeze at most this many"
         " times the least force that holds the cylinder through it (Coulomb, with its measured accelerations; "
         "info['carry_squeeze'], info['least_squeeze']); needs carry=True. None: off"),
     # observation
@@ -242,6 +250,11 @@ KEYWORDS: tuple[Keyword, ...] = (
         "(rows, cols): the observation ends with each pad's taxels on a rows x cols grid over the core's inner "
         "face, five per taxel: pressure and traction along y, z [Pa] and the tissue's shear along y, z [m] (0 for"
         " rigid pads); `softgrasp_env.observation.tactile_view` reshapes them. None: no tactile entries"),
+    _kw("tactile_history", "observation", "int", 1,
+        "Taxel frames in the observation, this env step's and the k - 1 before it (needs `tactile`): each earlier"
+        " frame's entries follow the current one's, tactile_past<d>_<left/right>_r<row>_c<col>_<channel> d env "
+        "steps back (a new episode's first observation repeats its frame); "
+        "`softgrasp_env.observation.tactile_frames` reshapes them. A slip is a change: one frame does not show it"),
     _kw("observe_object", "observation", "bool", True,
         "False: the observation leaves out the cylinder's pose and motion (cyl_rel, cyl_axis, cyl_v, cyl_w, "
         "lift), keeping what the gripper's own sensors give - its pose and velocity, the fingers' gap and forces,"
@@ -475,11 +488,15 @@ class GripForceConfig:
 
     squeeze_weight: float = 0.0
     squeeze_factor: float | None = None
+    squeeze_reference: str = "finger_force"
+    """The charge's unit of squeeze: the finger's full force, or the episode's static least force
+    (tasks.grip.SQUEEZE_REFERENCES)."""
 
     def __post_init__(self) -> None:
         check_range("squeeze_weight", self.squeeze_weight, 0.0, 10.0)
         if self.squeeze_factor is not None:
             check_range("squeeze_factor", self.squeeze_factor, 1.0, 100.0)
+        check_choice("squeeze_reference", self.squeeze_reference, SQUEEZE_REFERENCES)
 
     @property
     def on(self) -> bool:
@@ -496,15 +513,21 @@ class ObservationConfig:
     """(rows, cols) of each pad's taxel grid, or None."""
     observe_shape: bool = False
     """Whether the observation describes the object's shape (its kind and extents)."""
+    tactile_history: int = 1
+    """Taxel frames in the observation: this env step's and the ``tactile_history - 1`` before it."""
 
     def __post_init__(self) -> None:
         check_bool("observe_object", self.observe_object)
         check_bool("observe_shape", self.observe_shape)
+        check_int("tactile_history", self.tactile_history, 1, MAX_TACTILE_HISTORY)
         if self.tactile is not None:
             if not isinstance(self.tactile, tuple) or len(self.tactile) != 2:
                 raise ValueError(f"tactile must be (rows, cols) or None, got {self.tactile!r}")
             check_int("tactile[0] (rows)", self.tactile[0], 1, MAX_TAXELS)
             check_int("tactile[1] (cols)", self.tactile[1], 1, MAX_TAXELS)
+        elif self.tactile_history > 1:
+            raise ValueError(f"tactile_history={self.tactile_history!r} keeps earlier taxel frames: give tactile=(rows, "
+                             "cols) too")  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -668,10 +691,10 @@ class EnvArguments:
             lift=lift,
             ranges=ranges,
             carry_test=carry,
-            grip_force=GripForceConfig(v["squeeze_weight"], v["squeeze_factor"]),
+            grip_force=GripForceConfig(v["squeeze_weight"], v["squeeze_factor"], v["squeeze_reference"]),
             observation=ObservationConfig(v["observe_object"], _tuple(v["tactile"], integers=True),
                                           _given(v["observe_shape"], v["object"] is not None or
-                                                 bool(ranges.object_scale))),
+                                                 bool(ranges.object_scale)), v["tactile_history"]),
             camera=CameraConfig(v["render_width"], v["render_height"], v["render_camera"], v["camera_distance"],
                                 v["camera_yaw"], v["camera_pitch"], _tuple(v["camera_target"])),
         )  # fmt: skip
@@ -697,8 +720,8 @@ _FLAT: dict[str, tuple[str, str]] = {
     "carry": ("carry_test", "on"),
     "carry_start": ("carry_test", "start_time"),
     **{f"carry_{a}": ("carry_test", a) for a in ("duration", "frequency", "acceleration", "slide_limit")},
-    **{a: ("grip_force", a) for a in ("squeeze_weight", "squeeze_factor")},
-    **{a: ("observation", a) for a in ("observe_object", "tactile", "observe_shape")},
+    **{a: ("grip_force", a) for a in ("squeeze_weight", "squeeze_factor", "squeeze_reference")},
+    **{a: ("observation", a) for a in ("observe_object", "tactile", "observe_shape", "tactile_history")},
     "render_width": ("camera", "width"), "render_height": ("camera", "height"), "render_camera": ("camera", "mode"),
     **{f"camera_{a}": ("camera", a) for a in ("distance", "yaw", "pitch", "target")},
 }  # fmt: skip
@@ -847,7 +870,7 @@ class EnvPlan:
         if args.observation.tactile is not None:
             rows, cols = args.observation.tactile
             grid = TaxelGrid(int(rows), int(cols), float(fh[1]), float(fh[2]))
-            names = names + tactile_names(grid.rows, grid.cols)
+            names = names + tactile_names(grid.rows, grid.cols, args.observation.tactile_history)
         return cls(args, start, substeps, scene, Workspace.of(scene), names, grid)
 
     def make_task(self) -> Task:
@@ -867,7 +890,7 @@ class EnvPlan:
         if not grip.on:
             return test
         return GripForceTask(test, squeeze_weight=grip.squeeze_weight, squeeze_factor=grip.squeeze_factor,
-                             finger_force=control.finger_force)  # fmt: skip
+                             finger_force=control.finger_force, squeeze_reference=grip.squeeze_reference)  # fmt: skip
 
     def make_actions(self) -> GripperActions:
         c = self.args.control

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+from dataclasses import replace
 from typing import Any
 
 import gymnasium as gym
@@ -121,6 +122,7 @@ class SoftGraspEnv(gym.Env):
     | then | shape_<kind> | only with ``observe_shape`` (on when ``object=`` or ``object_scale_range`` is given): the object's kind, one-hot over cylinder, sphere, box, capsule, cone, elliptic, hull |
     | then | shape_extent_x/y/z | only with ``observe_shape``: the object's half extents at rest (half its bounding box) [m] |
     | then | tactile_<left/right>_r<row>_c<col>_<channel> | only with ``tactile=(rows, cols)``: each pad's taxels over its core's inner face, row 0 at the top, columns from -y to +y, five channels per taxel - pressure, traction_y, traction_z [Pa] and the tissue's shear_y, shear_z [m] (0 for rigid pads; core frame); ``softgrasp_env.observation.tactile_view`` gives the (2, rows, cols, 5) grid; unbounded |
+    | then | tactile_past<d>_<left/right>_r<row>_c<col>_<channel> | only with ``tactile_history=k`` > 1 (the grip ids' v5: 3): the taxels of d env steps before, d = 1 .. k - 1, as above (a new episode's first observation repeats its own); ``softgrasp_env.observation.tactile_frames`` gives the (k, 2, rows, cols, 5) frames; unbounded |
 
     The forces are reported, not capped: the arm (40 N) can press a finger onto
     the cylinder far harder than the motors squeeze.
@@ -219,15 +221,23 @@ class SoftGraspEnv(gym.Env):
     at ``converged`` (the package's documentation: Finger kinds, the tissue's settings).
 
     ## Grip-force task
-    The grip ids (``SoftGraspGrip-v4``, ``SoftGraspGrip-v3``, ``SoftGraspGripRigid-v3``, ``SoftGraspGripRigidTorsion-v3``)
+    The grip ids (``SoftGraspGrip-v5``, ``SoftGraspGripRigid-v4``, ``SoftGraspGripRigidTorsion-v4``;
+    the versions before: ``SoftGraspGrip-v4``, ``SoftGraspGripRigid-v3``, ``SoftGraspGripRigidTorsion-v3``)
     ask for the least squeeze that holds. They take the easy start with the carry test; the
     action's last entry is the squeeze itself (``finger_action="force"``, up to ``finger_force`` =
     6 N); the cylinder's mass (0.17 kg × U(1 ± 0.75)) and every friction (× U(1 ± 0.45)) are drawn
     per episode and not observed, so the least force that holds spans 0.16-3.0 N; the observation
     leaves out the cylinder (``observe_object=False``) and adds a 4 × 4 taxel grid on each pad
-    (``tactile=(4, 4)``). The reward adds ``squeeze = -squeeze_weight * mean(force_left,
-    force_right) / finger_force`` (``squeeze_weight`` 0.5), its own term in
-    ``info["reward_terms"]``. Success also needs the carry's mean squeeze ``info["carry_squeeze"]``
+    (``tactile=(4, 4)``). The reward adds a squeeze charge, its own term in
+    ``info["reward_terms"]``: on v5 (the rigid kinds' v4) ``squeeze = -0.3 * mean(force_left,
+    force_right) / F_least`` with ``F_least = m g / (2 mu_s)`` of the episode's cylinder
+    (``squeeze_reference="least"``, ``squeeze_weight`` 0.3), so a grip margin costs the same on a
+    light cylinder as on a heavy one, and the observation keeps the taxels of the last three env
+    steps (``tactile_history=3``: a slip is a change, one frame does not show it). Over constant
+    grips its expected return is highest from 1.2 to 1.5 times the least on the tissue (the
+    package's documentation: where the grip reward peaks). The versions before charge ``0.5 *
+    mean(force_left, force_right) / finger_force``, whose optimum on the tissue sits at the
+    success bound, 2 x the least. Success also needs the carry's mean squeeze ``info["carry_squeeze"]``
     at most ``squeeze_factor`` (2) times ``info["least_squeeze"]``, the least force per finger that
     holds this cylinder through this carry: Coulomb, ``m max|a - g| / (2 mu_s)`` across the jaw axis
     with the cylinder's accelerations over each env step of the carry (both 0 before it;
@@ -275,6 +285,9 @@ class SoftGraspEnv(gym.Env):
     step 99).
 
     ## Version history
+    - v5 of SoftGraspGrip (v4 of its rigid kinds): the squeeze charged in least forces
+      (``squeeze_reference="least"``, weight 0.3) and three taxel frames in the observation
+      (``tactile_history=3``); the physics is v4's (and v3's for the rigid kinds).
     - v4 (the soft ids; the goal id's v5): the v3 task on the v4 tissue - the continuum group
       energy with hourglass control, Coulomb's law per contact, element layers as thick as the
       particle spacing (The tissue and its resolution). The rigid kinds have no tissue and stay v3.
@@ -328,6 +341,8 @@ class SoftGraspEnv(gym.Env):
         self.scene: GraspScene | None = None
         self._renderer = None
         self._forces = np.zeros(2)
+        self._taxel_frames: np.ndarray | None = None
+        """(tactile_history, 2, rows, cols, channels) the last taxel frames, this env step's first."""
         self._last: Reading | None = None
         self._reset_record: tuple[dict, dict] | None = None
         self._actions: list[np.ndarray] = []
@@ -424,6 +439,7 @@ class SoftGraspEnv(gym.Env):
         if self._renderer is not None:
             self._renderer.invalidate()
         self._forces = np.zeros(2)
+        self._taxel_frames = None  # a new episode's first reading fills them (_read)
         self.task.begin(self.scene, self.np_random)
 
     def _simulate(self, act: np.ndarray) -> bool:
@@ -464,7 +480,18 @@ class SoftGraspEnv(gym.Env):
         return privileged(self._last, self.scene.config)
 
     def _read(self) -> Reading:
-        return read(self.scene, self._forces, self.plan.taxel_grid)
+        """The scene now; with ``tactile_history`` k > 1 the reading carries the k - 1 taxel frames
+        before it (each env step reads once: reset, every step that did not diverge, and the replay
+        of a copy, so the frames follow the env steps)."""
+        reading = read(self.scene, self._forces, self.plan.taxel_grid)
+        frames = self.args.observation.tactile_history
+        if frames > 1:
+            if self._taxel_frames is None:  # an episode's first frame stands for the ones before it
+                self._taxel_frames = np.repeat(reading.tactile[None], frames, axis=0)
+            else:
+                self._taxel_frames = np.concatenate((reading.tactile[None], self._taxel_frames[:-1]))
+            reading = replace(reading, tactile_past=self._taxel_frames[1:].copy())
+        return reading
 
     def _info(self, reading: Reading, outcome: Outcome | None, *, clipped: bool) -> dict[str, Any]:
         """``outcome`` None: the step diverged (nothing held, no reward, the last finite reading)."""

@@ -86,25 +86,46 @@ TACTILE_PREFIX = "tactile_"
 """Every tactile entry's name starts with it (``tactile=(rows, cols)``: :func:`tactile_names`)."""
 
 
-def tactile_names(rows: int, cols: int) -> tuple[str, ...]:
+def tactile_names(rows: int, cols: int, frames: int = 1) -> tuple[str, ...]:
     """The names of a tactile observation's entries, ``tactile_<left|right>_r<row>_c<col>_<channel>``,
     in the order of the reading's (2, rows, cols, channels) array flattened (C order):
-    fingers/tactile.py says what each channel is."""
-    return tuple(f"{TACTILE_PREFIX}{side}_r{r}_c{c}_{ch}" for side in ("left", "right") for r in range(rows)
-                 for c in range(cols) for ch in TAXEL_CHANNELS)  # fmt: skip
+    fingers/tactile.py says what each channel is. With ``frames`` > 1 (``tactile_history``) the
+    frames of the env steps before follow, ``tactile_past<d>_...`` d steps back, d = 1 .. frames - 1."""
+    return tuple(f"{TACTILE_PREFIX}{'' if d == 0 else f'past{d}_'}{side}_r{r}_c{c}_{ch}" for d in range(frames)
+                 for side in ("left", "right") for r in range(rows) for c in range(cols)
+                 for ch in TAXEL_CHANNELS)  # fmt: skip
+
+
+@functools.lru_cache(maxsize=64)
+def _tactile_layout(names: tuple[str, ...]) -> tuple[int, int, int, int]:
+    """(start, frames, rows, cols) of the taxel entries of an observation of ``names``."""
+    start = next((k for k, n in enumerate(names) if n.startswith(TACTILE_PREFIX)), None)
+    if start is None:
+        raise ValueError("the observation has no tactile entries (make the env with tactile=(rows, cols))")
+    last = f"{TACTILE_PREFIX}right_r"
+    end = max(k for k, n in enumerate(names) if n.startswith(last))  # the current frame's last entry
+    parts = names[end][len(last) - 1 :].split("_")  # r<R-1>, c<C-1>, <channel...>
+    rows, cols = int(parts[0][1:]) + 1, int(parts[1][1:]) + 1
+    per_frame = 2 * rows * cols * len(TAXEL_CHANNELS)
+    frames = sum(1 for n in names if n.startswith(TACTILE_PREFIX)) // per_frame
+    return start, frames, rows, cols
 
 
 def tactile_view(obs: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
     """The tactile part of an observation ``obs`` of ``names`` (``env.obs_names``; the last axis
-    of a batch of observations) as its (..., 2, rows, cols, channels) grid."""
-    start = next((k for k, n in enumerate(names) if n.startswith(TACTILE_PREFIX)), None)
-    if start is None:
-        raise ValueError("the observation has no tactile entries (make the env with tactile=(rows, cols))")
-    last = names[-1].split("_")  # tactile_right_r<R-1>_c<C-1>_<channel...>
-    rows, cols = int(last[2][1:]) + 1, int(last[3][1:]) + 1
+    of a batch of observations) as its (..., 2, rows, cols, channels) grid: this env step's taxels
+    (:func:`tactile_frames` for the earlier ones of ``tactile_history``)."""
+    return tactile_frames(obs, names)[..., 0, :, :, :, :]
+
+
+def tactile_frames(obs: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """The taxels of an observation ``obs`` of ``names`` as (..., frames, 2, rows, cols, channels):
+    frame 0 this env step's, frame d the one d env steps before (``tactile_history`` frames; a new
+    episode's first observation repeats its own)."""
+    start, frames, rows, cols = _tactile_layout(tuple(names))
     obs = np.asarray(obs)
-    return obs[..., start : start + 2 * rows * cols * len(TAXEL_CHANNELS)].reshape(
-        (*obs.shape[:-1], 2, rows, cols, len(TAXEL_CHANNELS)))  # fmt: skip
+    return obs[..., start : start + frames * 2 * rows * cols * len(TAXEL_CHANNELS)].reshape(
+        (*obs.shape[:-1], frames, 2, rows, cols, len(TAXEL_CHANNELS)))  # fmt: skip
 
 
 def obs_slice(names: tuple[str, ...], group: str) -> slice:
@@ -146,6 +167,9 @@ class Reading:
     tactile: np.ndarray | None = None
     """(2, rows, cols, channels) the pads' taxels (fingers/tactile.py), when the env reads them
     (``tactile=(rows, cols)``)."""
+    tactile_past: np.ndarray | None = None
+    """(frames - 1, 2, rows, cols, channels) the taxels of the env steps before, the last first
+    (``tactile_history``; the env keeps them)."""
     shape_kind: np.ndarray | None = None
     """(len(OBJECT_KINDS),) the object's kind, one-hot."""
     shape_extent: np.ndarray | None = None
@@ -179,8 +203,10 @@ class Reading:
             else:
                 values.append(float(v))
         out = np.array(values, dtype=np.float64)
-        if names and names[-1].startswith(TACTILE_PREFIX):  # the taxels come last
+        if names and names[-1].startswith(TACTILE_PREFIX):  # the taxels come last, then the earlier frames
             out = np.concatenate((out, self.tactile.ravel()))
+            if self.tactile_past is not None:
+                out = np.concatenate((out, self.tactile_past.ravel()))
         return out
 
 
@@ -218,4 +244,4 @@ def read(scene: GraspScene, force: np.ndarray, grid: TaxelGrid | None = None) ->
 
 __all__ = ["CARRY_OBS_NAMES", "OBJECT_GROUPS", "OBS_GROUPS", "OBS_NAMES", "PRIVILEGED_NAMES", "SHAPE_GROUPS", "SHAPE_OBS_NAMES",
            "TACTILE_PREFIX", "Reading", "obs_slice",
-           "privileged", "read", "tactile_names", "tactile_view", "without_object"]  # fmt: skip
+           "privileged", "read", "tactile_frames", "tactile_names", "tactile_view", "without_object"]  # fmt: skip

@@ -13,6 +13,8 @@ from .fingers import TorsionalRigidConfig
 MAX_EPISODE_STEPS = 100
 """5 s at the default 20 Hz control frequency."""
 
+SQUEEZE_WEIGHT_LEAST = 0.3
+"""The charge per env step of a squeeze of one least force (:data:`GRIP_TASK_LEAST`)."""
 GRIP_TASK = {"finger_action": "force", "finger_force": 6.0, "cylinder_mass": 0.17, "cylinder_mass_range": 0.75,
              "friction_range": 0.45, "squeeze_weight": 0.5, "squeeze_factor": 2.0, "tactile": (4, 4),
              "observe_object": False}
@@ -22,6 +24,14 @@ spans 0.16-3.0 N, 18-fold), the squeeze charged in the reward and bounded at twi
 success, a 4 x 4 taxel grid on each pad, and the cylinder's pose and motion left out of the
 observation (a gripper's own sensors do not give them; the documentation's Tactile pads page says
 what a learner does with them)."""
+GRIP_TASK_LEAST: dict[str, object] = {**GRIP_TASK, "squeeze_reference": "least", "squeeze_weight": SQUEEZE_WEIGHT_LEAST,
+                                      "tactile_history": 3}  # fmt: skip
+"""The grip-force task whose optimum is a grip just above the least force (SoftGraspGrip-v5 and the
+rigid kinds' v4): the squeeze charged in least forces, ``SQUEEZE_WEIGHT_LEAST`` x F / (m g / (2 mu_s))
+per env step, so a margin costs the same on every cylinder, and the taxels of the last three env
+steps in the observation (a slip is a change: one frame does not show it). Over constant grips
+the expected return peaks at 1.35-1.5 x the least on the tissue (the package's documentation,
+Tactile pads: where the reward peaks)."""
 _ENV, _GOAL = "softgrasp_env.env:SoftGraspEnv", "softgrasp_env.env:SoftGraspGoalEnv"
 
 OBJECT_SET: tuple[str, ...] = ("cylinder", "rod", "sphere", "cube", "slab", "capsule", "cone", "elliptic", "pebble-0",
@@ -66,11 +76,18 @@ _SPECS: dict[str, tuple[str, dict]] = {
     "SoftGraspEasyRigid-v3": (_ENV, {"fingers": "rigid", "reward_type": "dense", "start": "easy"}),
     "SoftGraspRigidTorsion-v3": (_ENV, {"fingers": "rigid_torsion", "reward_type": "dense", "carry": True}),
     "SoftGraspEasyRigidTorsion-v3": (_ENV, {"fingers": "rigid_torsion", "reward_type": "dense", "start": "easy"}),
+    # the grip-force task: v5 (the rigid kinds' v4) charges the squeeze in least forces and keeps
+    # three taxel frames; v4 is v3's task on the v4 tissue
+    "SoftGraspGrip-v5": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", "carry": True,
+                                **GRIP_TASK_LEAST, **TISSUE_V4}),
     "SoftGraspGrip-v4": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", "carry": True,
                                 **GRIP_TASK, **TISSUE_V4}),
+    **{f"SoftGraspGrip{name}-v4": (_ENV, {"fingers": kind, "reward_type": "dense", "start": "easy", "carry": True,
+                                          **GRIP_TASK_LEAST})
+       for name, kind in (("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion"))},
     **{f"SoftGraspGrip{name}-v3": (_ENV, {"fingers": kind, "reward_type": "dense", "start": "easy", "carry": True,
                                           **GRIP_TASK})
-       for name, kind in (("", "tissue"), ("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion"))},
+       for name, kind in (("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion"))},
     # the object-set family: the carry task and the grip-force task on every object
     "SoftGraspObjects-v1": (_ENV, {"fingers": "tissue", "reward_type": "dense", "carry": True, **OBJECTS_TASK,
                                    **TISSUE_V4}),
@@ -107,6 +124,7 @@ RETIRED: dict[str, str] = {
     **{f"SoftGrasp{family}-{v}": "0.6.0" for family in ("", "Rigid", "Sparse") for v in ("v1", "v2")},
     **{f"SoftGrasp{family}-v1": "0.6.0" for family in ("Goal", "Easy", "EasyRigid")},
     "SoftGraspGoal-v3": "0.6.0",
+    "SoftGraspGrip-v3": "0.6.0",
 }
 """Retired id -> the last release that registers it. ``gym.make`` of one raises
 :class:`gymnasium.error.DeprecatedEnv` naming that release (:func:`retired_env`); they are not in

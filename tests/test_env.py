@@ -19,7 +19,7 @@ import softgrasp_env
 from softgrasp_env import ENV_IDS
 from softgrasp_env.env import SoftGraspEnv
 from softgrasp_env.observation import OBS_NAMES, obs_slice
-from softgrasp_env.registration import RETIRED, TISSUE_V4, retired_message
+from softgrasp_env.registration import RETIRED, SQUEEZE_WEIGHT_LEAST, TISSUE_V4, retired_message
 from tests.helpers import assert_same, obs_vector, rollout, run_episode
 
 # Gymnasium's checker notes unbounded observation boxes; like its MuJoCo envs, ours are unbounded.
@@ -30,12 +30,13 @@ _INF_BOUND = "observation space m"
 
 
 def test_ids_are_registered_with_time_limits():
-    """Per family the latest version and the one before it: 22 ids."""
+    """Per family the latest version and the one before it: 24 ids."""
     assert ENV_IDS == ("SoftGrasp-v4", "SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspSparse-v4", "SoftGraspSparse-v3",
                        "SoftGraspGoal-v5", "SoftGraspGoal-v4", "SoftGraspEasy-v4", "SoftGraspEasy-v3",
                        "SoftGraspEasyRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspEasyRigidTorsion-v3",
-                       "SoftGraspGrip-v4", "SoftGraspGrip-v3", "SoftGraspGripRigid-v3",
-                       "SoftGraspGripRigidTorsion-v3", "SoftGraspObjects-v1", "SoftGraspObjectsRigid-v1",
+                       "SoftGraspGrip-v5", "SoftGraspGrip-v4", "SoftGraspGripRigid-v4",
+                       "SoftGraspGripRigidTorsion-v4", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3",
+                       "SoftGraspObjects-v1", "SoftGraspObjectsRigid-v1",
                        "SoftGraspObjectsRigidTorsion-v1", "SoftGraspObjectsGrip-v1", "SoftGraspObjectsGripRigid-v1",
                        "SoftGraspObjectsGripRigidTorsion-v1")  # fmt: skip
     gym.register_envs(softgrasp_env)  # the documented idiom is accepted
@@ -47,9 +48,16 @@ def test_ids_are_registered_with_time_limits():
         assert len(versions) <= 2
     # the soft ids' newest version is the one before on the v4 tissue, and nothing else
     for new, old in (("SoftGrasp-v4", "SoftGrasp-v3"), ("SoftGraspSparse-v4", "SoftGraspSparse-v3"),
-                     ("SoftGraspEasy-v4", "SoftGraspEasy-v3"), ("SoftGraspGrip-v4", "SoftGraspGrip-v3"),
-                     ("SoftGraspGoal-v5", "SoftGraspGoal-v4")):  # fmt: skip
+                     ("SoftGraspEasy-v4", "SoftGraspEasy-v3"), ("SoftGraspGoal-v5", "SoftGraspGoal-v4")):  # fmt: skip
         assert gym.spec(new).kwargs == {**gym.spec(old).kwargs, **TISSUE_V4}, new
+    # the grip-force task: v4 is the retired v3 (the rigid kinds' v3 with the tissue) on the v4
+    # tissue; v5 (the rigid kinds' v4) charges the squeeze in least forces and keeps three taxel frames
+    v3_grip = {**gym.spec("SoftGraspGripRigid-v3").kwargs, "fingers": "tissue"}
+    assert gym.spec("SoftGraspGrip-v4").kwargs == {**v3_grip, **TISSUE_V4}
+    least = {"squeeze_reference": "least", "squeeze_weight": SQUEEZE_WEIGHT_LEAST, "tactile_history": 3}
+    assert gym.spec("SoftGraspGrip-v5").kwargs == {**gym.spec("SoftGraspGrip-v4").kwargs, **least}
+    for kind in ("Rigid", "RigidTorsion"):
+        assert gym.spec(f"SoftGraspGrip{kind}-v4").kwargs == {**gym.spec(f"SoftGraspGrip{kind}-v3").kwargs, **least}
     assert gym.spec("SoftGraspGoal-v4").kwargs["end_when_knocked_over"] is False
     assert gym.spec("SoftGrasp-v3").kwargs["fingers"] == "tissue"
     assert gym.spec("SoftGraspRigid-v3").kwargs["fingers"] == "rigid"
@@ -70,9 +78,10 @@ def test_the_v4_tissue_is_the_continuum_with_coulomb_per_contact():
 
 @pytest.mark.parametrize("env_id", sorted(RETIRED))
 def test_a_retired_id_names_the_release_that_has_it(env_id):
-    """The v1/v2 ids (and SoftGraspGoal-v1, -v3) are retired: gym.make of one, with any arguments, is
-    gymnasium's DeprecatedEnv naming release 0.6.0 and its tag; they are not in ENV_IDS."""
-    assert env_id not in ENV_IDS and (env_id.endswith(("-v1", "-v2")) or env_id == "SoftGraspGoal-v3")
+    """The v1/v2 ids (and SoftGraspGoal-v1, -v3, SoftGraspGrip-v3) are retired: gym.make of one, with any
+    arguments, is gymnasium's DeprecatedEnv naming release 0.6.0 and its tag; they are not in ENV_IDS."""
+    assert env_id not in ENV_IDS and (env_id.endswith(("-v1", "-v2")) or env_id in ("SoftGraspGoal-v3",
+                                                                                    "SoftGraspGrip-v3"))
     message = (rf"{env_id} was retired; `pip install softgrasp-env==0\.6\.0` \(git tag v0\.6\.0\) reproduces its "
                "results")  # fmt: skip
     with pytest.warns(DeprecationWarning, match="is out of date"):  # gymnasium's own, on any older version
@@ -85,7 +94,7 @@ def test_a_retired_id_names_the_release_that_has_it(env_id):
 def test_the_retired_table_is_the_ids_0_6_0_had_beyond_these():
     assert sorted(RETIRED) == sorted([*(f"SoftGrasp{f}-{v}" for f in ("", "Rigid", "Sparse") for v in ("v1", "v2")),
                                       "SoftGraspGoal-v1", "SoftGraspEasy-v1", "SoftGraspEasyRigid-v1",
-                                      "SoftGraspGoal-v3"])  # fmt: skip
+                                      "SoftGraspGoal-v3", "SoftGraspGrip-v3"])  # fmt: skip
     assert set(RETIRED.values()) == {"0.6.0"}
     assert "This release registers SoftGraspGoal-v5, SoftGraspGoal-v4" in retired_message("SoftGraspGoal-v1")
 

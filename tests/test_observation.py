@@ -77,3 +77,57 @@ def test_tactile_entries_are_the_pads_taxels(fingers, make_env):
 def test_tactile_refuses_a_bad_grid(bad, make_env):
     with pytest.raises(ValueError, match="tactile"):
         make_env("SoftGrasp-v3", tactile=bad)
+
+
+@pytest.mark.parametrize("fingers", ["tissue", "rigid"])
+def test_tactile_history_keeps_the_frames_before(fingers, make_env):
+    """``tactile_history=k`` appends the k - 1 taxel frames before this env step's, the last first
+    (``tactile_past<d>_``); a new episode's first observation repeats its frame; the frames follow
+    the env steps across a reset and through a copy (pickle replays the episode); ``tactile_view``
+    still gives this step's grid, and the rest of the observation is the one-frame env's."""
+    import pickle
+
+    from gymnasium.utils.env_checker import check_env
+
+    from softgrasp_env.observation import tactile_frames, tactile_names, tactile_view
+    from softgrasp_env.policies import ScriptedGraspPolicy
+
+    env = make_env("SoftGrasp-v3", fingers=fingers, tactile=(3, 2), tactile_history=3)
+    one = make_env("SoftGrasp-v3", fingers=fingers, tactile=(3, 2))
+    u, names = env.unwrapped, env.unwrapped.obs_names
+    assert names == one.unwrapped.obs_names + tactile_names(3, 2, 3)[60:]
+    assert names[-1].startswith("tactile_past2_right_r2_c1_") and env.observation_space.shape == (len(names),)
+    policy = ScriptedGraspPolicy.for_env(env)
+    for seed in (3, 4):  # the second episode starts from fresh frames
+        obs, _ = env.reset(seed=seed)
+        obs1, _ = one.reset(seed=seed)
+        first = tactile_frames(obs, names)
+        assert first.shape == (3, 2, 3, 2, 5)
+        np.testing.assert_array_equal(first[1], first[0])
+        np.testing.assert_array_equal(first[2], first[0])
+        seen = [obs]
+        for _ in range(40):
+            obs, *_ = env.step(policy(obs))
+            obs1, *_ = one.step(policy(obs1))
+            seen.append(obs)
+        np.testing.assert_array_equal(obs[: len(obs1)], obs1)
+        np.testing.assert_array_equal(tactile_view(obs, names), tactile_view(obs1, one.unwrapped.obs_names))
+        frames = tactile_frames(np.array(seen), names)
+        for t in range(2, len(seen)):
+            np.testing.assert_array_equal(frames[t, 1], frames[t - 1, 0])
+            np.testing.assert_array_equal(frames[t, 2], frames[t - 2, 0])
+        assert np.abs(frames[-1, 0] - frames[-3, 0]).max() > 0.0  # the taxels change as the grasp closes
+    copy = pickle.loads(pickle.dumps(u))
+    np.testing.assert_array_equal(copy._format_obs(copy._last), u._format_obs(u._last))
+    check_env(u, skip_render_check=True)
+
+
+@pytest.mark.parametrize("bad", [0, 17, 2.5, "3", True])
+def test_tactile_history_refuses_a_bad_count(bad, make_env):
+    with pytest.raises((ValueError, TypeError), match="tactile_history"):
+        make_env("SoftGraspGripRigid-v3", tactile_history=bad)
+
+
+def test_tactile_history_needs_the_taxels(make_env):
+    with pytest.raises(ValueError, match=r"tactile_history=2 keeps earlier taxel frames: give tactile"):
+        make_env("SoftGraspRigid-v3", tactile_history=2)

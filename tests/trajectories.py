@@ -36,9 +36,11 @@ INFO_FLAGS = ("is_success", "held", "carrying", "diverged", "action_clipped")
 # (clipping exercised) and resets after an episode ends; "scripted" runs the scripted policy.
 V3_IDS = ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspSparse-v3", "SoftGraspGoal-v3", "SoftGraspEasy-v3",
           "SoftGraspEasyRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspEasyRigidTorsion-v3")
-RETIRED_AS: dict[str, tuple[str, dict]] = {"SoftGraspGoal-v3": ("SoftGraspGoal-v4", {"end_when_knocked_over": True})}
+RETIRED_AS: dict[str, tuple[str, dict]] = {"SoftGraspGoal-v3": ("SoftGraspGoal-v4", {"end_when_knocked_over": True}),
+                                           "SoftGraspGrip-v3": ("SoftGraspGripRigid-v3", {"fingers": "tissue"})}
 """A recorded id that is retired, and the registered id with the keywords that are it (the goal's
-v3 is v4's physics with the lift task's ends)."""
+v3 is v4's physics with the lift task's ends; the soft grip's v3 is the rigid twin's v3 with the
+v3 tissue)."""
 
 
 def _case(name: str, env_id: str, policy: str, steps: int) -> tuple[str, str, dict, str, int]:
@@ -58,7 +60,7 @@ world substep (1/1000 s) and four (1/120 s). (The recording also holds a case of
 material, retired after 0.6.0; it is no longer replayed.)"""
 
 MORE_CASES: tuple[tuple[str, str, dict, str, int], ...] = (
-    *((f"{env_id}/random", env_id, {}, "random", 130) for env_id in (
+    *(_case(f"{env_id}/random", env_id, "random", 130) for env_id in (
         "SoftGraspGoal-v4", "SoftGraspGrip-v3", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3")),
     ("SoftGraspGoal-v4/scripted", "SoftGraspGoal-v4", {}, "scripted", 100),
     ("segmented/scripted", "SoftGraspEasy-v3", {"fingers": "segmented"}, "scripted", 60),

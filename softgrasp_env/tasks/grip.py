@@ -47,6 +47,9 @@ GRAVITY = np.array([0.0, 0.0, -9.81])
 """pybullet's gravity in every scene [m/s^2] (scene/scene.py sets it)."""
 GRIP_INFO = ("carry_squeeze", "least_squeeze")
 """The entries the grip-force task adds to ``info`` [N]."""
+SQUEEZE_REFERENCES = ("finger_force", "least")
+"""What the squeeze charge divides the squeeze by (:class:`GripForceTask`): the finger's full force,
+or the episode's static least force m g / (2 mu_s)."""
 
 
 def least_squeeze(mass: float, mu_s: float, accelerations: np.ndarray, jaw_axis: np.ndarray) -> float:
@@ -63,14 +66,20 @@ def least_squeeze(mass: float, mu_s: float, accelerations: np.ndarray, jaw_axis:
 
 class GripForceTask(TaskWrapper):
     """``carry`` (a :class:`CarryTest`) judged as the grip-force task (module docstring):
-    ``squeeze_weight`` charges the squeeze in the reward; ``squeeze_factor`` (None: the carry's
-    success alone) bounds the carry's mean squeeze by that many times the least that holds;
-    ``finger_force`` [N] is the squeeze at full action."""
+    ``squeeze_weight`` charges the squeeze in the reward, per env step, ``squeeze_weight * F /
+    reference`` with F the fingers' mean normal force and the reference ``squeeze_reference``:
+    ``"finger_force"`` (``finger_force`` [N], the squeeze at full action) or ``"least"`` (the
+    episode's static least force m g / (2 mu_s), so the charge is in least forces and the same
+    grip margin costs the same on every cylinder); ``squeeze_factor`` (None: the carry's success
+    alone) bounds the carry's mean squeeze by that many times the least that holds."""
 
     def __init__(self, carry: CarryTest, *, squeeze_weight: float, squeeze_factor: float | None,
-                 finger_force: float) -> None:  # fmt: skip
+                 finger_force: float, squeeze_reference: str = "finger_force") -> None:  # fmt: skip
         if not isinstance(carry, CarryTest):
             raise TypeError(f"GripForceTask wraps a CarryTest (its accelerations judge the squeeze), got {carry!r}")
+        if squeeze_reference not in SQUEEZE_REFERENCES:
+            raise ValueError(f"squeeze_reference must be one of {SQUEEZE_REFERENCES}, got {squeeze_reference!r}")
+        self.squeeze_reference = squeeze_reference
         super().__init__(carry)
         self.reward_terms = carry.reward_terms + ("squeeze",)
         self.info_keys = carry.info_keys + GRIP_INFO
@@ -82,6 +91,9 @@ class GripForceTask(TaskWrapper):
     def _begun(self, scene: GraspScene | None) -> None:
         self.mass = math.nan if scene is None else float(scene.config.cylinder_mass)
         self.mu_s = math.nan if scene is None else float(scene.config.tissue.friction_static)
+        # the charge's unit of squeeze [N]
+        self.reference = (self.finger_force if self.squeeze_reference == "finger_force"
+                          else self.mass * -GRAVITY[2] / (2.0 * self.mu_s))  # fmt: skip
         self._prev: tuple[float, np.ndarray] | None = None  # (time, cylinder velocity) of the last reading
         self.least = 0.0
         """The least squeeze that holds through the carry so far [N] (0 before it): the largest of
@@ -110,7 +122,7 @@ class GripForceTask(TaskWrapper):
             self._squeeze_sum += squeeze
             self._squeeze_n += 1
         self._prev = (reading.time, reading.cyl_v.copy())
-        term = -self.squeeze_weight * squeeze / self.finger_force
+        term = -self.squeeze_weight * squeeze / self.reference
         success = out.success
         least, mean = self.least, self.carry_squeeze
         if success and self.squeeze_factor is not None:
@@ -128,4 +140,4 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = ["GRIP_INFO", "GripForceTask", "least_squeeze"]
+__all__ = ["GRIP_INFO", "SQUEEZE_REFERENCES", "GripForceTask", "least_squeeze"]

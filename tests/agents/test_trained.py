@@ -167,7 +167,7 @@ def test_results_table_lists_every_group_with_its_cards_rates():
     assert v3 and all(line.split(" | ")[1].split()[0].endswith("-v3") for line in v3), v3
     assert len(v3) == len({(cards.policy_label(cards.read_card(d)), cards.env_label(cards.read_card(d))) for d in MODELS
                            if cards.read_card(d)["env_version"] == 3})  # fmt: skip
-    assert cards.env_label({"env": "SoftGraspGrip-v3", "env_kwargs": {"tactile": None}}) == "SoftGraspGrip-v3 tactile=None"
+    assert cards.env_label({"env": "SoftGraspGrip-v4", "env_kwargs": {"tactile": None}}) == "SoftGraspGrip-v4 tactile=None"
     # The per-run table: a row per model, its success and convergence verdict from its card.
     per_run = cards.runs_table(versions=(3, 4)).splitlines()[2:]
     current = [cards.read_card(d) for d in MODELS if cards.read_card(d)["env_version"] >= 3]
@@ -223,7 +223,7 @@ def test_learning_curves_draw_a_variant_by_env_kwargs_as_a_group_of_its_own(tmp_
 
     from benchmarks import learning_curves
 
-    src = cards.TRAINED / "SoftGraspGrip-v3_sac_0"
+    src = cards.TRAINED / "SoftGraspGripRigidTorsion-v3_sac_0"
     for name, kwargs in (("with", {}), ("without", {"tactile": None})):
         shutil.copytree(src, tmp_path / "models" / name)
         meta = json.loads((src / "run.json").read_text())
@@ -231,7 +231,7 @@ def test_learning_curves_draw_a_variant_by_env_kwargs_as_a_group_of_its_own(tmp_
     assert learning_curves.main(["--models", str(tmp_path / "models"), "--out", str(tmp_path), "--by", "kind"]) == 0
     with open(tmp_path / "learning_curves.csv", newline="") as f:
         groups = {(r["algo"], r["env"]) for r in csv.DictReader(f)}
-    assert groups == {("sac", "SoftGraspGrip-v3"), ("sac", "SoftGraspGrip-v3 tactile=None")}
+    assert groups == {("sac", "SoftGraspGripRigidTorsion-v3"), ("sac", "SoftGraspGripRigidTorsion-v3 tactile=None")}
 
 @pytest.mark.slow
 @pytest.mark.parametrize("model_dir", MODELS, ids=[d.name for d in MODELS])

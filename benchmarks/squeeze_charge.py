@@ -1,0 +1,176 @@
+"""Where the grip-force task's reward peaks over constant grips: the squeeze charge measured.
+
+    PYTHONPATH=. python benchmarks/squeeze_charge.py run [--seeds 12] [--factors 0.8,1,...,3]
+        [--ids SoftGraspGrip-v4,SoftGraspGripRigidTorsion-v3,SoftGraspGripRigid-v3] [--out CSV]
+    PYTHONPATH=. python benchmarks/squeeze_charge.py curves [--csv CSV] [--plot PNG]
+
+``run``: each episode squeezes with one constant force (policies/grip.py ``ConstantGripPolicy``),
+``factor`` times the static least m g / (2 mu_s) of the episode's drawn mass and friction (read
+from the env's privileged state), capped at the finger's 6 N. Per episode it records the sum of
+the reward's other terms (lift, reach), the squeeze the fingers measured (sum over the steps of F,
+of F / F_static and of (F / F_static)^2), the carry's success without the squeeze bound, and the
+task's ``carry_squeeze`` / ``least_squeeze``. The squeeze term does not act on the physics, so
+``curves`` re-prices the same episodes under any charge: the expected return per factor, each
+kind, and where it peaks (the ids' charge and the candidates).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import time
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+import softgrasp_env  # noqa: F401
+from softgrasp_env.observation import PRIVILEGED_NAMES
+from softgrasp_env.policies.grip import ConstantGripPolicy
+from softgrasp_env.registration import SQUEEZE_WEIGHT_LEAST
+
+P = {n: k for k, n in enumerate(PRIVILEGED_NAMES)}
+FIELDS = ("id", "factor", "seed", "mass", "mu", "static_least", "force", "steps", "base", "sum_f", "sum_r", "sum_r2",
+          "carried", "success", "carry_squeeze", "least_squeeze")  # fmt: skip
+SQUEEZE_FACTOR = 2.0
+"""The grip ids' bound on the carry's mean squeeze, in least forces (registration.GRIP_TASK)."""
+OUT = Path("docs/results/squeeze_charge.csv")
+
+
+def episode(env: gym.Env, factor: float, seed: int) -> dict:
+    base = env.unwrapped
+    env.reset(seed=seed)
+    state = base.privileged_state()
+    mu, mass = float(state[P["friction_static"]]), float(state[P["object_mass"]])
+    static = mass * 9.81 / (2.0 * mu)
+    force = min(factor * static, float(base.plan.args.control.finger_force))
+    policy = ConstantGripPolicy(env, force)
+    obs, _ = env.reset(seed=seed)
+    row = {"factor": factor, "seed": seed, "mass": mass, "mu": mu, "static_least": static, "force": force, "steps": 0,
+           "base": 0.0, "sum_f": 0.0, "sum_r": 0.0, "sum_r2": 0.0}  # fmt: skip
+    done, info = False, {}
+    while not done:
+        obs, _, term, trunc, info = env.step(policy(obs))
+        done = term or trunc
+        terms = info["reward_terms"]
+        f = float(np.mean([obs[base.obs_names.index("force_left")], obs[base.obs_names.index("force_right")]]))
+        row["steps"] += 1
+        row["base"] += sum(v for k, v in terms.items() if k != "squeeze")
+        row["sum_f"] += f
+        row["sum_r"] += f / static
+        row["sum_r2"] += (f / static) ** 2
+    least, mean = float(info["least_squeeze"]), float(info["carry_squeeze"])
+    row["carried"] = bool(info["is_success"])  # the env is made without the squeeze bound: the carry's own
+    row["success"] = row["carried"] and mean <= SQUEEZE_FACTOR * least
+    row["carry_squeeze"] = mean
+    row["least_squeeze"] = least
+    return row
+
+
+def run(ids: list[str], factors: list[float], seeds: int, out: Path, first_seed: int = 1000) -> None:
+    rows = []
+    for env_id in ids:
+        env = gym.make(env_id, squeeze_factor=None)  # success: the carry's alone (the bound applied here)
+        tic = time.perf_counter()
+        for factor in factors:
+            for seed in range(first_seed, first_seed + seeds):
+                rows.append({"id": env_id, **episode(env, factor, seed)})
+            got = [r for r in rows if r["id"] == env_id and r["factor"] == factor]
+            print(f"{env_id} x{factor:.2f}: carried {sum(r['carried'] for r in got)}/{len(got)}, success "
+                  f"{sum(r['success'] for r in got)}, {time.perf_counter() - tic:.0f} s", flush=True)  # fmt: skip
+        env.close()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with out.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=FIELDS)
+        w.writeheader()
+        w.writerows(rows)
+    print(f"wrote {out}")
+
+
+def load(path: Path) -> list[dict]:
+    with path.open() as fh:
+        rows = list(csv.DictReader(fh))
+    for r in rows:
+        for k in FIELDS[1:]:
+            r[k] = r[k] == "True" if r[k] in ("True", "False") else float(r[k])
+    return rows
+
+
+def expected(rows: list[dict], price) -> dict[str, dict[float, tuple[float, float]]]:
+    """Per id and factor: the mean return under ``price(row)`` (the squeeze term's episode sum) and
+    its standard error."""
+    out: dict[str, dict[float, tuple[float, float]]] = {}
+    for r in rows:
+        out.setdefault(r["id"], {}).setdefault(r["factor"], []).append(r["base"] - price(r))
+    return {i: {f: (float(np.mean(v)), float(np.std(v) / np.sqrt(len(v)))) for f, v in sorted(d.items())}
+            for i, d in out.items()}  # fmt: skip
+
+
+CHARGES = {
+    "v4: 0.5 F / finger_force": lambda r: 0.5 * r["sum_f"] / 6.0,
+    f"v5: {SQUEEZE_WEIGHT_LEAST:g} F / F_least": lambda r: SQUEEZE_WEIGHT_LEAST * r["sum_r"],
+    "0.2 F / F_least": lambda r: 0.2 * r["sum_r"],
+    "0.4 F / F_least": lambda r: 0.4 * r["sum_r"],
+    "0.15 (F / F_least)^2": lambda r: 0.15 * r["sum_r2"],
+}
+"""Charges to price the episodes under: the v4 ids', the v5 ids' (registration.GRIP_TASK_LEAST)
+and neighbours of it."""
+
+
+def curves(path: Path, plot: Path | None = None) -> None:
+    rows = load(path)
+    for name, price in CHARGES.items():
+        print(f"\n{name}: expected return (+- standard error) per factor of the static least")
+        for env_id, d in expected(rows, price).items():
+            best = max(d, key=lambda f: d[f][0])
+            line = "  ".join(f"{f:.2f}: {m:5.1f}+-{e:.1f}" for f, (m, e) in d.items())
+            print(f"  {env_id:30s} peak x{best:.2f} | {line}")
+    print("\ncarried through the carry, per factor:")
+    for env_id in dict.fromkeys(r["id"] for r in rows):
+        got: dict[float, list[bool]] = {}
+        for r in rows:
+            if r["id"] == env_id:
+                got.setdefault(r["factor"], []).append(r["carried"])
+        print(f"  {env_id:30s} " + "  ".join(f"{f:.2f}: {sum(v)}/{len(v)}" for f, v in sorted(got.items())))
+    if plot is not None:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        names = list(CHARGES)[:2]
+        fig, axes = plt.subplots(1, len(names), figsize=(10, 3.8), sharey=False)
+        for ax, name in zip(axes, names, strict=True):
+            for env_id, d in expected(rows, CHARGES[name]).items():
+                f = np.array(list(d))
+                m = np.array([v[0] for v in d.values()])
+                e = np.array([v[1] for v in d.values()])
+                ax.errorbar(f, m, yerr=e, marker="o", ms=3, capsize=2, label=env_id)
+            ax.axvspan(1.2, 1.5, color="0.9", zorder=0)
+            ax.set_xlabel("constant squeeze / static least force m g / (2 mu_s)")
+            ax.set_title(f"charge {name}", fontsize=9)
+        axes[0].set_ylabel("expected return (100 env steps)")
+        axes[0].legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(plot, dpi=120)
+        print(f"wrote {plot}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("what", choices=("run", "curves"))
+    ap.add_argument("--ids", default="SoftGraspGrip-v4,SoftGraspGripRigidTorsion-v3,SoftGraspGripRigid-v3")
+    ap.add_argument("--factors", default="0.8,1.0,1.1,1.2,1.35,1.5,1.75,2.0,2.5,3.0")
+    ap.add_argument("--seeds", type=int, default=12)
+    ap.add_argument("--first-seed", type=int, default=1000)
+    ap.add_argument("--out", "--csv", dest="csv", type=Path, default=OUT)
+    ap.add_argument("--plot", type=Path, default=None, help="curves: draw the expected return per factor here")
+    a = ap.parse_args()
+    if a.what == "run":
+        run(a.ids.split(","), [float(f) for f in a.factors.split(",")], a.seeds, a.csv, a.first_seed)
+    else:
+        curves(a.csv, a.plot)
+
+
+if __name__ == "__main__":
+    main()
