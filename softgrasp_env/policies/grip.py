@@ -215,7 +215,7 @@ class ShearLagGripPolicy(TactileGripPolicy):
     (:func:`softgrasp_env.fingers.tactile.edge_friction`, the larger of the pads'), and the squeeze
     becomes ``margin`` x W / mu read (Coulomb's least for the weight the pad carries), at most
     ``margin`` times the squeeze at the warning. If the traction falls ``tolerance`` (relative)
-    below W first - gross slip, the warning missed - it holds ``slip_margin`` times the last
+    below W (read again once the pads have settled at W / ``mu_min``) first - gross slip, the warning missed - it holds ``slip_margin`` times the last
     squeeze that held, as :class:`TactileGripPolicy` does. At ``deadline`` [s] (default: just
     before the carry) the search stops where it is. After the episode: ``fired_lag`` (the rise that
     warned, NaN if none) and ``mu_read``.
@@ -224,7 +224,7 @@ class ShearLagGripPolicy(TactileGripPolicy):
 
     def __init__(self, env, *, start_force: float = 4.0, fast: float = 0.8, step: float = 0.85, wait: int = 1,
                  settle: int = 2, rise: float = 0.4, margin: float = 1.3, slip_margin: float = 1.5,
-                 tolerance: float = 0.1, mu_min: float = 0.45, deadline: float | None = None, **kwargs) -> None:  # fmt: skip
+                 tolerance: float = 0.05, mu_min: float = 0.45, deadline: float | None = None, **kwargs) -> None:  # fmt: skip
         owner = "ShearLagGripPolicy"
         self.rise = check_range("rise", rise, 0.0, 1.0, lo_open=True, owner=owner)
         self.slip_margin = check_range("slip_margin", slip_margin, 1.0, 10.0, owner=owner)
@@ -259,6 +259,9 @@ class ShearLagGripPolicy(TactileGripPolicy):
                 # the lag's rise as a share of the way from its level at the lift to 1 (a pad that
                 # lifted near 1 has little left to rise and never warns)
                 rise = (shear_lag(taxels) - self.lifted_lag) / np.maximum(1.0 - self.lifted_lag, 1e-9)
+                if not self.judged:  # the first settled step at the floor: the weight read there (the
+                    # fast drops leave the pads' traction a few % off the lift's for a step or two)
+                    self.judged, self.weight = 1, self.traction(obs)
                 if self.traction(obs) < (1.0 - self.tolerance) * self.weight:  # gross slip came first
                     self.phase, self.force = "hold", min(self.slip_margin * self.held, self.finger_force)
                 elif (rise >= self.rise).any():  # the edges slide: slip is coming
