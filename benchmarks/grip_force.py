@@ -1,7 +1,7 @@
 """The grip-force task measured: success and squeeze of the scripted policies on the
 soft fingers and the rigid peers, over the same seeds.
 
-    python benchmarks/grip_force.py                       # 50 seeds, every kind and policy (~15 min)
+    python benchmarks/grip_force.py                       # 50 seeds, every kind and policy (minutes)
     python benchmarks/grip_force.py --seeds 20 --ids SoftGraspGripRigid-v3
     PYTHONPATH=. python benchmarks/grip_force.py --models runs/SoftGraspGrip-v3_sac_0   # a learned policy
 
@@ -30,7 +30,8 @@ import softgrasp_env  # noqa: F401  (registers the ids)
 from softgrasp_env.policies.grip import ConstantGripPolicy, ShearLagGripPolicy, TactileGripPolicy
 from softgrasp_env.tasks import CarryTest
 
-GRIP_IDS = ("SoftGraspGrip-v4", "SoftGraspGrip-v3", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3")
+GRIP_IDS = ("SoftGraspGrip-v4", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3")
+"""The ids the docs' tables are of (SoftGraspGrip-v3, retired, is measured by the release that has it)."""
 CONSTANT_FORCES = (0.5, 1.0, 2.0, 3.0)
 """Force-blind squeezes [N]: the least force of the task's draws spans 0.16-3.0 N."""
 
