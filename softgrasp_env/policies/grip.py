@@ -169,13 +169,21 @@ class TactileGripPolicy(_GripPolicy):
         taxels = tactile_view(obs, self.names)
         return float(-taxels[..., 2].sum(axis=(1, 2)).mean() * self.area)
 
+    def _lift(self, obs: np.ndarray) -> bool:
+        """The lift phase's step: True once the grip has been up and still for ``settle`` env
+        steps - the weight W read then as the pads' traction, the search's floor W / mu_min - and
+        the lowering begins."""
+        self.still = self.still + 1 if self.lifted(obs) else 0
+        if self.still < self.settle:
+            return False
+        self.phase, self.weight = "lower", self.traction(obs)
+        self.floor = self.weight / self.mu_min
+        return True
+
     def squeeze(self, obs: np.ndarray) -> float:
         i = self.index
         if self.phase == "lift":
-            self.still = self.still + 1 if self.lifted(obs) else 0
-            if self.still >= self.settle:
-                self.phase, self.weight = "lower", self.traction(obs)
-                self.floor = self.weight / self.mu_min
+            self._lift(obs)
         elif self.phase == "lower":
             if obs[i["time"]] >= self.deadline:
                 self.phase = "hold"
@@ -242,10 +250,7 @@ class ShearLagGripPolicy(TactileGripPolicy):
     def squeeze(self, obs: np.ndarray) -> float:
         i = self.index
         if self.phase == "lift":
-            self.still = self.still + 1 if self.lifted(obs) else 0
-            if self.still >= self.settle:
-                self.phase, self.weight = "lower", self.traction(obs)
-                self.floor = self.weight / self.mu_min
+            if self._lift(obs):
                 self.lifted_lag = shear_lag(tactile_view(obs, self.names))
         elif self.phase == "lower":
             self.since_drop += 1
