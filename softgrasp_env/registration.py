@@ -30,8 +30,8 @@ GRIP_TASK_LEAST: dict[str, object] = {**GRIP_TASK, "squeeze_reference": "least",
 rigid kinds' v4): the squeeze charged in least forces, ``SQUEEZE_WEIGHT_LEAST`` x F / (m g / (2 mu_s))
 per env step, so a margin costs the same on every cylinder, and the taxels of the last three env
 steps in the observation (a slip is a change: one frame does not show it). Over constant grips
-the expected return peaks at 1.35-1.5 x the least on the tissue (the package's documentation,
-Tactile pads: where the reward peaks)."""
+the expected return peaks at 1.2-1.5 x the least on the tissue, at 1.1 on the rigid kinds, which
+hold from there (the package's documentation, Results: where the grip reward peaks)."""
 _ENV, _GOAL = "softgrasp_env.env:SoftGraspEnv", "softgrasp_env.env:SoftGraspGoalEnv"
 
 OBJECT_SET: tuple[str, ...] = ("cylinder", "rod", "sphere", "cube", "slab", "capsule", "cone", "elliptic", "pebble-0",
@@ -112,7 +112,8 @@ a knocked-over cylinder does not end its episode since SoftGraspGoal-v4) and the
 the physics; the grip-force task (SoftGraspGrip, soft / rigid / torsional: the gentle start with
 the carry, the squeeze as the action, mass and friction drawn and not observed, the squeeze charged
 and success within 2 x the least that holds, 4 x 4 taxels per pad, the cylinder's pose and motion
-not observed: softgrasp_env/tasks/grip.py); the object set (SoftGraspObjects, soft / rigid /
+not observed: softgrasp_env/tasks/grip.py; its v5, the rigid kinds' v4, charges the squeeze in least
+forces and keeps three taxel frames: :data:`GRIP_TASK_LEAST`); the object set (SoftGraspObjects, soft / rigid /
 torsional, and its grip-force variants: one of :data:`OBJECT_SET` drawn per episode, at a drawn
 size, mass and friction, its kind and extents observed). The arm moves the palm at the action's velocity along a
 smooth path (at most 0.15 m/s and 1.5 m/s^2). The soft ids' v4 (the goal's v5) is the same task on

@@ -4,8 +4,13 @@ with the least squeeze.
 The cylinder's mass and friction are drawn per episode and not observed (the ids' ranges make the
 force that holds it vary 18-fold); the action's last entry sets the squeeze (``finger_action=
 "force"``). The reward pays the lift and charges the squeeze: ``squeeze = -squeeze_weight *
-mean(force_left, force_right) / finger_force`` is added to the wrapped task's reward (its own term
+mean(force_left, force_right) / reference`` is added to the wrapped task's reward (its own term
 in ``info["reward_terms"]``), so a policy that holds harder than it must pays for it at every step.
+The reference is the finger's full force (``squeeze_reference="finger_force"``: a newton costs the
+same on every cylinder) or the episode's static least force m g / (2 mu_s) (``"least"``: a margin
+over the least costs the same on every cylinder, and over constant grips the tissue's expected
+return is highest at 1.2-1.5 times the least; the package's documentation, Results: where the grip
+reward peaks).
 
 Success is the carry test's (held at every env step of the carry, its in-hand slide within the
 limit) and the carry's mean squeeze - the mean over its env steps of the two fingers' mean normal
