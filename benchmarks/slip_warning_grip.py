@@ -35,14 +35,22 @@ ALARM = 3
 """Env steps of warning without a slip that count as a false alarm."""
 
 
-def episode(env: gym.Env, factor: float, seed: int) -> dict[str, float | bool]:
+def constant_grip(env: gym.Env, factor: float, seed: int) -> tuple[ConstantGripPolicy, float, float, float, float]:
+    """The constant grip of ``factor`` times the seeded episode's static least force m g / (2 mu),
+    its mass and friction read from the env's privileged state, capped at the finger's full force:
+    (policy, mu, mass, static least [N], force [N]). The env is left reset to the episode's start."""
     base = env.unwrapped
     env.reset(seed=seed)
     state = base.privileged_state()
     mu, mass = float(state[P["friction_static"]]), float(state[P["object_mass"]])
     least = mass * 9.81 / (2.0 * mu)
     force = min(factor * least, float(base.plan.args.control.finger_force))
-    policy = ConstantGripPolicy(env, force)
+    return ConstantGripPolicy(env, force), mu, mass, least, force
+
+
+def episode(env: gym.Env, factor: float, seed: int) -> dict[str, float | bool]:
+    base = env.unwrapped
+    policy, mu, mass, _, force = constant_grip(env, factor, seed)
     obs, _ = env.reset(seed=seed)
     rel0, warn, steps, slip_step = None, [], 0, None
     dt = 1.0 / base.control_frequency

@@ -25,11 +25,9 @@ import gymnasium as gym
 import numpy as np
 
 import softgrasp_env  # noqa: F401
-from softgrasp_env.observation import PRIVILEGED_NAMES
-from softgrasp_env.policies.grip import ConstantGripPolicy
+from benchmarks.slip_warning_grip import constant_grip
 from softgrasp_env.registration import SQUEEZE_WEIGHT_LEAST
 
-P = {n: k for k, n in enumerate(PRIVILEGED_NAMES)}
 FIELDS = ("id", "factor", "seed", "mass", "mu", "static_least", "force", "steps", "base", "sum_f", "sum_r", "sum_r2",
           "carried", "success", "carry_squeeze", "least_squeeze")  # fmt: skip
 SQUEEZE_FACTOR = 2.0
@@ -39,12 +37,7 @@ OUT = Path("docs/results/squeeze_charge.csv")
 
 def episode(env: gym.Env, factor: float, seed: int) -> dict:
     base = env.unwrapped
-    env.reset(seed=seed)
-    state = base.privileged_state()
-    mu, mass = float(state[P["friction_static"]]), float(state[P["object_mass"]])
-    static = mass * 9.81 / (2.0 * mu)
-    force = min(factor * static, float(base.plan.args.control.finger_force))
-    policy = ConstantGripPolicy(env, force)
+    policy, mu, mass, static, force = constant_grip(env, factor, seed)
     obs, _ = env.reset(seed=seed)
     row = {"factor": factor, "seed": seed, "mass": mass, "mu": mu, "static_least": static, "force": force, "steps": 0,
            "base": 0.0, "sum_f": 0.0, "sum_r": 0.0, "sum_r2": 0.0}  # fmt: skip

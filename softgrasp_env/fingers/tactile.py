@@ -346,6 +346,24 @@ def _check_taxels(taxels) -> np.ndarray:
     return taxels
 
 
+def _along_net(taxels: np.ndarray, channels: slice, pressed: float) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                                          np.ndarray]:  # fmt: skip
+    """What :func:`shear_lag` and :func:`edge_friction` read: per taxel, whether it is pressed (at
+    least ``pressed`` times its pad's largest pressure), its pressure, and the in-face vector of
+    ``channels`` (shear or traction) projected on the direction of the pad's sum of it over the
+    pressed taxels; per pad, the size of that sum (0: no direction)."""
+    if not (np.isfinite(pressed) and 0.0 <= pressed <= 1.0):
+        raise ValueError(f"pressed must be a share of the pad's largest pressure in [0, 1], got {pressed!r}")
+    taxels = _check_taxels(taxels)
+    pressure = np.maximum(taxels[..., 0], 0.0)
+    vec = taxels[..., channels]
+    on = (pressure > 0.0) & (pressure >= pressed * pressure.max(axis=(-2, -1), keepdims=True))
+    total = (vec * on[..., None]).sum(axis=(-3, -2))
+    size = np.linalg.norm(total, axis=-1)
+    direction = total / np.where(size > 0.0, size, 1.0)[..., None]
+    return on, pressure, (vec * direction[..., None, None, :]).sum(axis=-1), size
+
+
 def shear_lag(taxels: np.ndarray, *, pressed: float = PRESSED_SHARE) -> np.ndarray:
     """Per pad, how far the least sheared of its pressed taxels lags behind the most sheared, along
     the pad's mean shear: 1 - min / max of the taxels' shear projected on the direction of the
@@ -365,16 +383,7 @@ def shear_lag(taxels: np.ndarray, *, pressed: float = PRESSED_SHARE) -> np.ndarr
     (..., 2, rows, cols, channels). Returns (..., 2). A pad that presses nothing, or has not
     sheared along its mean direction (the rigid kinds read no shear), reads 0: no signal, not
     "no slip"."""
-    if not (np.isfinite(pressed) and 0.0 <= pressed <= 1.0):
-        raise ValueError(f"pressed must be a share of the pad's largest pressure in [0, 1], got {pressed!r}")
-    taxels = _check_taxels(taxels)
-    pressure = np.maximum(taxels[..., 0], 0.0)
-    shear = taxels[..., 3:5]
-    on = (pressure > 0.0) & (pressure >= pressed * pressure.max(axis=(-2, -1), keepdims=True))
-    total = (shear * on[..., None]).sum(axis=(-3, -2))
-    size = np.linalg.norm(total, axis=-1)
-    direction = total / np.where(size > 0.0, size, 1.0)[..., None]
-    along = (shear * direction[..., None, None, :]).sum(axis=-1)
+    on, _, along, size = _along_net(taxels, slice(3, 5), pressed)
     most = np.where(on, along, -np.inf).max(axis=(-2, -1))
     least = np.where(on, along, np.inf).min(axis=(-2, -1))
     signal = on.any(axis=(-2, -1)) & (size > 0.0) & (most > 0.0)
@@ -401,16 +410,7 @@ def edge_friction(taxels: np.ndarray, *, pressed: float = PRESSED_SHARE) -> np.n
     contact normals fan out across the strip and their in-face components cancel over the pad), which
     would read as friction. Same ``taxels`` as :func:`shear_lag`; (..., 2), 0 for a pad that
     presses nothing or carries no traction."""
-    if not (np.isfinite(pressed) and 0.0 <= pressed <= 1.0):
-        raise ValueError(f"pressed must be a share of the pad's largest pressure in [0, 1], got {pressed!r}")
-    taxels = _check_taxels(taxels)
-    pressure = np.maximum(taxels[..., 0], 0.0)
-    traction = taxels[..., 1:3]
-    on = (pressure > 0.0) & (pressure >= pressed * pressure.max(axis=(-2, -1), keepdims=True))
-    total = (traction * on[..., None]).sum(axis=(-3, -2))
-    size = np.linalg.norm(total, axis=-1)
-    direction = total / np.where(size > 0.0, size, 1.0)[..., None]
-    along = (traction * direction[..., None, None, :]).sum(axis=-1)
+    on, pressure, along, size = _along_net(taxels, slice(1, 3), pressed)
     ratio = np.where(on, along / np.where(on, pressure, 1.0), 0.0).max(axis=(-2, -1))
     return np.where(size > 0.0, np.maximum(ratio, 0.0), 0.0)
 
