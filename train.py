@@ -234,8 +234,9 @@ def main(argv: list[str] | None = None) -> int:
                              "the actor only the env's observation (softgrasp_env.policies.asymmetric); the run is "
                              "named <env>_<algo>-asymmetric_<seed>")  # fmt: skip
     parser.add_argument("--demos", type=int, default=None, metavar="N",
-                        help="start an off-policy learner's replay buffer with N episodes of the scripted grasp "
-                             "(agents/demos.py: HER on the goal id never lifts the cylinder by itself)")
+                        help="start an off-policy learner's replay buffer with N episodes of the scripted grasp, on the "
+                             "grip ids the shear-lag grip script (agents/demos.py: HER on the goal id never "
+                             "lifts the cylinder by itself)")
     parser.add_argument(
         "--checkpoint-every",
         type=int,
@@ -325,9 +326,6 @@ def main(argv: list[str] | None = None) -> int:
     if asymmetric and algo not in ASYMMETRIC_ALGOS:
         parser.error(f"--asymmetric is built for {', '.join(ASYMMETRIC_ALGOS)}, not {algo} (the goal env's dict "
                      "observations are HER's)")  # fmt: skip
-    if asymmetric and ns.demos is not None:
-        parser.error("--demos records the scripted grasp's observations without the privileged state; "
-                     "not with --asymmetric")  # fmt: skip
     if ns.demos is not None and algo == "ppo":
         parser.error("--demos fills a replay buffer; ppo has none (an off-policy algo: sac, her-sac)")
     if ns.demos is not None and n_envs != 1:
@@ -406,7 +404,8 @@ def main(argv: list[str] | None = None) -> int:
         if ns.demos is not None:
             assert isinstance(model, OffPolicyAlgorithm)  # ppo refused above
             tic = time.perf_counter()
-            meta["demonstrations"] = add_demonstrations(model, env_id, env_kwargs, ns.demos, seed=seed, norm=norm)
+            meta["demonstrations"] = add_demonstrations(model, env_id, env_kwargs, ns.demos, seed=seed, norm=norm,
+                                                          privileged=asymmetric)
             meta["demonstrations"]["seconds"] = round(time.perf_counter() - tic, 1)
             _log(f"{ns.demos} scripted demonstrations in the replay buffer: {meta['demonstrations']['transitions']} "
                  f"transitions, {meta['demonstrations']['successes']} successes")  # fmt: skip

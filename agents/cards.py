@@ -341,7 +341,8 @@ def _card_extras(card: dict[str, Any]) -> list[str]:
                     "observation alone |")  # fmt: skip
     demos = card.get("demonstrations")
     if demos:
-        rows.append(f"| demonstrations | {demos['episodes']} episodes of the scripted grasp (seeds {demos['seeds']}; "
+        script = {"ShearLagGripPolicy": "the shear-lag grip script"}.get(demos.get("policy"), "the scripted grasp")
+        rows.append(f"| demonstrations | {demos['episodes']} episodes of {script} (seeds {demos['seeds']}; "
                     f"{demos['successes']} successful, {demos['transitions']:,} transitions) in the replay buffer "
                     "before training (`--demos`, agents/demos.py) |")  # fmt: skip
     return rows

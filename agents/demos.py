@@ -11,6 +11,15 @@ with the heights they reached like any other episode. Only the buffer is filled:
 behaviour-cloning loss, no Q-filter (Nair et al.'s further terms), so a result with demos
 measures what the data alone gives.
 
+On the grip-force ids (finger_action "force") the demonstrations come from the shear-lag grip
+script (softgrasp_env.policies.ShearLagGripPolicy), which sets the squeeze from the taxels. A run
+without the taxels (``--env-kwargs tactile=None``) gets the same episodes: the script runs on the
+id's own taxels and the buffer stores the observation the learner has (the taxel entries left
+out; the taxels are a sensor and change nothing of the physics), so learners with and without
+touch start from the same demonstrations. An asymmetric run (``train.py --asymmetric``) stores
+each observation as ``PrivilegedObservation`` gives it to the learner: ``sensed`` and
+``privileged``.
+
 The transitions are stored as SB3's off-policy loop stores its own
 (OffPolicyAlgorithm._store_transition): the raw observations (a VecNormalize run normalises at
 sampling; its running statistics are updated with the demonstrations' observations as they would
@@ -27,6 +36,8 @@ import gymnasium as gym
 import numpy as np
 from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 from stable_baselines3.common.vec_env import VecNormalize
+
+from softgrasp_env.wrappers import PRIVILEGED, SENSED, PrivilegedObservation
 
 DEMO_SEED_BASE = 2_000_000
 MAX_DEMOS = 10_000
@@ -47,33 +58,93 @@ def _batched(obs: Any) -> Any:
     return np.asarray(obs)[None]
 
 
+def _update_statistics(norm: VecNormalize, obs: Any) -> None:
+    """VecNormalize's running observation statistics, updated with one env's observation (per key
+    of a dict observation, as VecNormalize itself does)."""
+    if isinstance(norm.obs_rms, dict):
+        for key, rms in norm.obs_rms.items():
+            rms.update(np.asarray(obs[key])[None])
+    else:
+        norm.obs_rms.update(_batched(obs))
+
+
+TAXEL_KEYWORDS = ("tactile", "tactile_history")
+"""The gym.make keywords a run without the taxels may set; its demonstrations run without them."""
+
+
+def _grip_env(env: gym.Env) -> bool:
+    return env.unwrapped.plan.args.control.finger_action == "force"
+
+
+def demonstrator(env_id: str, env_kwargs: dict[str, Any]) -> tuple[gym.Env, Any, np.ndarray | None]:
+    """The env the demonstrations run in, its scripted policy, and the indices of the learner's
+    observation entries in that env's observation (None: the same observation).
+
+    The scripted grasp (ScriptedGraspPolicy) on the lift ids; on a grip-force id the shear-lag grip
+    script, in the id's own taxels when the learner's env has none (module docstring)."""
+    from softgrasp_env.policies import ScriptedGraspPolicy
+    from softgrasp_env.policies.grip import ShearLagGripPolicy
+
+    env = gym.make(env_id, **env_kwargs)
+    if not _grip_env(env):
+        return env, ScriptedGraspPolicy.for_env(env), None
+    if env.unwrapped.plan.taxel_grid is not None:
+        return env, ShearLagGripPolicy(env), None
+    names = env.unwrapped.obs_names
+    env.close()
+    env = gym.make(env_id, **{k: v for k, v in env_kwargs.items() if k not in TAXEL_KEYWORDS})
+    if env.unwrapped.plan.taxel_grid is None:
+        env.close()
+        raise ValueError(f"demonstrations on {env_id}: the grip script reads the taxels, and {env_id} has none "
+                         "by default")  # fmt: skip
+    index = {n: k for k, n in enumerate(env.unwrapped.obs_names)}
+    missing = [n for n in names if n not in index]
+    if missing:  # an observation the taxel env lacks: the learner's env differs by more than its taxels
+        env.close()
+        raise ValueError(f"demonstrations on {env_id} with {env_kwargs}: the grip script's env (with the taxels) "
+                         f"has no entries {missing[:3]}")  # fmt: skip
+    return env, ShearLagGripPolicy(env), np.array([index[n] for n in names], dtype=np.intp)
+
+
 def add_demonstrations(model: OffPolicyAlgorithm, env_id: str, env_kwargs: dict[str, Any], episodes: int, *,
-                       seed: int, norm: VecNormalize | None = None) -> dict[str, Any]:  # fmt: skip
-    """Run ``episodes`` episodes of the scripted grasp on ``env_id`` (with ``env_kwargs``, an env
-    of its own) and add every transition to ``model``'s replay buffer (see the module docstring).
-    Returns ``{"episodes", "transitions", "successes", "seeds"}``."""
+                       seed: int, norm: VecNormalize | None = None, privileged: bool = False) -> dict[str, Any]:  # fmt: skip
+    """Run ``episodes`` episodes of the scripted policy (:func:`demonstrator`) on ``env_id`` (with
+    ``env_kwargs``, an env of its own) and add every transition to ``model``'s replay buffer (see
+    the module docstring); ``privileged``: observations as PrivilegedObservation gives them (an
+    asymmetric learner's). Returns ``{"episodes", "transitions", "successes", "seeds", "policy"}``."""
     if not isinstance(model, OffPolicyAlgorithm):
         raise TypeError(
             f"demonstrations fill a replay buffer; {type(model).__name__} has none (an off-policy algo: sac, her-sac)"
         )
     if model.n_envs != 1:
         raise ValueError(f"demonstrations are added to a single-env buffer; the model has {model.n_envs} envs")
-    from softgrasp_env.policies import ScriptedGraspPolicy
-
     seeds = demo_seeds(seed, episodes)
-    env = gym.make(env_id, **env_kwargs)
+    env, policy, project = demonstrator(env_id, env_kwargs)
+    if privileged:
+        env = PrivilegedObservation(env)
+
+    def stored(raw: Any) -> Any:
+        """The learner's observation of the demonstrator env's ``raw`` one."""
+        sensed = raw[SENSED] if privileged else raw
+        if project is not None:
+            sensed = sensed[project]
+        return {SENSED: sensed, PRIVILEGED: raw[PRIVILEGED]} if privileged else sensed
+
     try:
-        policy = ScriptedGraspPolicy.for_env(env)
         transitions = successes = 0
         for s in seeds:
-            obs, _ = env.reset(seed=s)
+            if hasattr(policy, "reset"):
+                policy.reset()
+            raw, _ = env.reset(seed=s)
+            obs = stored(raw)
             if norm is not None:
-                norm.obs_rms.update(_batched(obs))
+                _update_statistics(norm, obs)
             while True:
-                action = np.asarray(policy(obs), dtype=np.float32)
-                next_obs, reward, terminated, truncated, info = env.step(action)
+                action = np.asarray(policy(raw[SENSED] if privileged else raw), dtype=np.float32)
+                raw, reward, terminated, truncated, info = env.step(action)
+                next_obs = stored(raw)
                 if norm is not None:
-                    norm.obs_rms.update(_batched(next_obs))
+                    _update_statistics(norm, next_obs)
                 done = terminated or truncated
                 # SB3 stores a time limit as done plus TimeLimit.truncated (the target bootstraps there)
                 infos = [
@@ -89,7 +160,7 @@ def add_demonstrations(model: OffPolicyAlgorithm, env_id: str, env_kwargs: dict[
     finally:
         env.close()
     return {"episodes": episodes, "transitions": transitions, "successes": successes,
-            "seeds": f"{seeds[0]}-{seeds[-1]}" if seeds else ""}  # fmt: skip
+            "seeds": f"{seeds[0]}-{seeds[-1]}" if seeds else "", "policy": type(policy).__name__}  # fmt: skip
 
 
-__all__ = ["DEMO_SEED_BASE", "MAX_DEMOS", "add_demonstrations", "demo_seeds"]
+__all__ = ["DEMO_SEED_BASE", "MAX_DEMOS", "TAXEL_KEYWORDS", "add_demonstrations", "demo_seeds", "demonstrator"]

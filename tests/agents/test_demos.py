@@ -107,3 +107,51 @@ def test_her_exploration_counts_the_lifts_in_a_buffer(tmp_path, capsys):
     assert last[0] == "all" and last[1:4] == ["2", "2", "2"] and last[5] == "2" and float(last[4].rstrip("%")) > 20
     with pytest.raises(SystemExit):
         her_exploration.main([str(tmp_path / "nothing.pkl")])
+
+
+GRIP = "SoftGraspGripRigid-v4"  # the shear-lag script's fallback (gross slip) holds there; rigid: fast
+BLIND = {"tactile": None, "tactile_history": 1}  # the grip id without its taxels
+
+
+def test_grip_demonstrations_come_from_the_grip_script_and_a_learner_without_taxels_gets_the_same_episodes():
+    """On a grip id the demonstrations are the shear-lag grip script's; a run without the taxels
+    stores the same episodes with the taxel entries left out (the taxels change no physics)."""
+    stores = {}
+    for kwargs in ({}, BLIND):
+        venv = make_vec_env(GRIP, n_envs=1, seed=0, env_kwargs=kwargs)
+        model = make_model("sac", venv, seed=0, buffer_size=400, learning_starts=10_000)
+        stats = add_demonstrations(model, GRIP, kwargs, 1, seed=0)
+        assert stats["policy"] == "ShearLagGripPolicy" and model.replay_buffer.pos == stats["transitions"] > 50
+        stores[bool(kwargs)] = (stats, model.replay_buffer, gym.make(GRIP, **kwargs).unwrapped.obs_names)
+        venv.close()
+    (full, buf, names), (blind, blind_buf, blind_names) = stores[False], stores[True]
+    assert full["successes"] == blind["successes"] and full["transitions"] == blind["transitions"]
+    assert len(blind_names) < len(names) and not any(n.startswith("tactile") for n in blind_names)
+    keep = [names.index(n) for n in blind_names]
+    n = full["transitions"]
+    np.testing.assert_array_equal(blind_buf.observations[:n, 0], buf.observations[:n, 0][:, keep])
+    np.testing.assert_array_equal(blind_buf.actions[:n], buf.actions[:n])
+    np.testing.assert_array_equal(blind_buf.rewards[:n], buf.rewards[:n])
+    # The blind learner's first observation is its own env's reset observation on the demo seed.
+    first, _ = gym.make(GRIP, **BLIND).reset(seed=DEMO_SEED_BASE)
+    np.testing.assert_array_equal(blind_buf.observations[0, 0], first)
+
+
+def test_an_asymmetric_run_stores_the_privileged_state_and_normalises_each_key():
+    from softgrasp_env.wrappers import PRIVILEGED, SENSED, PrivilegedObservation
+
+    venv = VecNormalize(make_vec_env(GRIP, n_envs=1, seed=0, env_kwargs=BLIND,
+                                     wrapper_class=PrivilegedObservation), norm_obs=True, norm_reward=False)  # fmt: skip
+    model = make_model("sac", venv, seed=0, asymmetric=True, buffer_size=400, learning_starts=10_000)
+    before = {k: rms.count for k, rms in venv.obs_rms.items()}
+    stats = add_demonstrations(model, GRIP, BLIND, 1, seed=0, norm=venv, privileged=True)
+    n = stats["transitions"]
+    env = PrivilegedObservation(gym.make(GRIP, **BLIND))
+    first, _ = env.reset(seed=DEMO_SEED_BASE)
+    for key in (SENSED, PRIVILEGED):
+        np.testing.assert_array_equal(model.replay_buffer.observations[key][0, 0], first[key])
+        assert venv.obs_rms[key].count == pytest.approx(before[key] + n + 1)
+    # the privileged state is the episode's own: its mass and friction stay put, its pose moves
+    priv = model.replay_buffer.observations[PRIVILEGED][:n, 0]
+    assert np.ptp(priv, axis=0).max() > 0.01 and (np.ptp(priv, axis=0) == 0.0).any()
+    venv.close()
