@@ -72,6 +72,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="the tissue's friction law (default: the preset's, patch)")
     parser.add_argument("--preset", default=None, help="the tissue's resolution preset, e.g. converged")
     parser.add_argument("--threads", type=int, default=None, help="the tissue solver's threads (SimConfig.threads)")
+    parser.add_argument("--min-rows", type=int, default=None, help="the fewest particle rows across a finger face "
+                        "(gym.make's tissue_min_rows)")
     parser.add_argument("--seed", type=int, default=0,
                         help="episodes are seeded from seed * 10^6 on: chunks with different seeds never repeat one")
     ns = parser.parse_args(argv)
@@ -80,6 +82,8 @@ def main(argv: list[str] | None = None) -> int:
         kwargs["preset"] = ns.preset
     if ns.threads is not None:
         kwargs["threads"] = ns.threads
+    if ns.min_rows is not None:
+        kwargs["tissue_min_rows"] = ns.min_rows
     if ns.coupling:
         from dataclasses import replace
 
@@ -89,7 +93,8 @@ def main(argv: list[str] | None = None) -> int:
     failed = 0
     for stream in ns.streams.split(","):
         r = soak(ns.env, ns.steps, stream, seed=ns.seed, **kwargs)
-        print(f"{ns.env} {stream} (seed {ns.seed}{', ' + ns.preset if ns.preset else ''}): {r['steps']} steps, "
+        label = "".join([f", {ns.preset}" if ns.preset else "", f", min rows {ns.min_rows}" if ns.min_rows else ""])
+        print(f"{ns.env} {stream} (seed {ns.seed}{label}): {r['steps']} steps, "
               f"{r['episodes']} episodes, {len(r['divergences'])} divergences, largest tissue deviation "
               f"{r['max_deviation'] * 1e3:.2f} mm, {r['steps_per_s']:.1f} env steps/s (1 process, "
               f"{ns.threads or 1} solver thread(s))", flush=True)  # fmt: skip

@@ -149,6 +149,10 @@ KEYWORDS: tuple[Keyword, ...] = (
     _kw("layers", "physics", "int or 'auto'", None,
         "Element layers through the pad's thickness, 1 to 8, or 'auto' (a layer about as thick as the particle "
         "spacing: 1 up to 16,000 per m², 2 at 64,000, 4 at 256,000); None: the preset's, 1"),
+    _kw("tissue_min_rows", "physics", "int", None,
+        "The fewest rows of tissue particles across each side of a finger face, 1 to 4 (2: the 16 mm tip gets two "
+        "rows at 4,000 per m², its groups round and the world 3 steps per physics step instead of 6; "
+        "TissueConfig.min_rows); None: the preset's, 1"),
     _kw("tissue", "physics", "TissueConfig", None,
         "A whole TissueConfig to start from (None: the preset's)"),
     _kw("sim", "physics", "SimConfig", None,
@@ -311,7 +315,7 @@ class PhysicsConfig:
            tissue_contact_cone: bool | None = None, friction_law: str | None = None,
            shear_modulus: float | None = None, group_energy: str | None = None,
            hourglass_stiffness: float | None = None, layers: int | str | None = None,
-           tissue: TissueConfig | None = None, sim: SimConfig | None = None,
+           tissue_min_rows: int | None = None, tissue: TissueConfig | None = None, sim: SimConfig | None = None,
            threads: int | None = None) -> PhysicsConfig:  # fmt: skip
         """The configs the keywords mean: the kind's config with its own keywords folded in, the
         preset's tissue and solver (or the whole ones given) with the tissue keywords over them.
@@ -343,7 +347,8 @@ class PhysicsConfig:
                                        ("friction_kinetic", friction_kinetic), ("contact_cone", tissue_contact_cone),
                                        ("friction_law", friction_law), ("shear_modulus", shear_modulus),
                                        ("group_energy", group_energy), ("hourglass_stiffness", hourglass_stiffness),
-                                       ("layers", layers if layers != "auto" else None))
+                                       ("layers", layers if layers != "auto" else None),
+                                       ("min_rows", tissue_min_rows))
                      if v is not None}  # fmt: skip
         tissue = replace(tissue, **overrides)  # validated by TissueConfig
         if layers == "auto":
@@ -670,7 +675,7 @@ class EnvArguments:
                                                          "particle_density", "friction_static", "friction_kinetic",
                                                          "tissue_contact_cone", "friction_law", "shear_modulus",
                                                          "group_energy", "hourglass_stiffness", "layers",
-                                                         "tissue", "sim", "threads")})  # fmt: skip
+                                                         "tissue_min_rows", "tissue", "sim", "threads")})  # fmt: skip
         lift = LiftConfig(v["start"], v["reward_type"], v["success_height"], v["reach_weight"], v["max_tilt"],
                           _tuple(v["approach_range"]))  # fmt: skip
         defaults = STARTS[lift.start].defaults  # None: the start's

@@ -59,6 +59,18 @@ class TissueConfig:
     which the continuum group energy's limit shows as a pad 5 to 10 % stiffer than the continuum
     (the package's documentation, Results: convergence in space). Keyword-only, so that the
     positional order of the fields after it is that of the releases before it."""
+    min_rows: int = field(default=1, kw_only=True)
+    """The fewest rows of particles across each side of a box core's face [-], 1 to 4: a face gets
+    max(min_rows, round(side / spacing)) along each side. 1, the default: as the spacing gives, so
+    at 4,000 per m^2 (16 mm spacing) the finger's 16 mm wide tip face has one row, and the groups
+    that straddle the tip and the inner face are nearly flat (their rest moments' smallest
+    eigenvalue 0.03 of their largest). A flat group is stiff across its thin side (its stiffness
+    per unit mass, 2 G V / the moment's smallest eigenvalue, builder.continuum_groups, 420,000 /s^2
+    against a median 65,000), and the world's step rule (compliant.substeps_for) takes its world
+    steps from the stiffest group: 6 per physics step at 1/240 s, where the inner face's groups
+    alone need 3. 2 gives the tip two rows (36 particles a pad instead of 30), the tip's groups
+    round, 3 world steps. Changes nothing where the spacing already gives 2 rows (from about
+    16,000 per m^2 on the finger). Keyword-only, after ``layers``."""
     group_size: int = 8
     """Particles per implicit shape-matching group, centre included (thesis 5.2.1 *groupSize*), 4 to
     16. Larger groups span most of a pad (30 particles a face at the default density) and let it
@@ -138,6 +150,7 @@ class TissueConfig:
         check_range("particle_density", self.particle_density, 100.0, 1e7, owner=o)
         check_range("extrude", self.extrude, 0.0, 0.1, lo_open=True, owner=o)
         check_int("layers", self.layers, 1, 8, owner=o)
+        check_int("min_rows", self.min_rows, 1, 4, owner=o)
         check_int("group_size", self.group_size, 4, 16, owner=o)
         check_range("mass_density", self.mass_density, 100.0, 1e4, owner=o)
         check_bool("contact_cone", self.contact_cone, owner=o)

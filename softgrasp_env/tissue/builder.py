@@ -121,10 +121,12 @@ def _check_faces(shape: CoreShape, faces) -> frozenset[str] | None:
     return chosen
 
 
-def sample_surface(shape: CoreShape, spacing: float, *, faces=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def sample_surface(shape: CoreShape, spacing: float, *, faces=None,
+                   min_rows: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
     """Points spread evenly over the surface at about ``spacing``: (points, outward normals, area
     each point stands for). Areas sum to the surface area exactly. ``faces`` (box cores only:
-    names from BOX_FACES) keeps those faces and leaves the rest bare."""
+    names from BOX_FACES) keeps those faces and leaves the rest bare; ``min_rows``: the fewest rows
+    along each side of a box's face (TissueConfig.min_rows)."""
     if not spacing > 0.0:
         raise ValueError(f"spacing must be > 0, got {spacing!r}")
     chosen = _check_faces(shape, faces)
@@ -133,8 +135,8 @@ def sample_surface(shape: CoreShape, spacing: float, *, faces=None) -> tuple[np.
         h = np.asarray(shape.half_extents, dtype=np.float64)
         for axis in range(3):
             u_ax, v_ax = [a for a in range(3) if a != axis]
-            n_u = _count(2 * h[u_ax], spacing)
-            n_v = _count(2 * h[v_ax], spacing)
+            n_u = _count(2 * h[u_ax], spacing, minimum=min_rows)
+            n_v = _count(2 * h[v_ax], spacing, minimum=min_rows)
             uu, vv = _grid(n_u, n_v)
             for sign in (1.0, -1.0):
                 if chosen is not None and f"{'+' if sign > 0 else '-'}{'xyz'[axis]}" not in chosen:
@@ -545,7 +547,7 @@ def build_combined_body(
     check_fits((layers + 1) * int(math.ceil(shape.area * tissue.particle_density)),
                tissue.group_size + (3 if layers > 1 else 0),
                what="combined body")  # fmt: skip
-    pts, nrm, area = sample_surface(shape, tissue.spacing, faces=faces)
+    pts, nrm, area = sample_surface(shape, tissue.spacing, faces=faces, min_rows=tissue.min_rows)
     pts = pts + offset
     if extrude_direction == "radial":
         d = pts / np.maximum(np.linalg.norm(pts, axis=1, keepdims=True), 1e-12)

@@ -144,3 +144,40 @@ def test_the_strain_limit_holds_a_particle_within_reach_of_its_core(limit):
     assert out.rigid_impulse[0, 2] + M_OUTER * state.particle_v[1, 2] == pytest.approx(0.0, abs=1e-15)
     assert state.particle_v[1, 2] < 0.0  # pulled back toward the core
 
+
+
+def test_two_rows_on_the_tip_round_its_groups_and_halve_the_world_steps():
+    """TissueConfig.min_rows: at 4,000 per m^2 the v4 pad's 16 mm tip has one row of particles, so
+    the groups across the tip and the inner face are flat (rest moments' eigenvalue ratio 0.03) and
+    stiff across their thin side, and the step rule takes 6 world steps at 1/240 s from them. Two
+    rows (6 particles more a pad) round them: 3 steps, what the inner face alone needs. Where the
+    spacing gives two rows already (16,000 per m^2) nothing changes."""
+    from softgrasp_env.presets import TISSUE_V4
+
+    base = replace(TissueConfig(**{k: v for k, v in TISSUE_V4.items() if k != "layers"}), layers=1)
+    half = (0.008, 0.02, 0.03)
+
+    def pad(**kw):
+        return build_combined_body(CoreShape("box", half_extents=half), replace(base, **kw), faces=("+x", "-z"))
+
+    def flattest(model):
+        ratios = []
+        for i in range(model.particle_count):
+            e = slice(int(model.group_offsets[i]), int(model.group_offsets[i + 1]))
+            q, m = model.group_rest_offset[e], model.particle_mass[model.group_members[e]]
+            w = np.linalg.eigvalsh((m[:, None, None] * q[:, :, None] * q[:, None, :]).sum(axis=0))
+            ratios.append(w[0] / w[2])
+        return min(ratios)
+
+    one, two, face = pad(), pad(min_rows=2), build_combined_body(CoreShape("box", half_extents=half), base, faces=("+x",))
+    assert (one.particle_count, two.particle_count) == (30, 36)
+    assert flattest(one) < 0.03 and flattest(two) > 0.1
+    assert substeps_for(one, 1 / 240) == 6 and substeps_for(two, 1 / 240) == substeps_for(face, 1 / 240) == 3
+    assert two.group_kappa.max() < 0.3 * one.group_kappa.max()
+    fine = replace(base, particle_density=16_000.0)
+    a = build_combined_body(CoreShape("box", half_extents=half), fine, faces=("+x", "-z"))
+    b = build_combined_body(CoreShape("box", half_extents=half), replace(fine, min_rows=2), faces=("+x", "-z"))
+    np.testing.assert_array_equal(a.particle_rest_x, b.particle_rest_x)
+    np.testing.assert_array_equal(a.group_kappa, b.group_kappa)
+    with pytest.raises(ValueError, match="min_rows"):
+        replace(base, min_rows=5)
