@@ -1,6 +1,7 @@
 """The physics floor and how near each env gets to it, in one run.
 
     PYTHONPATH=. python benchmarks/physics_floor.py [--seconds 3] [--repeats 3] [--ids SoftGrasp-v4,...]
+        [--min-rows 2]      # the soft ids' pads with two particle rows across every face (tissue_min_rows)
 
 - **Floor**: pybullet alone stepping the scene's rigid bodies - the ground, the free cylinder, the
   palm on its arm constraint and the two prismatic finger cores squeezing the cylinder - nothing
@@ -48,11 +49,11 @@ hand-over and the env's own Python as a share of an env step (soft, rigid); the 
 env steps/s on one thread."""
 
 
-def _grasped(env_id: str):
+def _grasped(env_id: str, **kwargs):
     """The env after the scripted grasp has closed on the cylinder (40 env steps from the gentle
-    start): the bodies and contacts the floor steps."""
+    start): the bodies and contacts the floor steps; ``kwargs`` go to gym.make."""
     easy = env_id.replace("SoftGrasp", "SoftGraspEasy", 1) if "Easy" not in env_id else env_id
-    env = gym.make(easy)
+    env = gym.make(easy, **kwargs)
     policy = ScriptedGraspPolicy.for_env(env)
     obs, _ = env.reset(seed=0)
     for _ in range(40):
@@ -60,9 +61,10 @@ def _grasped(env_id: str):
     return env
 
 
-def floor(env_id: str, seconds: float) -> tuple[float, float]:
-    """(pybullet steps/s, its world step [s]) of ``env_id``'s scene, nothing of ours around it."""
-    env = _grasped(env_id)
+def floor(env_id: str, seconds: float, **kwargs) -> tuple[float, float]:
+    """(pybullet steps/s, its world step [s]) of ``env_id``'s scene (``kwargs`` to gym.make), nothing
+    of ours around it."""
+    env = _grasped(env_id, **kwargs)
     scene = env.unwrapped.scene
     client = scene.client
     h = env.unwrapped.plan.scene.sim.dt / (scene.bullet_steps * scene.world_steps)
@@ -152,7 +154,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--ids", default=",".join(IDS))
     parser.add_argument("--no-converged", action="store_true",
                         help="leave out SoftGrasp-v4 at preset='converged' (its target: env steps/s on one thread)")
+    parser.add_argument("--min-rows", type=int, default=None,
+                        help="the soft ids' fewest particle rows across a finger face (gym.make's tissue_min_rows)")
     ns = parser.parse_args(argv)
+    soft = {} if ns.min_rows is None else {"tissue_min_rows": ns.min_rows}
+
+    def kw(env_id: str) -> dict:
+        return {} if "Rigid" in env_id else soft
+
     ids = ns.ids.split(",")
     unknown = sorted(set(ids) - set(softgrasp_env.ENV_IDS))
     if unknown:
@@ -168,19 +177,19 @@ def main(argv: list[str] | None = None) -> int:
     floor_ids = dict.fromkeys(["SoftGraspRigid-v3"] + [i for i in ids if "Rigid" not in i])
     for r in range(ns.repeats):
         for fid in floor_ids:
-            rate, h = floor(fid, ns.seconds)
+            rate, h = floor(fid, ns.seconds, **kw(fid))
             floors[h] = max(floors.get(h, 0.0), rate)
         for env_id in ids:
-            rate, _, steps = env_rate(env_id, ns.seconds, breakdown=False)
+            rate, _, steps = env_rate(env_id, ns.seconds, breakdown=False, **kw(env_id))
             rates[env_id] = max(rates[env_id], rate)
             pb_steps[env_id] = steps
         if r == ns.repeats - 1:
             for env_id in ids:
-                stages[env_id] = env_rate(env_id, ns.seconds, breakdown=True)[1]
+                stages[env_id] = env_rate(env_id, ns.seconds, breakdown=True, **kw(env_id))[1]
 
     converged = math.nan
     if not ns.no_converged:  # one thread, the env's default
-        converged = max(env_rate(CONVERGED_ID, ns.seconds, breakdown=False, preset="converged")[0] for _ in range(ns.repeats))
+        converged = max(env_rate(CONVERGED_ID, ns.seconds, breakdown=False, preset="converged", **soft)[0] for _ in range(ns.repeats))
 
     sim_dt = 1.0 / 240.0
     base = floors[min(floors, key=lambda h: abs(h - sim_dt))]

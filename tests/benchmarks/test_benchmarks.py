@@ -152,6 +152,12 @@ def test_physics_floor_prints_the_floor_the_ratios_and_a_breakdown_that_adds_up(
     assert soft[1] > 0 and soft[0] > 0 and abs(sum(soft[:5]) - soft[5]) <= 3, out  # rounding of 5 figures
     rigid = [float(x) for x in breakdown.split("SoftGraspRigid-v3")[1].split()[:6]]
     assert rigid[1] == 0 and rigid[2] == 0, out  # no tissue
+    # two particle rows across every face: the tip's groups round, 3 world steps per physics step
+    out = _run_plain("physics_floor.py", "--seconds", "0.3", "--repeats", "1", "--no-converged", "--ids",
+                     "SoftGrasp-v4", "--min-rows", "2")  # fmt: skip
+    row = next(line.split() for line in out.split("where an env step goes")[0].splitlines()
+               if line.startswith("SoftGrasp-v4"))  # fmt: skip
+    assert int(row[3]) == 36, out
 
 
 def test_torch_threads_trains_at_each_count_alone_and_side_by_side():
