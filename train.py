@@ -235,7 +235,7 @@ def main(argv: list[str] | None = None) -> int:
                              "named <env>_<algo>-asymmetric_<seed>")  # fmt: skip
     parser.add_argument("--demos", type=int, default=None, metavar="N",
                         help="start an off-policy learner's replay buffer with N episodes of the scripted grasp, on the "
-                             "grip ids the shear-lag grip script (agents/demos.py: HER on the goal id never "
+                             "grip ids a tactile grip script (agents/demos.py: HER on the goal id never "
                              "lifts the cylinder by itself)")
     parser.add_argument(
         "--checkpoint-every",

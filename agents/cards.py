@@ -341,7 +341,8 @@ def _card_extras(card: dict[str, Any]) -> list[str]:
                     "observation alone |")  # fmt: skip
     demos = card.get("demonstrations")
     if demos:
-        script = {"ShearLagGripPolicy": "the shear-lag grip script"}.get(demos.get("policy"), "the scripted grasp")
+        script = {"ShearLagGripPolicy": "the shear-lag grip script", "TactileGripPolicy": "the slip grip script"}.get(
+            demos.get("policy"), "the scripted grasp")
         rows.append(f"| demonstrations | {demos['episodes']} episodes of {script} (seeds {demos['seeds']}; "
                     f"{demos['successes']} successful, {demos['transitions']:,} transitions) in the replay buffer "
                     "before training (`--demos`, agents/demos.py) |")  # fmt: skip

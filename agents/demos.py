@@ -11,8 +11,11 @@ with the heights they reached like any other episode. Only the buffer is filled:
 behaviour-cloning loss, no Q-filter (Nair et al.'s further terms), so a result with demos
 measures what the data alone gives.
 
-On the grip-force ids (finger_action "force") the demonstrations come from the shear-lag grip
-script (softgrasp_env.policies.ShearLagGripPolicy), which sets the squeeze from the taxels. A run
+On the grip-force ids (finger_action "force") the demonstrations come from the tactile grip
+script that does best on the id's fingers (:func:`grip_script`): on the tissue the shear-lag
+script (ShearLagGripPolicy: 46 of 50 on SoftGraspGrip-v4), on rigid pads, which do not shear,
+the slip script (TactileGripPolicy: 89 % on the rigid grip ids' cards). Both set the squeeze from
+the taxels. A run
 without the taxels (``--env-kwargs tactile=None``) gets the same episodes: the script runs on the
 id's own taxels and the buffer stores the observation the learner has (the taxel entries left
 out; the taxels are a sensor and change nothing of the physics), so learners with and without
@@ -76,20 +79,29 @@ def _grip_env(env: gym.Env) -> bool:
     return env.unwrapped.plan.args.control.finger_action == "force"
 
 
+def grip_script(env: gym.Env) -> Any:
+    """The tactile grip script demonstrations come from on a grip-force env: ShearLagGripPolicy on
+    tissue fingers, TactileGripPolicy on the others (module docstring)."""
+    from softgrasp_env.policies.grip import ShearLagGripPolicy, TactileGripPolicy
+
+    tissue = env.unwrapped.plan.args.physics.fingers.kind == "tissue"
+    return ShearLagGripPolicy(env) if tissue else TactileGripPolicy(env)
+
+
 def demonstrator(env_id: str, env_kwargs: dict[str, Any]) -> tuple[gym.Env, Any, np.ndarray | None]:
     """The env the demonstrations run in, its scripted policy, and the indices of the learner's
     observation entries in that env's observation (None: the same observation).
 
-    The scripted grasp (ScriptedGraspPolicy) on the lift ids; on a grip-force id the shear-lag grip
-    script, in the id's own taxels when the learner's env has none (module docstring)."""
+    The scripted grasp (ScriptedGraspPolicy) on the lift ids; on a grip-force id its tactile grip
+    script (:func:`grip_script`), in the id's own taxels when the learner's env has none (module
+    docstring)."""
     from softgrasp_env.policies import ScriptedGraspPolicy
-    from softgrasp_env.policies.grip import ShearLagGripPolicy
 
     env = gym.make(env_id, **env_kwargs)
     if not _grip_env(env):
         return env, ScriptedGraspPolicy.for_env(env), None
     if env.unwrapped.plan.taxel_grid is not None:
-        return env, ShearLagGripPolicy(env), None
+        return env, grip_script(env), None
     names = env.unwrapped.obs_names
     env.close()
     env = gym.make(env_id, **{k: v for k, v in env_kwargs.items() if k not in TAXEL_KEYWORDS})
@@ -103,7 +115,7 @@ def demonstrator(env_id: str, env_kwargs: dict[str, Any]) -> tuple[gym.Env, Any,
         env.close()
         raise ValueError(f"demonstrations on {env_id} with {env_kwargs}: the grip script's env (with the taxels) "
                          f"has no entries {missing[:3]}")  # fmt: skip
-    return env, ShearLagGripPolicy(env), np.array([index[n] for n in names], dtype=np.intp)
+    return env, grip_script(env), np.array([index[n] for n in names], dtype=np.intp)
 
 
 def add_demonstrations(model: OffPolicyAlgorithm, env_id: str, env_kwargs: dict[str, Any], episodes: int, *,
@@ -163,4 +175,5 @@ def add_demonstrations(model: OffPolicyAlgorithm, env_id: str, env_kwargs: dict[
             "seeds": f"{seeds[0]}-{seeds[-1]}" if seeds else "", "policy": type(policy).__name__}  # fmt: skip
 
 
-__all__ = ["DEMO_SEED_BASE", "MAX_DEMOS", "TAXEL_KEYWORDS", "add_demonstrations", "demo_seeds", "demonstrator"]
+__all__ = ["DEMO_SEED_BASE", "MAX_DEMOS", "TAXEL_KEYWORDS", "add_demonstrations", "demo_seeds", "demonstrator",
+           "grip_script"]

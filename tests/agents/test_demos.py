@@ -109,19 +109,19 @@ def test_her_exploration_counts_the_lifts_in_a_buffer(tmp_path, capsys):
         her_exploration.main([str(tmp_path / "nothing.pkl")])
 
 
-GRIP = "SoftGraspGripRigid-v4"  # the shear-lag script's fallback (gross slip) holds there; rigid: fast
+GRIP = "SoftGraspGripRigid-v4"  # rigid: fast; its demonstrations are the slip script's
 BLIND = {"tactile": None, "tactile_history": 1}  # the grip id without its taxels
 
 
 def test_grip_demonstrations_come_from_the_grip_script_and_a_learner_without_taxels_gets_the_same_episodes():
-    """On a grip id the demonstrations are the shear-lag grip script's; a run without the taxels
+    """On a rigid grip id the demonstrations are the slip script's; a run without the taxels
     stores the same episodes with the taxel entries left out (the taxels change no physics)."""
     stores = {}
     for kwargs in ({}, BLIND):
         venv = make_vec_env(GRIP, n_envs=1, seed=0, env_kwargs=kwargs)
         model = make_model("sac", venv, seed=0, buffer_size=400, learning_starts=10_000)
         stats = add_demonstrations(model, GRIP, kwargs, 1, seed=0)
-        assert stats["policy"] == "ShearLagGripPolicy" and model.replay_buffer.pos == stats["transitions"] > 50
+        assert stats["policy"] == "TactileGripPolicy" and model.replay_buffer.pos == stats["transitions"] > 50
         stores[bool(kwargs)] = (stats, model.replay_buffer, gym.make(GRIP, **kwargs).unwrapped.obs_names)
         venv.close()
     (full, buf, names), (blind, blind_buf, blind_names) = stores[False], stores[True]
@@ -155,3 +155,11 @@ def test_an_asymmetric_run_stores_the_privileged_state_and_normalises_each_key()
     priv = model.replay_buffer.observations[PRIVILEGED][:n, 0]
     assert np.ptp(priv, axis=0).max() > 0.01 and (np.ptp(priv, axis=0) == 0.0).any()
     venv.close()
+
+
+def test_the_grip_script_is_the_shear_lag_one_on_the_tissue_and_the_slip_one_on_rigid_pads():
+    from agents.demos import grip_script
+
+    assert type(grip_script(gym.make("SoftGraspGrip-v5"))).__name__ == "ShearLagGripPolicy"
+    for env_id in ("SoftGraspGripRigid-v4", "SoftGraspGripRigidTorsion-v4"):
+        assert type(grip_script(gym.make(env_id))).__name__ == "TactileGripPolicy"
