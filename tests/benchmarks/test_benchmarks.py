@@ -170,7 +170,10 @@ def test_learners_times_a_learner_on_the_env_and_on_pendulum():
     out = _run_plain("learners.py", "--env", "SoftGraspRigid-v3", "--steps", "20", "--learners", "sac")
     row = next(line.split() for line in out.splitlines() if line.startswith("sac "))
     ours, pendulum, ratio = (float(x) for x in row[1:4])
-    assert ours > 0 and pendulum > 0 and abs(ratio - ours / pendulum) < 0.01, out
+    # the rates are printed as whole numbers, the ratio to 0.01: at a few dozen steps/s (a loaded
+    # machine) the rounding of the rates alone moves their quotient by more than 0.01
+    slack = 0.005 + (ours / pendulum) * (0.5 / ours + 0.5 / pendulum)
+    assert ours > 0 and pendulum > 0 and abs(ratio - ours / pendulum) <= slack, out
 
 
 def test_env_throughput_prints_every_id_asked_for():
