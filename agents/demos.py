@@ -15,11 +15,10 @@ On the grip-force ids (finger_action "force") the demonstrations come from the t
 script that does best on the id's fingers (:func:`grip_script`): on the tissue the shear-lag
 script (ShearLagGripPolicy: 46 of 50 on SoftGraspGrip-v4), on rigid pads, which do not shear,
 the slip script (TactileGripPolicy: 89 % on the rigid grip ids' cards). Both set the squeeze from
-the taxels. A run
-without the taxels (``--env-kwargs tactile=None``) gets the same episodes: the script runs on the
-id's own taxels and the buffer stores the observation the learner has (the taxel entries left
-out; the taxels are a sensor and change nothing of the physics), so learners with and without
-touch start from the same demonstrations. An asymmetric run (``train.py --asymmetric``) stores
+the taxels. A run without the taxels (``--env-kwargs tactile=None tactile_history=1``) gets the
+same episodes: the script runs on the id's own taxels and the buffer stores the observation the
+learner has (the taxel entries left out; the taxels are a sensor and change nothing of the
+physics), so learners with and without touch start from the same demonstrations. An asymmetric run (``train.py --asymmetric``) stores
 each observation as ``PrivilegedObservation`` gives it to the learner: ``sensed`` and
 ``privileged``.
 
