@@ -59,18 +59,6 @@ class TissueConfig:
     which the continuum group energy's limit shows as a pad 5 to 10 % stiffer than the continuum
     (the package's documentation, Results: convergence in space). Keyword-only, so that the
     positional order of the fields after it is that of the releases before it."""
-    min_rows: int = field(default=1, kw_only=True)
-    """The fewest rows of particles across each side of a box core's face [-], 1 to 4: a face gets
-    max(min_rows, round(side / spacing)) along each side. 1, the default: as the spacing gives, so
-    at 4,000 per m^2 (16 mm spacing) the finger's 16 mm wide tip face has one row, and the groups
-    that straddle the tip and the inner face are nearly flat (their rest moments' smallest
-    eigenvalue 0.03 of their largest). A flat group is stiff across its thin side (its stiffness
-    per unit mass, 2 G V / the moment's smallest eigenvalue, builder.continuum_groups, 420,000 /s^2
-    against a median 65,000), and the world's step rule (compliant.substeps_for) takes its world
-    steps from the stiffest group: 6 per physics step at 1/240 s, where the inner face's groups
-    alone need 3. 2 gives the tip two rows (36 particles a pad instead of 30), the tip's groups
-    round, 3 world steps. Changes nothing where the spacing already gives 2 rows (from about
-    16,000 per m^2 on the finger). Keyword-only, after ``layers``."""
     group_size: int = 8
     """Particles per implicit shape-matching group, centre included (thesis 5.2.1 *groupSize*), 4 to
     16. Larger groups span most of a pad (30 particles a face at the default density) and let it
@@ -139,6 +127,17 @@ class TissueConfig:
     slides in its own cone, with its own stick/slide state and anchor; a patch's torsion and
     partial slip then follow from its contacts. ``contact_cone`` refines the patch law and is an
     error with "contact"."""
+
+    min_rows: int = field(default=1, kw_only=True)
+    """The fewest rows of particles across each side of a box core's face [-], 1 to 4: a face gets
+    max(min_rows, round(side / spacing)) along each side. 1, the default: as the spacing gives, so
+    at 4,000 per m^2 the finger's 16 mm wide tip has one row, and the groups that straddle the tip
+    and the inner face are nearly flat. A flat group is stiff across its thin side (its stiffness
+    per unit mass is 2 G V over its rest moments' smallest eigenvalue: builder.continuum_groups),
+    and the world takes its steps from the stiffest group (compliant.substeps_for): 6 per physics
+    step at 1/240 s, where 2 rows give 3 (the package's documentation, Results: speed, "Which
+    groups set the world steps"). Changes nothing where the spacing gives 2 rows already.
+    Keyword-only, the last field."""
 
     def __post_init__(self) -> None:
         o = "TissueConfig"
