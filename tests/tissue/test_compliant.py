@@ -145,7 +145,6 @@ def test_the_strain_limit_holds_a_particle_within_reach_of_its_core(limit):
     assert state.particle_v[1, 2] < 0.0  # pulled back toward the core
 
 
-
 def test_two_rows_on_the_tip_round_its_groups_and_halve_the_world_steps():
     """TissueConfig.min_rows: at 4,000 per m^2 the v4 pad's 16 mm tip has one row of particles, so
     the groups across the tip and the inner face are flat (rest moments' eigenvalue ratio 0.03) and
@@ -181,3 +180,23 @@ def test_two_rows_on_the_tip_round_its_groups_and_halve_the_world_steps():
     np.testing.assert_array_equal(a.group_kappa, b.group_kappa)
     with pytest.raises(ValueError, match="min_rows"):
         replace(base, min_rows=5)
+
+
+def test_two_rows_on_the_tip_carry_the_cylinder_in_the_env():
+    """SoftGrasp-v4 with tissue_min_rows=2 (3 world steps a physics step): the scripted grasp lifts
+    the cylinder and carries it through the carry test, at the default iterations and friction."""
+    import gymnasium as gym
+
+    import softgrasp_env  # noqa: F401  (registers the ids)
+    from softgrasp_env.policies import ScriptedGraspPolicy
+
+    env = gym.make("SoftGrasp-v4", tissue_min_rows=2)
+    policy = ScriptedGraspPolicy.for_env(env)
+    obs, _ = env.reset(seed=0)
+    assert env.unwrapped.scene.world.substeps == 3
+    done = False
+    while not done:
+        obs, _, term, trunc, info = env.step(policy(obs))
+        done = term or trunc
+    assert info["is_success"] and not info["diverged"]
+    env.close()
