@@ -99,7 +99,7 @@ class TissueConfig:
     is a different pad at every particle_density. "continuum" (opt-in): ``E = G V ||F - R||_F^2``, F the
     group's least-squares deformation gradient A_pq A_qq^-1, R its rotation and V the volume it
     stands for (linear elasticity with nu = 0 for small strain; tissue/compliant.py,
-    continuum_group), independent of the group's shape. The package's documentation (Results:
+    continuum_groups), independent of the group's shape. The package's documentation (Results:
     convergence in space) measures both against a finite-element reference."""
     hourglass_stiffness: float = 0.0
     """The continuum group energy's hourglass control h [-]: each member's miss r from its group's

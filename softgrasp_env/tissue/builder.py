@@ -433,7 +433,7 @@ def continuum_groups(offsets: np.ndarray, members: np.ndarray, rest_offset: np.n
                      modulus: float, density: float, hourglass: float = 0.0,
                      volume: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """The continuum group energy's rest data (TissueConfig.group_energy "continuum";
-    compliant.continuum_group): ((N, CONTINUUM_COLUMNS) [A_qq^+ (xx, xy, xz, yy, yz, zz), 2 G V,
+    compliant.continuum_groups): ((N, CONTINUUM_COLUMNS) [A_qq^+ (xx, xy, xz, yy, yz, zz), 2 G V,
     beta, A_qq (xx, xy, xz, yy, yz, zz)], (N,) kappa).
 
     E_g = G V_g ||F - R||_F^2 with F = A_pq A_qq^-1, A_pq = sum_j m_j (x_j - c) q_j^T and

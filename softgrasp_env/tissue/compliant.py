@@ -25,7 +25,7 @@ late, from ringing: MAX_COUPLING_FOLD).
 An attached particle sits on its core through the solve (thesis 5.1.3, "the
 core infinitely heavy inside the solve", taken literally): a group's force on it is an impulse on
 the core at its spot. Under the consistent coupling the core slides inside the solve, and the
-group's Newton step moves it (the core unknown of project_group and continuum_group). Moving attached particles with their
+group's Newton step moves it (the core unknown of project_group and continuum_groups). Moving attached particles with their
 own mass inside the solve and handing the error over afterwards (anchors.snap_attached) gives an
 impulse m e / dt that can carry at most about m e / dt^2, a force that falls with dt^2 (pads
 crushed at 1/120 s and stiff at 1/1000 s).
@@ -85,7 +85,7 @@ def core_stiffness(model: TissueModel) -> np.ndarray:
             m = model.particle_mass[members]
             fix = model.particle_attached[members]
             if cont[i, 6] > 0.0:
-                # continuum group (continuum_group): its free members moved by d against the fixed
+                # continuum group (continuum_groups): its free members moved by d against the fixed
                 # ones change F by d beta^T, beta = sum_free b_j, an energy of at most
                 # G V |d|^2 |beta|^2: a spring 2 G V |beta|^2
                 p = cont[i]
@@ -113,15 +113,28 @@ def world_substeps(model: TissueModel, core_mass: np.ndarray, dt: float) -> int:
     return max(substeps_for(model, dt), coupling_substeps(model, core_mass, dt))
 
 
+@nb.njit(cache=True, error_model="numpy")
+def turn_rates(group_kappa, dt, iterations, out):
+    """Each group's turn of its centre per pass, out[i] = 1 - (1 / (1 + s))^(1 / iterations) with
+    s = kappa dt^2 (sweep_body): s / (1 + s) of the way over the step's passes. Once per step
+    length, not per group and pass: the power is a libm call. Compiled without contraction, so that
+    1 + s is rounded as the sweep rounded it when it computed this itself (a fused
+    kappa dt * dt + 1 differs in the last bit for some groups), and every trajectory stays as it
+    was."""
+    for i in range(group_kappa.shape[0]):
+        s = group_kappa[i] * dt * dt
+        out[i] = 1.0 - (1.0 / (1.0 + s)) ** (1.0 / iterations)
+
+
 @nb.njit(**KERNEL)
-def compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, frame,
+def compliant_sweep(g_turn, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, frame,
                     attached, fixed, rest_q, rest_moment, xs, xp, qp, group_q, moment, g_u, g_raw, mass,
                     body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
                     imp_lin, imp_ang, coupling_imp, continuum, g_cont):  # fmt: skip
     """One Gauss-Seidel sweep over the groups of every body, one body after the other
     (sweep_body)."""
     for b in range(body_off.shape[0] - 1):
-        sweep_body(b, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, frame, attached, fixed,
+        sweep_body(b, g_turn, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, frame, attached, fixed,
                    rest_q, rest_moment, xs, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid,
                    rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp,
                    continuum, g_cont)  # fmt: skip
@@ -139,34 +152,57 @@ def bodies_independent(model: TissueModel, shape_rigid: np.ndarray) -> bool:
     return covered and all(c >= 0 for c in cores) and len(set(cores)) == len(cores)
 
 
+@nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
+def _all_continuum(lo, hi, g_cont):
+    """True if every group lo..hi-1 has the continuum energy (g_cont[i, 6] > 0)."""
+    for i in range(lo, hi):
+        if not g_cont[i, 6] > 0.0:
+            return False
+    return True
+
+
 @nb.njit(**KERNEL)
-def sweep_body(b, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, frame, attached, fixed,
+def sweep_body(b, g_turn, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, frame, attached, fixed,
                rest_q, rest_moment, xs, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid, rig_x,
                rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, continuum,
                g_cont):  # fmt: skip
-    """One Gauss-Seidel sweep over body b's groups: project_group, or continuum_group for a group
+    """One Gauss-Seidel sweep over body b's groups: project_group, or continuum_groups for a group
     with the continuum energy (``continuum`` and g_cont[i, 6] > 0; kappa then the group's largest
     stiffness per unit mass). A group's centre turns toward quat(R) q_bar by s / (1 + s) a step (the
     same implicit spring on its orientation, Mueller & Chentanez 2011 sec. 4.3's goal), spread over
-    the iterations."""
+    the iterations: g_turn[i] a pass (turn_rates)."""
     cs = body_core_shape[b]
     core = shape_rigid[cs] if cs >= 0 else -1
     m_att = 0.0
     for k in range(body_off[b], body_off[b + 1]):
         if fixed[k]:
             m_att += mass[k]
-    for i in range(body_off[b], body_off[b + 1]):
+    lo, hi = body_off[b], body_off[b + 1]
+    if continuum and _all_continuum(lo, hi, g_cont):
+        # every group continuum (the v4 material): one call solves them all, then the centres turn.
+        # The order is the serial one's: continuum_groups reads neither qp nor moment, which the turns
+        # write, and a group's quat(R) (group_q) is written by its own solve only
+        continuum_groups(lo, hi, core, lo, hi, m_att, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs, xp, group_q,
+                         fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
+                         imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+        for i in range(lo, hi):
+            if not attached[i]:
+                qr = (group_q[i, 0], group_q[i, 1], group_q[i, 2], group_q[i, 3])
+                _turn_centre(i, qr, g_turn[i], rest_q, qp, rest_moment, moment)
+        return
+    for i in range(lo, hi):
         s = group_kappa[i] * dt * dt
         if continuum and g_cont[i, 6] > 0.0:
-            qr = continuum_group(i, core, body_off[b], body_off[b + 1], m_att, rot_iters, g_cont, g_off, g_mem,
-                                 g_pack, frame, xs, xp, group_q, fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass,
-                                 rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+            continuum_groups(i, i + 1, core, lo, hi, m_att, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs, xp,
+                             group_q, fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
+                             rig_move, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+            qr = (group_q[i, 0], group_q[i, 1], group_q[i, 2], group_q[i, 3])
         else:
-            qr = project_group(i, s, core, body_off[b], body_off[b + 1], m_att, rot_iters, g_off, g_mem, g_pack,
+            qr = project_group(i, s, core, lo, hi, m_att, rot_iters, g_off, g_mem, g_pack,
                                frame, xs, xp, group_q, moment, fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass,
                                rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
         if not attached[i]:
-            _turn_centre(i, qr, 1.0 - (1.0 / (1.0 + s)) ** (1.0 / iterations), rest_q, qp, rest_moment, moment)
+            _turn_centre(i, qr, g_turn[i], rest_q, qp, rest_moment, moment)
 
 
 @nb.njit(**KERNEL)
@@ -416,7 +452,7 @@ def _apply_deformation(i, start, end, g_mem, g_pack, frame, xs, xp, g_u, g_raw):
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _held_step(b0, b1, b2, inv_m, zx, zy, zz, y00, y01, y02, y10, y11, y12, y20, y21, y22, hb, opm, gx, gy, gz):
-    """continuum_group's step of a free member with the core held: dx_j = -(z_j - Y^T b_j / m_j),
+    """continuum_groups's step of a free member with the core held: dx_j = -(z_j - Y^T b_j / m_j),
     with the hourglass term / (1 + hb) - t (sum m z - Y^T sum b) (g)."""
     dx = (y00 * b0 + y10 * b1 + y20 * b2) * inv_m - zx
     dy = (y01 * b0 + y11 * b1 + y21 * b2) * inv_m - zy
@@ -430,7 +466,7 @@ def _held_step(b0, b1, b2, inv_m, zx, zy, zz, y00, y01, y02, y10, y11, y12, y20,
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _core_column(b0, b1, b2, inv_m, m, o0, o1, o2, h, hb, bf0, bf1, bf2, wfix, yc0, yc1, yc2, opm, tq):
-    """continuum_group's coupling of a free member to a sliding core: gamma_j (its residual's change
+    """continuum_groups's coupling of a free member to a sliding core: gamma_j (its residual's change
     per unit of the core's move, along the axis) and q_j (the free block's solve of that column,
     along the axis)."""
     gam = h * (b0 * bf0 + b1 * bf1 + b2 * bf2)
@@ -443,10 +479,17 @@ def _core_column(b0, b1, b2, inv_m, m, o0, o1, o2, h, hb, bf0, bf1, bf2, wfix, y
 
 
 @nb.njit(**KERNEL)
-def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs, xp, group_q,
+def continuum_groups(lo, hi, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, g_mem, g_pack, frame, xs, xp, group_q,
                     fixed, g_u, g_raw, mass, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin,
                     imp_ang, coupling_imp, dt):  # fmt: skip
-    """One Newton step of group i's implicit equations under E = G V ||F - R||_F^2; returns quat(R).
+    """One Newton step of each group lo..hi-1's implicit equations under E = G V ||F - R||_F^2, one
+    group after the other (Gauss-Seidel); each group i's quat(R) is left in group_q[i].
+
+    The groups are looped here, not in the caller: a call into this kernel passes some twenty
+    arrays, and one call per group was 15-20 % of the sweep; one per body costs nothing. The
+    arithmetic is the same, so the results are the same to the bit.
+
+    For group i:
 
     F = sum_j x_j b_j^T, b_j = A_qq^-1 m_j q_j (sum_j b_j = 0: F ignores translation), so with R
     held (the polar factor of F, warm-started from the group's last rotation, Mueller et al. 2016;
@@ -484,237 +527,255 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
     and each fixed member's residual across a goes to the core (the joint takes it). A group with
     no fixed member is made free of momentum and angular momentum about the step's start
     positions (_apply_deformation)."""
-    i = np.uint64(i)
-    start = np.uint64(g_off[i])
-    end = np.uint64(g_off[i + 1])
-    p00, p01, p02, p11, p12, p22 = g_cont[i, 0], g_cont[i, 1], g_cont[i, 2], g_cont[i, 3], g_cont[i, 4], g_cont[i, 5]
-    k = g_cont[i, 6]
-    c = k * dt * dt
-    hb = g_cont[i, 7] * dt * dt  # the hourglass term's beta dt^2 (0: none)
-    # A_pq = sum_j x_j (m_j q_j)^T (sum_j m_j q_j = 0: no centre needed); the centre for the
-    # hourglass term's affine fit
-    a00 = a01 = a02 = a10 = a11 = a12 = a20 = a21 = a22 = 0.0
-    cx = cy = cz = 0.0
-    for e in range(start, end):
-        j = np.uint64(g_mem[e])
-        x0 = xp[j, 0]
-        x1 = xp[j, 1]
-        x2 = xp[j, 2]
-        if hb > 0.0:
-            w = g_pack[e, 0]
-            cx += w * x0
-            cy += w * x1
-            cz += w * x2
-        q0 = g_pack[e, 1]
-        q1 = g_pack[e, 2]
-        q2 = g_pack[e, 3]
-        a00 += x0 * q0
-        a01 += x0 * q1
-        a02 += x0 * q2
-        a10 += x1 * q0
-        a11 += x1 * q1
-        a12 += x1 * q2
-        a20 += x2 * q0
-        a21 += x2 * q1
-        a22 += x2 * q2
-    # F = A_pq A_qq^-1
-    f00 = a00 * p00 + a01 * p01 + a02 * p02
-    f01 = a00 * p01 + a01 * p11 + a02 * p12
-    f02 = a00 * p02 + a01 * p12 + a02 * p22
-    f10 = a10 * p00 + a11 * p01 + a12 * p02
-    f11 = a10 * p01 + a11 * p11 + a12 * p12
-    f12 = a10 * p02 + a11 * p12 + a12 * p22
-    f20 = a20 * p00 + a21 * p01 + a22 * p02
-    f21 = a20 * p01 + a21 * p11 + a22 * p12
-    f22 = a20 * p02 + a21 * p12 + a22 * p22
-    qr = extract_rotation_unit_t((f00, f01, f02, f10, f11, f12, f20, f21, f22),
-                                 (group_q[i, 0], group_q[i, 1], group_q[i, 2], group_q[i, 3]), rot_iters, 1e-10)  # fmt: skip
-    group_q[i, 0] = qr[0]
-    group_q[i, 1] = qr[1]
-    group_q[i, 2] = qr[2]
-    group_q[i, 3] = qr[3]
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = qmat(qr)
-    # D = dt^2 k (F - R): the residual's elastic part is D b_j
-    h = dt * dt * k
-    d00, d01, d02 = h * (f00 - r00), h * (f01 - r01), h * (f02 - r02)
-    d10, d11, d12 = h * (f10 - r10), h * (f11 - r11), h * (f12 - r12)
-    d20, d21, d22 = h * (f20 - r20), h * (f21 - r21), h * (f22 - r22)
-    s00 = s01 = s02 = s11 = s12 = s22 = 0.0  # sum_free b b^T / m
-    w00 = w01 = w02 = w10 = w11 = w12 = w20 = w21 = w22 = 0.0  # sum_free b z^T, row a = b's component
-    sb0 = sb1 = sb2 = 0.0  # sum_free b (the hourglass term's translation coupling; the core's column)
-    mzx = mzy = mzz = 0.0  # sum_free m z
-    m_free = 0.0
-    m_all = 0.0
-    held = False
-    # a core that slides along its joint axis inside the solve (the consistent coupling): one more
-    # unknown, dc (docstring); its sums over the members
-    ax = ay = az = 0.0
-    sliding = rig_move[core] and rig_inv_mass[core] > 0.0
-    if sliding:
-        ax, ay, az = rig_axis[core, 0], rig_axis[core, 1], rig_axis[core, 2]
-        sliding = ax != 0.0 or ay != 0.0 or az != 0.0
-    rc = uc = mfix = wfix = 0.0  # a . sum_fix m_j z_j, U_c, M_fix, W_f
-    bf0 = bf1 = bf2 = 0.0  # beta_f = sum_fix b_j
-    fo0 = fo1 = fo2 = 0.0  # sum_fix m_j o_j
-    no0 = no1 = no2 = 0.0  # sum_free m_j o_j
-    t00 = t01 = t02 = t10 = t11 = t12 = t20 = t21 = t22 = 0.0  # sum_free b_j o_j^T
-    for e in range(start, end):
-        j = np.uint64(g_mem[e])
-        m = mass[j]
-        b0 = g_pack[e, 8]
-        b1 = g_pack[e, 9]
-        b2 = g_pack[e, 10]
+    for g in range(lo, hi):
+        i = np.uint64(g)
+        start = np.uint64(g_off[i])
+        end = np.uint64(g_off[i + 1])
+        p00, p01, p02, p11, p12, p22 = g_cont[i, 0], g_cont[i, 1], g_cont[i, 2], g_cont[i, 3], g_cont[i, 4], g_cont[i, 5]
+        k = g_cont[i, 6]
+        c = k * dt * dt
+        hb = g_cont[i, 7] * dt * dt  # the hourglass term's beta dt^2 (0: none)
+        # A_pq = sum_j x_j (m_j q_j)^T (sum_j m_j q_j = 0: no centre needed); the centre for the
+        # hourglass term's affine fit
+        a00 = a01 = a02 = a10 = a11 = a12 = a20 = a21 = a22 = 0.0
+        cx = cy = cz = 0.0
+        for e in range(start, end):
+            j = np.uint64(g_mem[e])
+            x0 = xp[j, 0]
+            x1 = xp[j, 1]
+            x2 = xp[j, 2]
+            if hb > 0.0:
+                w = g_pack[e, 0]
+                cx += w * x0
+                cy += w * x1
+                cz += w * x2
+            q0 = g_pack[e, 1]
+            q1 = g_pack[e, 2]
+            q2 = g_pack[e, 3]
+            a00 += x0 * q0
+            a01 += x0 * q1
+            a02 += x0 * q2
+            a10 += x1 * q0
+            a11 += x1 * q1
+            a12 += x1 * q2
+            a20 += x2 * q0
+            a21 += x2 * q1
+            a22 += x2 * q2
+        # F = A_pq A_qq^-1
+        f00 = a00 * p00 + a01 * p01 + a02 * p02
+        f01 = a00 * p01 + a01 * p11 + a02 * p12
+        f02 = a00 * p02 + a01 * p12 + a02 * p22
+        f10 = a10 * p00 + a11 * p01 + a12 * p02
+        f11 = a10 * p01 + a11 * p11 + a12 * p12
+        f12 = a10 * p02 + a11 * p12 + a12 * p22
+        f20 = a20 * p00 + a21 * p01 + a22 * p02
+        f21 = a20 * p01 + a21 * p11 + a22 * p12
+        f22 = a20 * p02 + a21 * p12 + a22 * p22
+        qr = extract_rotation_unit_t((f00, f01, f02, f10, f11, f12, f20, f21, f22),
+                                     (group_q[i, 0], group_q[i, 1], group_q[i, 2], group_q[i, 3]), rot_iters, 1e-10)  # fmt: skip
+        group_q[i, 0] = qr[0]
+        group_q[i, 1] = qr[1]
+        group_q[i, 2] = qr[2]
+        group_q[i, 3] = qr[3]
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = qmat(qr)
+        # D = dt^2 k (F - R): the residual's elastic part is D b_j
+        h = dt * dt * k
+        d00, d01, d02 = h * (f00 - r00), h * (f01 - r01), h * (f02 - r02)
+        d10, d11, d12 = h * (f10 - r10), h * (f11 - r11), h * (f12 - r12)
+        d20, d21, d22 = h * (f20 - r20), h * (f21 - r21), h * (f22 - r22)
+        s00 = s01 = s02 = s11 = s12 = s22 = 0.0  # sum_free b b^T / m
+        w00 = w01 = w02 = w10 = w11 = w12 = w20 = w21 = w22 = 0.0  # sum_free b z^T, row a = b's component
+        sb0 = sb1 = sb2 = 0.0  # sum_free b (the hourglass term's translation coupling; the core's column)
+        mzx = mzy = mzz = 0.0  # sum_free m z
+        m_free = 0.0
+        m_all = 0.0
+        held = False
+        # a core that slides along its joint axis inside the solve (the consistent coupling): one more
+        # unknown, dc (docstring); its sums over the members
+        ax = ay = az = 0.0
+        sliding = rig_move[core] and rig_inv_mass[core] > 0.0
         if sliding:
-            o0 = g_pack[e, 4]
-            o1 = g_pack[e, 5]
-            o2 = g_pack[e, 6]
-            if fixed[j]:
-                mfix += m
-                wfix += g_pack[e, 0]
-                bf0 += b0
-                bf1 += b1
-                bf2 += b2
-                fo0 += m * o0
-                fo1 += m * o1
-                fo2 += m * o2
-                uc = ax * g_u[e, 0] + ay * g_u[e, 1] + az * g_u[e, 2]
-            else:
-                no0 += m * o0
-                no1 += m * o1
-                no2 += m * o2
-                t00 += b0 * o0
-                t01 += b0 * o1
-                t02 += b0 * o2
-                t10 += b1 * o0
-                t11 += b1 * o1
-                t12 += b1 * o2
-                t20 += b2 * o0
-                t21 += b2 * o1
-                t22 += b2 * o2
-        # z_j = u_j + D b_j / m_j (per unit mass)
-        inv_m = g_pack[e, 7]
-        zx = g_u[e, 0] + (d00 * b0 + d01 * b1 + d02 * b2) * inv_m
-        zy = g_u[e, 1] + (d10 * b0 + d11 * b1 + d12 * b2) * inv_m
-        zz = g_u[e, 2] + (d20 * b0 + d21 * b1 + d22 * b2) * inv_m
-        if hb > 0.0:
-            # + beta dt^2 r_j, r_j = x_j - c - F q_j the member's miss from the group's affine fit
-            o0 = g_pack[e, 4]
-            o1 = g_pack[e, 5]
-            o2 = g_pack[e, 6]
-            zx += hb * (xp[j, 0] - cx - (f00 * o0 + f01 * o1 + f02 * o2))
-            zy += hb * (xp[j, 1] - cy - (f10 * o0 + f11 * o1 + f12 * o2))
-            zz += hb * (xp[j, 2] - cz - (f20 * o0 + f21 * o1 + f22 * o2))
-            m_all += m
-        g_raw[e, 0] = zx
-        g_raw[e, 1] = zy
-        g_raw[e, 2] = zz
-        if fixed[j]:
-            held = True
+            ax, ay, az = rig_axis[core, 0], rig_axis[core, 1], rig_axis[core, 2]
+            sliding = ax != 0.0 or ay != 0.0 or az != 0.0
+        rc = uc = mfix = wfix = 0.0  # a . sum_fix m_j z_j, U_c, M_fix, W_f
+        bf0 = bf1 = bf2 = 0.0  # beta_f = sum_fix b_j
+        fo0 = fo1 = fo2 = 0.0  # sum_fix m_j o_j
+        no0 = no1 = no2 = 0.0  # sum_free m_j o_j
+        t00 = t01 = t02 = t10 = t11 = t12 = t20 = t21 = t22 = 0.0  # sum_free b_j o_j^T
+        for e in range(start, end):
+            j = np.uint64(g_mem[e])
+            m = mass[j]
+            b0 = g_pack[e, 8]
+            b1 = g_pack[e, 9]
+            b2 = g_pack[e, 10]
             if sliding:
-                rc += m * (ax * zx + ay * zy + az * zz)
-            continue
-        sb0 += b0
-        sb1 += b1
-        sb2 += b2
+                o0 = g_pack[e, 4]
+                o1 = g_pack[e, 5]
+                o2 = g_pack[e, 6]
+                if fixed[j]:
+                    mfix += m
+                    wfix += g_pack[e, 0]
+                    bf0 += b0
+                    bf1 += b1
+                    bf2 += b2
+                    fo0 += m * o0
+                    fo1 += m * o1
+                    fo2 += m * o2
+                    uc = ax * g_u[e, 0] + ay * g_u[e, 1] + az * g_u[e, 2]
+                else:
+                    no0 += m * o0
+                    no1 += m * o1
+                    no2 += m * o2
+                    t00 += b0 * o0
+                    t01 += b0 * o1
+                    t02 += b0 * o2
+                    t10 += b1 * o0
+                    t11 += b1 * o1
+                    t12 += b1 * o2
+                    t20 += b2 * o0
+                    t21 += b2 * o1
+                    t22 += b2 * o2
+            # z_j = u_j + D b_j / m_j (per unit mass)
+            inv_m = g_pack[e, 7]
+            zx = g_u[e, 0] + (d00 * b0 + d01 * b1 + d02 * b2) * inv_m
+            zy = g_u[e, 1] + (d10 * b0 + d11 * b1 + d12 * b2) * inv_m
+            zz = g_u[e, 2] + (d20 * b0 + d21 * b1 + d22 * b2) * inv_m
+            if hb > 0.0:
+                # + beta dt^2 r_j, r_j = x_j - c - F q_j the member's miss from the group's affine fit
+                o0 = g_pack[e, 4]
+                o1 = g_pack[e, 5]
+                o2 = g_pack[e, 6]
+                zx += hb * (xp[j, 0] - cx - (f00 * o0 + f01 * o1 + f02 * o2))
+                zy += hb * (xp[j, 1] - cy - (f10 * o0 + f11 * o1 + f12 * o2))
+                zz += hb * (xp[j, 2] - cz - (f20 * o0 + f21 * o1 + f22 * o2))
+                m_all += m
+            g_raw[e, 0] = zx
+            g_raw[e, 1] = zy
+            g_raw[e, 2] = zz
+            if fixed[j]:
+                held = True
+                if sliding:
+                    rc += m * (ax * zx + ay * zy + az * zz)
+                continue
+            sb0 += b0
+            sb1 += b1
+            sb2 += b2
+            if hb > 0.0:
+                mzx += m * zx
+                mzy += m * zy
+                mzz += m * zz
+                m_free += m
+            s00 += b0 * b0 * inv_m
+            s01 += b0 * b1 * inv_m
+            s02 += b0 * b2 * inv_m
+            s11 += b1 * b1 * inv_m
+            s12 += b1 * b2 * inv_m
+            s22 += b2 * b2 * inv_m
+            w00 += b0 * zx
+            w01 += b0 * zy
+            w02 += b0 * zz
+            w10 += b1 * zx
+            w11 += b1 * zy
+            w12 += b1 * zz
+            w20 += b2 * zx
+            w21 += b2 * zy
+            w22 += b2 * zz
+        v00, v01, v02, v11, v12, v22 = s00, s01, s02, s11, s12, s22  # sum_free b b^T / m (the core's column)
+        opm = 1.0
+        t = 0.0
         if hb > 0.0:
-            mzx += m * zx
-            mzy += m * zy
-            mzz += m * zz
-            m_free += m
-        s00 += b0 * b0 * inv_m
-        s01 += b0 * b1 * inv_m
-        s02 += b0 * b2 * inv_m
-        s11 += b1 * b1 * inv_m
-        s12 += b1 * b2 * inv_m
-        s22 += b2 * b2 * inv_m
-        w00 += b0 * zx
-        w01 += b0 * zy
-        w02 += b0 * zz
-        w10 += b1 * zx
-        w11 += b1 * zy
-        w12 += b1 * zz
-        w20 += b2 * zx
-        w21 += b2 * zy
-        w22 += b2 * zz
-    v00, v01, v02, v11, v12, v22 = s00, s01, s02, s11, s12, s22  # sum_free b b^T / m (the core's column)
-    opm = 1.0
-    t = 0.0
-    if hb > 0.0:
-        # the hourglass term: with D' = (1 + hb) M_f - (hb / M) m_f m_f^T (Sherman-Morrison:
-        # D'^-1 v = v / ((1 + hb) m) + t sum v, t = sigma / (1 + hb)^2) and C3 = c I - hb A_qq
-        # (positive definite for hourglass_stiffness < 2), S = C3^-1 + B^T D'^-1 B, w = B^T D'^-1 rho
-        opm = 1.0 + hb
-        sigma = (hb / m_all) / (1.0 - hb * m_free / (m_all * opm))
-        t = sigma / (opm * opm)
-        io = 1.0 / opm
-        s00 = s00 * io + t * sb0 * sb0
-        s01 = s01 * io + t * sb0 * sb1
-        s02 = s02 * io + t * sb0 * sb2
-        s11 = s11 * io + t * sb1 * sb1
-        s12 = s12 * io + t * sb1 * sb2
-        s22 = s22 * io + t * sb2 * sb2
-        w00 = w00 * io + t * sb0 * mzx
-        w01 = w01 * io + t * sb0 * mzy
-        w02 = w02 * io + t * sb0 * mzz
-        w10 = w10 * io + t * sb1 * mzx
-        w11 = w11 * io + t * sb1 * mzy
-        w12 = w12 * io + t * sb1 * mzz
-        w20 = w20 * io + t * sb2 * mzx
-        w21 = w21 * io + t * sb2 * mzy
-        w22 = w22 * io + t * sb2 * mzz
-        i00, i01, i02, i11, i12, i22 = inv_sym3(c - hb * g_cont[i, 8], -hb * g_cont[i, 9], -hb * g_cont[i, 10],
-                                                c - hb * g_cont[i, 11], -hb * g_cont[i, 12], c - hb * g_cont[i, 13])  # fmt: skip
-        s00 += i00
-        s01 += i01
-        s02 += i02
-        s11 += i11
-        s12 += i12
-        s22 += i22
-    else:
-        ic = 1.0 / c
-        s00 += ic
-        s11 += ic
-        s22 += ic
-    y00, y10, y20 = solve_sym3(s00, s01, s02, s11, s12, s22, w00, w10, w20)
-    y01, y11, y21 = solve_sym3(s00, s01, s02, s11, s12, s22, w01, w11, w21)
-    y02, y12, y22 = solve_sym3(s00, s01, s02, s11, s12, s22, w02, w12, w22)
-    # the core's column: moving the fixed members by dc a changes free member j's residual by
-    # gamma_j dc a, gamma_j = h (b_j . beta_f) - hb m_j (W_f + beta_f . o_j); the free block's
-    # solve of that right-hand side is dx'_j = q_j a with q_j below (w' = sum_free b_j gamma_j / m_j)
-    h = dt * dt * k
-    yc0 = yc1 = yc2 = 0.0
-    gsum = tq = 0.0
-    if sliding and held:
-        vw0 = h * (v00 * bf0 + v01 * bf1 + v02 * bf2)
-        vw1 = h * (v01 * bf0 + v11 * bf1 + v12 * bf2)
-        vw2 = h * (v02 * bf0 + v12 * bf1 + v22 * bf2)
-        gsum = h * (bf0 * sb0 + bf1 * sb1 + bf2 * sb2)  # sum_free gamma_j
-        if hb > 0.0:
-            vw0 -= hb * (wfix * sb0 + t00 * bf0 + t01 * bf1 + t02 * bf2)
-            vw1 -= hb * (wfix * sb1 + t10 * bf0 + t11 * bf1 + t12 * bf2)
-            vw2 -= hb * (wfix * sb2 + t20 * bf0 + t21 * bf1 + t22 * bf2)
-            gsum -= hb * (wfix * m_free + bf0 * no0 + bf1 * no1 + bf2 * no2)
+            # the hourglass term: with D' = (1 + hb) M_f - (hb / M) m_f m_f^T (Sherman-Morrison:
+            # D'^-1 v = v / ((1 + hb) m) + t sum v, t = sigma / (1 + hb)^2) and C3 = c I - hb A_qq
+            # (positive definite for hourglass_stiffness < 2), S = C3^-1 + B^T D'^-1 B, w = B^T D'^-1 rho
+            opm = 1.0 + hb
+            sigma = (hb / m_all) / (1.0 - hb * m_free / (m_all * opm))
+            t = sigma / (opm * opm)
             io = 1.0 / opm
-            vw0 = vw0 * io + t * sb0 * gsum
-            vw1 = vw1 * io + t * sb1 * gsum
-            vw2 = vw2 * io + t * sb2 * gsum
-        yc0, yc1, yc2 = solve_sym3(s00, s01, s02, s11, s12, s22, vw0, vw1, vw2)
-        tq = t * (gsum - (yc0 * sb0 + yc1 * sb1 + yc2 * sb2))
-    # the free members' step dx_j = -(z_j - Y^T b_j / m_j), and dF = sum_free dx_j b_j^T (times dt^2 k);
-    # with the hourglass term dx_j = -(z_j - Y^T b_j / m_j) / (1 + hb) - t (sum m z - Y^T sum b)
-    gx = t * (mzx - (y00 * sb0 + y10 * sb1 + y20 * sb2))
-    gy = t * (mzy - (y01 * sb0 + y11 * sb1 + y21 * sb2))
-    gz = t * (mzz - (y02 * sb0 + y12 * sb1 + y22 * sb2))
-    dc = 0.0
-    mcore = 0.0
-    if sliding and held:
-        # Schur complement on the core: dc = -(R_c + sum gamma_j a . dx_j) / (H_c + sum gamma_j q_j),
-        # dx_j the free block's step with the core held (below), R_c and H_c as in the docstring
-        mcore = 1.0 / rig_inv_mass[core]
-        num = (mcore + m_att - mfix) * uc + rc
-        den = mcore + m_att + h * (bf0 * bf0 + bf1 * bf1 + bf2 * bf2)
-        if hb > 0.0:
-            den += hb * (mfix * (1.0 - wfix) - (bf0 * fo0 + bf1 * fo1 + bf2 * fo2))
+            s00 = s00 * io + t * sb0 * sb0
+            s01 = s01 * io + t * sb0 * sb1
+            s02 = s02 * io + t * sb0 * sb2
+            s11 = s11 * io + t * sb1 * sb1
+            s12 = s12 * io + t * sb1 * sb2
+            s22 = s22 * io + t * sb2 * sb2
+            w00 = w00 * io + t * sb0 * mzx
+            w01 = w01 * io + t * sb0 * mzy
+            w02 = w02 * io + t * sb0 * mzz
+            w10 = w10 * io + t * sb1 * mzx
+            w11 = w11 * io + t * sb1 * mzy
+            w12 = w12 * io + t * sb1 * mzz
+            w20 = w20 * io + t * sb2 * mzx
+            w21 = w21 * io + t * sb2 * mzy
+            w22 = w22 * io + t * sb2 * mzz
+            i00, i01, i02, i11, i12, i22 = inv_sym3(c - hb * g_cont[i, 8], -hb * g_cont[i, 9], -hb * g_cont[i, 10],
+                                                    c - hb * g_cont[i, 11], -hb * g_cont[i, 12], c - hb * g_cont[i, 13])  # fmt: skip
+            s00 += i00
+            s01 += i01
+            s02 += i02
+            s11 += i11
+            s12 += i12
+            s22 += i22
+        else:
+            ic = 1.0 / c
+            s00 += ic
+            s11 += ic
+            s22 += ic
+        y00, y10, y20 = solve_sym3(s00, s01, s02, s11, s12, s22, w00, w10, w20)
+        y01, y11, y21 = solve_sym3(s00, s01, s02, s11, s12, s22, w01, w11, w21)
+        y02, y12, y22 = solve_sym3(s00, s01, s02, s11, s12, s22, w02, w12, w22)
+        # the core's column: moving the fixed members by dc a changes free member j's residual by
+        # gamma_j dc a, gamma_j = h (b_j . beta_f) - hb m_j (W_f + beta_f . o_j); the free block's
+        # solve of that right-hand side is dx'_j = q_j a with q_j below (w' = sum_free b_j gamma_j / m_j)
+        h = dt * dt * k
+        yc0 = yc1 = yc2 = 0.0
+        gsum = tq = 0.0
+        if sliding and held:
+            vw0 = h * (v00 * bf0 + v01 * bf1 + v02 * bf2)
+            vw1 = h * (v01 * bf0 + v11 * bf1 + v12 * bf2)
+            vw2 = h * (v02 * bf0 + v12 * bf1 + v22 * bf2)
+            gsum = h * (bf0 * sb0 + bf1 * sb1 + bf2 * sb2)  # sum_free gamma_j
+            if hb > 0.0:
+                vw0 -= hb * (wfix * sb0 + t00 * bf0 + t01 * bf1 + t02 * bf2)
+                vw1 -= hb * (wfix * sb1 + t10 * bf0 + t11 * bf1 + t12 * bf2)
+                vw2 -= hb * (wfix * sb2 + t20 * bf0 + t21 * bf1 + t22 * bf2)
+                gsum -= hb * (wfix * m_free + bf0 * no0 + bf1 * no1 + bf2 * no2)
+                io = 1.0 / opm
+                vw0 = vw0 * io + t * sb0 * gsum
+                vw1 = vw1 * io + t * sb1 * gsum
+                vw2 = vw2 * io + t * sb2 * gsum
+            yc0, yc1, yc2 = solve_sym3(s00, s01, s02, s11, s12, s22, vw0, vw1, vw2)
+            tq = t * (gsum - (yc0 * sb0 + yc1 * sb1 + yc2 * sb2))
+        # the free members' step dx_j = -(z_j - Y^T b_j / m_j), and dF = sum_free dx_j b_j^T (times dt^2 k);
+        # with the hourglass term dx_j = -(z_j - Y^T b_j / m_j) / (1 + hb) - t (sum m z - Y^T sum b)
+        gx = t * (mzx - (y00 * sb0 + y10 * sb1 + y20 * sb2))
+        gy = t * (mzy - (y01 * sb0 + y11 * sb1 + y21 * sb2))
+        gz = t * (mzz - (y02 * sb0 + y12 * sb1 + y22 * sb2))
+        dc = 0.0
+        mcore = 0.0
+        if sliding and held:
+            # Schur complement on the core: dc = -(R_c + sum gamma_j a . dx_j) / (H_c + sum gamma_j q_j),
+            # dx_j the free block's step with the core held (below), R_c and H_c as in the docstring
+            mcore = 1.0 / rig_inv_mass[core]
+            num = (mcore + m_att - mfix) * uc + rc
+            den = mcore + m_att + h * (bf0 * bf0 + bf1 * bf1 + bf2 * bf2)
+            if hb > 0.0:
+                den += hb * (mfix * (1.0 - wfix) - (bf0 * fo0 + bf1 * fo1 + bf2 * fo2))
+            for e in range(start, end):
+                j = np.uint64(g_mem[e])
+                if fixed[j]:
+                    continue
+                inv_m = g_pack[e, 7]
+                b0 = g_pack[e, 8]
+                b1 = g_pack[e, 9]
+                b2 = g_pack[e, 10]
+                dx, dy, dz = _held_step(b0, b1, b2, inv_m, g_raw[e, 0], g_raw[e, 1], g_raw[e, 2], y00, y01, y02, y10, y11,
+                                        y12, y20, y21, y22, hb, opm, gx, gy, gz)  # fmt: skip
+                gam, qj = _core_column(b0, b1, b2, inv_m, mass[j], g_pack[e, 4], g_pack[e, 5], g_pack[e, 6], h, hb, bf0,
+                                       bf1, bf2, wfix, yc0, yc1, yc2, opm, tq)  # fmt: skip
+                num += gam * (ax * dx + ay * dy + az * dz)
+                den += gam * qj
+            dc = -num / den
+        mx = my = mz = 0.0  # sum_free (m_j / M) dx_j: the fit centre's move
+        e00 = e01 = e02 = e10 = e11 = e12 = e20 = e21 = e22 = 0.0
         for e in range(start, end):
             j = np.uint64(g_mem[e])
             if fixed[j]:
@@ -723,102 +784,84 @@ def continuum_group(i, core, core_lo, core_hi, m_att, rot_iters, g_cont, g_off, 
             b0 = g_pack[e, 8]
             b1 = g_pack[e, 9]
             b2 = g_pack[e, 10]
-            dx, dy, dz = _held_step(b0, b1, b2, inv_m, g_raw[e, 0], g_raw[e, 1], g_raw[e, 2], y00, y01, y02, y10, y11,
-                                    y12, y20, y21, y22, hb, opm, gx, gy, gz)  # fmt: skip
-            gam, qj = _core_column(b0, b1, b2, inv_m, mass[j], g_pack[e, 4], g_pack[e, 5], g_pack[e, 6], h, hb, bf0,
-                                   bf1, bf2, wfix, yc0, yc1, yc2, opm, tq)  # fmt: skip
-            num += gam * (ax * dx + ay * dy + az * dz)
-            den += gam * qj
-        dc = -num / den
-    mx = my = mz = 0.0  # sum_free (m_j / M) dx_j: the fit centre's move
-    e00 = e01 = e02 = e10 = e11 = e12 = e20 = e21 = e22 = 0.0
-    for e in range(start, end):
-        j = np.uint64(g_mem[e])
-        if fixed[j]:
+            dx, dy, dz = _held_step(b0, b1, b2, inv_m, g_raw[e, 0], g_raw[e, 1], g_raw[e, 2], y00, y01, y02, y10, y11, y12,
+                                    y20, y21, y22, hb, opm, gx, gy, gz)  # fmt: skip
+            if dc != 0.0:
+                _, qj = _core_column(b0, b1, b2, inv_m, mass[j], g_pack[e, 4], g_pack[e, 5], g_pack[e, 6], h, hb, bf0, bf1,
+                                     bf2, wfix, yc0, yc1, yc2, opm, tq)  # fmt: skip
+                dx += dc * qj * ax
+                dy += dc * qj * ay
+                dz += dc * qj * az
+            if hb > 0.0:
+                w = g_pack[e, 0]
+                mx += w * dx
+                my += w * dy
+                mz += w * dz
+            g_raw[e, 0] = dx
+            g_raw[e, 1] = dy
+            g_raw[e, 2] = dz
+            if held:
+                xp[j, 0] += dx
+                xp[j, 1] += dy
+                xp[j, 2] += dz
+                g_u[e, 0] += dx
+                g_u[e, 1] += dy
+                g_u[e, 2] += dz
+                e00 += dx * b0
+                e01 += dx * b1
+                e02 += dx * b2
+                e10 += dy * b0
+                e11 += dy * b1
+                e12 += dy * b2
+                e20 += dz * b0
+                e21 += dz * b1
+                e22 += dz * b2
+        if not held:
+            _apply_deformation(i, start, end, g_mem, g_pack, frame, xs, xp, g_u, g_raw)
             continue
-        inv_m = g_pack[e, 7]
-        b0 = g_pack[e, 8]
-        b1 = g_pack[e, 9]
-        b2 = g_pack[e, 10]
-        dx, dy, dz = _held_step(b0, b1, b2, inv_m, g_raw[e, 0], g_raw[e, 1], g_raw[e, 2], y00, y01, y02, y10, y11, y12,
-                                y20, y21, y22, hb, opm, gx, gy, gz)  # fmt: skip
         if dc != 0.0:
-            _, qj = _core_column(b0, b1, b2, inv_m, mass[j], g_pack[e, 4], g_pack[e, 5], g_pack[e, 6], h, hb, bf0, bf1,
-                                 bf2, wfix, yc0, yc1, yc2, opm, tq)  # fmt: skip
-            dx += dc * qj * ax
-            dy += dc * qj * ay
-            dz += dc * qj * az
-        if hb > 0.0:
-            w = g_pack[e, 0]
-            mx += w * dx
-            my += w * dy
-            mz += w * dz
-        g_raw[e, 0] = dx
-        g_raw[e, 1] = dy
-        g_raw[e, 2] = dz
-        if held:
-            xp[j, 0] += dx
-            xp[j, 1] += dy
-            xp[j, 2] += dz
-            g_u[e, 0] += dx
-            g_u[e, 1] += dy
-            g_u[e, 2] += dz
-            e00 += dx * b0
-            e01 += dx * b1
-            e02 += dx * b2
-            e10 += dy * b0
-            e11 += dy * b1
-            e12 += dy * b2
-            e20 += dz * b0
-            e21 += dz * b1
-            e22 += dz * b2
-    if not held:
-        _apply_deformation(i, start, end, g_mem, g_pack, frame, xs, xp, g_u, g_raw)
-        return qr
-    if dc != 0.0:
-        slide_core(core, dc, ax, ay, az, mcore, core_lo, core_hi, fixed, xp, rig_x, imp_lin, coupling_imp, dt)
-    # each fixed member's residual once the free members moved, r_j = m_j u_j + dt^2 grad_j E:
-    # z_j (before) + dt^2 k dF b_j / m_j; its force goes to the core and its u takes it up. A sliding
-    # core's move changes it along a alone, where the core's own step has balanced it (its inertia:
-    # m_c dc above)
-    for e in range(start, end):
-        j = np.uint64(g_mem[e])
-        if not fixed[j]:
-            continue
-        m = mass[j]
-        b0 = g_pack[e, 8]
-        b1 = g_pack[e, 9]
-        b2 = g_pack[e, 10]
-        rx = g_raw[e, 0] + h * (e00 * b0 + e01 * b1 + e02 * b2) / m
-        ry = g_raw[e, 1] + h * (e10 * b0 + e11 * b1 + e12 * b2) / m
-        rz = g_raw[e, 2] + h * (e20 * b0 + e21 * b1 + e22 * b2) / m
-        if hb > 0.0:
-            # its miss from the fit moved by -(the centre's move + dF q_j): F = sum_k x_k b_k^T
-            o0 = g_pack[e, 4]
-            o1 = g_pack[e, 5]
-            o2 = g_pack[e, 6]
-            rx -= hb * (mx + e00 * o0 + e01 * o1 + e02 * o2)
-            ry -= hb * (my + e10 * o0 + e11 * o1 + e12 * o2)
-            rz -= hb * (mz + e20 * o0 + e21 * o1 + e22 * o2)
-        if sliding:
-            k = ax * rx + ay * ry + az * rz
-            rx -= k * ax
-            ry -= k * ay
-            rz -= k * az
-            g_u[e, 0] += dc * ax
-            g_u[e, 1] += dc * ay
-            g_u[e, 2] += dc * az
-        deliver_to_core(j, -m * rx, -m * ry, -m * rz, core, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
-                        imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
-        g_u[e, 0] -= rx
-        g_u[e, 1] -= ry
-        g_u[e, 2] -= rz
-    return qr
+            slide_core(core, dc, ax, ay, az, mcore, core_lo, core_hi, fixed, xp, rig_x, imp_lin, coupling_imp, dt)
+        # each fixed member's residual once the free members moved, r_j = m_j u_j + dt^2 grad_j E:
+        # z_j (before) + dt^2 k dF b_j / m_j; its force goes to the core and its u takes it up. A sliding
+        # core's move changes it along a alone, where the core's own step has balanced it (its inertia:
+        # m_c dc above)
+        for e in range(start, end):
+            j = np.uint64(g_mem[e])
+            if not fixed[j]:
+                continue
+            m = mass[j]
+            b0 = g_pack[e, 8]
+            b1 = g_pack[e, 9]
+            b2 = g_pack[e, 10]
+            rx = g_raw[e, 0] + h * (e00 * b0 + e01 * b1 + e02 * b2) / m
+            ry = g_raw[e, 1] + h * (e10 * b0 + e11 * b1 + e12 * b2) / m
+            rz = g_raw[e, 2] + h * (e20 * b0 + e21 * b1 + e22 * b2) / m
+            if hb > 0.0:
+                # its miss from the fit moved by -(the centre's move + dF q_j): F = sum_k x_k b_k^T
+                o0 = g_pack[e, 4]
+                o1 = g_pack[e, 5]
+                o2 = g_pack[e, 6]
+                rx -= hb * (mx + e00 * o0 + e01 * o1 + e02 * o2)
+                ry -= hb * (my + e10 * o0 + e11 * o1 + e12 * o2)
+                rz -= hb * (mz + e20 * o0 + e21 * o1 + e22 * o2)
+            if sliding:
+                k = ax * rx + ay * ry + az * rz
+                rx -= k * ax
+                ry -= k * ay
+                rz -= k * az
+                g_u[e, 0] += dc * ax
+                g_u[e, 1] += dc * ay
+                g_u[e, 2] += dc * az
+            deliver_to_core(j, -m * rx, -m * ry, -m * rz, core, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
+                            imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+            g_u[e, 0] -= rx
+            g_u[e, 1] -= ry
+            g_u[e, 2] -= rz
 
 
 def continuum_energy(x: np.ndarray, mq: np.ndarray, ainv: np.ndarray, k: float, *, mass: np.ndarray | None = None,
                      beta: float = 0.0) -> tuple[float, np.ndarray, np.ndarray]:  # fmt: skip
-    """One continuum group's energy, plain numpy (for tests and for reading: continuum_group is the
+    """One continuum group's energy, plain numpy (for tests and for reading: continuum_groups is the
     kernel): ``x`` (n, 3) its members' positions, ``mq`` (n, 3) their m_j q_j, ``ainv`` (3, 3)
     A_qq^+, ``k`` = 2 G V. Returns (E, dE/dx (n, 3), R): E = (k / 2) ||F - R||_F^2, F = sum_j x_j
     b_j^T, b_j = A_qq^+ m_j q_j, R = polar(F) (det +1); dE/dx_j = k (F - R) b_j (R held: the

@@ -16,7 +16,7 @@ import numpy as np
 
 CONTINUUM_COLUMNS = 14
 """Columns of TissueModel.group_continuum (builder.continuum_groups writes them, the solver packs
-them, compliant.continuum_group reads them)."""
+them, compliant.continuum_groups reads them)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,7 +68,7 @@ class TissueModel:
     (the patch law)."""
     group_continuum: np.ndarray | None = None
     """(N, CONTINUUM_COLUMNS) per group, the continuum group energy E = G V ||F - R||_F^2
-    (TissueConfig.group_energy "continuum"; builder.continuum_groups, compliant.continuum_group):
+    (TissueConfig.group_energy "continuum"; builder.continuum_groups, compliant.continuum_groups):
     [A_qq^+ (6: xx, xy, xz, yy, yz, zz) [1/(kg m^2)], 2 G V [N m], beta [1/s^2] (the hourglass
     term's stiffness per unit mass), A_qq (6) [kg m^2]], A_qq = sum_j m_j q_j q_j^T the group's rest second moment and V the volume it
     stands for; a row of zeros is a shape-matching group. None: all zeros (every group shape

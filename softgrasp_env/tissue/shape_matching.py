@@ -50,7 +50,7 @@ def group_pack(model: TissueModel) -> np.ndarray:
     """(G, 12) per group entry e (member j of group i): [m_j / M_i, m_j q_e (3), q_e (3), 1 / m_j,
     b_e (3), 0], with q_e = x_bar_j - c_bar_i the rest offset, M_i the group's mass and, for a
     continuum group (model.group_continuum), b_e = A_qq^-1 m_j q_e its member's column of F
-    (compliant.continuum_group; 0 elsewhere). These are the rest-state factors of Mueller &
+    (compliant.continuum_groups; 0 elsewhere). These are the rest-state factors of Mueller &
     Chentanez 2011 eq. (10) and of the continuum energy, constant over a run: precomputed once,
     each member's row read in one pass instead of recomputed in each of the group solve's."""
     g_mem = model.group_members.astype(np.int64)

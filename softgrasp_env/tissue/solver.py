@@ -53,7 +53,7 @@ from .anchors import (
     snap_attached_of,
 )
 from .collision import more_kinds_of
-from .compliant import bodies_independent, compliant_sweep, sweep_body
+from .compliant import bodies_independent, compliant_sweep, sweep_body, turn_rates
 from .contacts import (
     clear_multipliers,
     collect_contacts,
@@ -147,7 +147,7 @@ _F_SCRATCH = (
     ("pair_lambda", "pairs", 0), ("pair_lambda_t", "pairs", 0), ("pair_normal", "pairs", 3),
     ("shape_pose", "shapes", 8), ("patch", "patches", 18),
     ("g_u", "members", 3), ("g_raw", "members", 3), ("c_friction_vel", "contacts", 3),
-    ("pair_boxes", "pair_boxes", 0),
+    ("pair_boxes", "pair_boxes", 0), ("g_turn", "n", 0),
 )  # fmt: skip
 _I_SCRATCH = (("c_particle", "contacts", 0), ("c_shape", "contacts", 0), ("c_patch", "contacts", 0),
               ("pair_i", "pairs", 0), ("pair_j", "pairs", 0), ("patch_body", "patches", 0),
@@ -171,7 +171,7 @@ _PACK = _F_PACK + _I_PACK + _B_PACK
 # their rows in `layout` (numba reads module-level ints as compile-time constants)
 (_XP, _QP, _Q_PRED, _VD, _WD, _MOMENT, _SPIN_KICK, _G_FRAME, _C_LAMBDA, _C_NORMAL, _C_RN, _C_FRICTION,
  _C_FRICTION_GOAL, _C_ANCHOR, _C_POINT, _PAIR_LAMBDA, _PAIR_LAMBDA_T, _PAIR_NORMAL, _SHAPE_POSE, _PATCH,
- _G_U, _G_RAW, _C_FRICTION_VEL, _PAIR_BOXES,
+ _G_U, _G_RAW, _C_FRICTION_VEL, _PAIR_BOXES, _G_TURN,
  _REST_X, _REST_Q, _REST_MOMENT, _INERTIA, _RADII, _MASS, _INV_MASS, _G_PACK, _BODY_FRICTION,
  _GROUP_KAPPA, _BODY_MAX_DEVIATION, _G_CONT,
  _C_PARTICLE, _C_SHAPE, _C_PATCH, _PAIR_I, _PAIR_J, _PATCH_BODY, _PAIR_GRID,
@@ -185,6 +185,7 @@ assert _PACK[_PAIR_J][0] == "pair_j" and _PACK[_FIXED][0] == "fixed" and _PACK[_
 assert _PACK[_BODY_CONTACT_CONE][0] == "body_contact_cone" and _PACK[_BODY_CONTACT_LAW][0] == "body_contact_law"
 assert _PACK[_PATCH_BODY][0] == "patch_body" and _PACK[_C_FRICTION_VEL][0] == "c_friction_vel"
 assert _PACK[_PAIR_BOXES][0] == "pair_boxes" and _PACK[_PAIR_GRID][0] == "pair_grid"
+assert _PACK[_G_TURN][0] == "g_turn"
 
 
 @nb.njit(cache=True, inline="always")
@@ -208,13 +209,13 @@ def _view1(buf, layout, k):
 
 
 @nb.njit(**KERNEL)
-def _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
+def _sweep(it, iterations, g_turn, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
            rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
            rig_axis, rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont):  # fmt: skip
     """One shape-matching sweep over every body's groups, and after the last one each group's
     spin of the step turned back. ``continuum``: some groups have the continuum group energy
-    (compliant.continuum_group)."""
-    compliant_sweep(iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
+    (compliant.continuum_groups)."""
+    compliant_sweep(g_turn, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
                     rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid,
                     rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp,
                     continuum, g_cont)  # fmt: skip
@@ -224,7 +225,7 @@ def _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g
 
 
 @nb.njit(cache=True, parallel=True, error_model="numpy", fastmath={"contract"})
-def _bodies_pass(snap, last, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached,
+def _bodies_pass(snap, last, g_turn, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached,
                  fixed, rest_x, rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw,
                  mass, p_body, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
                  rig_move, imp_lin, imp_ang, coupling_imp, continuum, g_cont):  # fmt: skip
@@ -239,7 +240,7 @@ def _bodies_pass(snap, last, iterations, rot_iters, body_off, group_kappa, dt, g
         if snap:
             snap_attached_of(lo, hi, rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp,
                              rig_x, rig_q, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
-        sweep_body(b, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
+        sweep_body(b, g_turn, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached, fixed,
                    rest_q, rest_moment, x, xp, qp, group_q, moment, g_u, g_raw, mass, body_core_shape, shape_rigid,
                    rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp,
                    continuum, g_cont)  # fmt: skip
@@ -329,6 +330,7 @@ def _step(
     c_inner, patch_slide = _view1(b_pack, layout, _C_INNER), _view1(b_pack, layout, _PATCH_SLIDE)
     patch_change, fixed = _view1(b_pack, layout, _PATCH_CHANGE), _view1(b_pack, layout, _FIXED)
     c_slip = _view1(b_pack, layout, _C_SLIP)
+    g_turn = _view1(f_pack, layout, _G_TURN)
     # --- predict rigid bodies: semi-implicit Euler, as pybullet will integrate them (thesis 5.2.2)
     predict_rigid(rig_x0, rig_q0, rig_v, rig_w, rig_gravity, rig_move, rig_inv_mass, rig_force, gx, gy, gz, dt, rig_x,
                   rig_q, imp_lin, imp_ang, coupling_imp)  # fmt: skip
@@ -364,7 +366,7 @@ def _step(
     # --- Gauss-Seidel iterations
     for it in range(iterations):
         if threads is not None:
-            _bodies_pass(coupling == COUPLING_THESIS, it == iterations - 1, iterations, rot_iters, body_off, group_kappa,
+            _bodies_pass(coupling == COUPLING_THESIS, it == iterations - 1, g_turn, rot_iters, body_off, group_kappa,
                          dt, g_off, g_mem, g_pack, g_frame, attached, fixed, rest_x, rest_q, rest_moment, inertia, x, xp,
                          qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass, p_body, body_core_shape, shape_rigid,
                          rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, coupling_imp,
@@ -376,7 +378,7 @@ def _step(
                 # core taking it as an impulse (the thesis coupling's snap, 5.1.3, each iteration)
                 snap_attached(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x,
                               rig_q, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
-            _sweep(it, iterations, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached,
+            _sweep(it, iterations, g_turn, rot_iters, body_off, group_kappa, dt, g_off, g_mem, g_pack, g_frame, attached,
                    fixed, rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass,
                    body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
                    imp_lin, imp_ang, coupling_imp, continuum, g_cont)  # fmt: skip
@@ -545,6 +547,7 @@ class TissueSolver:
         sim = self.sim
         coupling = COUPLING_CONSISTENT if sim.coupling == "consistent" else COUPLING_THESIS
         self.damping = damping_of(self.model, sim)
+        turn_rates(self.model.group_kappa, sim.dt, sim.iterations, self._scratch["g_turn"])
         self._tail_args = (
             self._rig_x, self._rig_q, self._imp_lin, self._imp_ang, self._coupling_imp,
             *self._packed,

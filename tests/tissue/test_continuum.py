@@ -1,5 +1,5 @@
 """The continuum group energy (TissueConfig.group_energy "continuum"; tissue/compliant.py,
-continuum_group; builder.continuum_groups): E = G V ||F - R||^2 per group, its gradient, its
+continuum_groups; builder.continuum_groups): E = G V ||F - R||^2 per group, its gradient, its
 Newton step, its momentum, the uniform-strain patch test, and the pad against the finite-element
 reference (benchmarks/pad_reference.py)."""
 
@@ -12,7 +12,7 @@ import pytest
 
 from softgrasp_env.config import TissueConfig
 from softgrasp_env.tissue.builder import CoreShape, build_combined_body, build_free_block
-from softgrasp_env.tissue.compliant import continuum_energy, continuum_group, core_stiffness, substeps_for
+from softgrasp_env.tissue.compliant import continuum_energy, continuum_groups, core_stiffness, substeps_for
 from softgrasp_env.tissue.rotation import quat_to_matrix
 from softgrasp_env.tissue.shape_matching import group_frames, group_pack
 
@@ -55,7 +55,7 @@ def model_energy(model, x):
 
 
 def run_group(model, i, xp, fixed, dt, group_q=None):
-    """continuum_group on group i alone, as the sweep calls it (core 0, held still): returns
+    """continuum_groups on group i alone (core 0, held still): returns
     (xp after, g_u, the core's linear impulse [N s], quat(R))."""
     n = model.particle_count
     pack = group_pack(model)
@@ -67,11 +67,11 @@ def run_group(model, i, xp, fixed, dt, group_q=None):
     g_u, g_raw = np.zeros((members, 3)), np.zeros((members, 3))
     imp = [np.zeros((1, 3)) for _ in range(3)]
     xp = xp.copy()
-    qr = continuum_group(i, 0, 0, 0, 0.0, 50, model.group_continuum, model.group_offsets, model.group_members, pack,
-                         frame, xs, xp, gq, fixed, g_u, g_raw, model.particle_mass, np.zeros((1, 3)),
-                         np.array([[0.0, 0.0, 0.0, 1.0]]), np.zeros(1), np.zeros((1, 3)), np.zeros((1, 3)),
-                         np.zeros(1, dtype=np.bool_), *imp, dt)  # fmt: skip
-    return xp, g_u, imp[0][0] * dt, np.array(qr)
+    continuum_groups(i, i + 1, 0, 0, 0, 0.0, 50, model.group_continuum, model.group_offsets, model.group_members,
+                     pack, frame, xs, xp, gq, fixed, g_u, g_raw, model.particle_mass, np.zeros((1, 3)),
+                     np.array([[0.0, 0.0, 0.0, 1.0]]), np.zeros(1), np.zeros((1, 3)), np.zeros((1, 3)),
+                     np.zeros(1, dtype=np.bool_), *imp, dt)  # fmt: skip
+    return xp, g_u, imp[0][0] * dt, gq[i].copy()
 
 
 @pytest.mark.parametrize("hourglass", [0.0, 1.0])
@@ -248,10 +248,11 @@ def test_the_newton_step_with_a_sliding_core_is_exact_and_keeps_momentum(hourgla
         rig_x = np.zeros((1, 3))
         after = x.copy()
         m_att = float(m[fixed].sum())
-        qr = continuum_group(i, 0, 0, n, m_att, 50, model.group_continuum, model.group_offsets, model.group_members,
-                             pack, frame, x, after, gq, fixed, g_u, g_raw, m, rig_x,
-                             np.array([[0.0, 0.0, 0.0, 1.0]]), np.array([1.0 / m_core]), np.ones((1, 3)),
-                             axis[None, :], np.ones(1, dtype=np.bool_), imp_lin, imp_ang, coupling, dt)  # fmt: skip
+        continuum_groups(i, i + 1, 0, 0, n, m_att, 50, model.group_continuum, model.group_offsets,
+                         model.group_members, pack, frame, x, after, gq, fixed, g_u, g_raw, m, rig_x,
+                         np.array([[0.0, 0.0, 0.0, 1.0]]), np.array([1.0 / m_core]), np.ones((1, 3)),
+                         axis[None, :], np.ones(1, dtype=np.bool_), imp_lin, imp_ang, coupling, dt)  # fmt: skip
+        qr = gq[i].copy()
         uc = rig_x[0] @ axis
         assert abs(uc) > 0.0
         np.testing.assert_allclose(after[fixed] - x[fixed], np.outer(np.full(fixed.sum(), uc), axis), atol=1e-15)

@@ -11,7 +11,7 @@ from softgrasp_env.tissue.jit import KERNEL
 
 HOT = (
     solver._step, solver._sweep, compliant.compliant_sweep, compliant.sweep_body, compliant.project_group,
-    compliant.continuum_group, anchors.limit_deviation_of, anchors.project_anchors, anchors.snap_attached_of,
+    compliant.continuum_groups, anchors.limit_deviation_of, anchors.project_anchors, anchors.snap_attached_of,
     contacts.collect_contacts, contacts.collect_pairs, contacts.project_shape_contacts, contacts.project_pairs,
     friction.friction_patches, friction._apply_patch_law, integrate.predict_particles, integrate.update_velocities,
     shape_matching.group_frames, shape_matching.balance_torques,
