@@ -5,6 +5,8 @@
     python benchmarks/solver_kernel.py conserve     # momentum drift, zero gravity, damping 0
     python benchmarks/solver_kernel.py scene        # us/step of the grasp scene's tissue (352 p.)
     python benchmarks/solver_kernel.py demo         # whole scripted grasp: steps/s, tissue share
+    python benchmarks/solver_kernel.py breakdown [--converged]   # SoftGrasp-v4's pads: a call's fixed
+                                                    # cost, its cost per iteration, the group sweep alone
     python benchmarks/solver_kernel.py record DIR   # save reference outputs (run on the old code)
     python benchmarks/solver_kernel.py compare DIR  # max |difference| against the saved reference
 
@@ -195,6 +197,79 @@ def bench_demo(repeats: int = 3) -> None:
           f" {'HELD' if info['held'] else 'NOT HELD'}")  # fmt: skip
 
 
+def capture_env(env_kwargs: dict, steps: int = 60) -> tuple[TissueSolver, TissueState, Colliders]:
+    """SoftGrasp-v4 (with ``env_kwargs``), the scripted grasp from seed 0 for ``steps`` env steps (the
+    pads pressed on the cylinder by then): the env's tissue solver and the next world step's inputs."""
+    import gymnasium as gym
+
+    import softgrasp_env  # noqa: F401  (registers the ids)
+    from softgrasp_env.policies import ScriptedGraspPolicy
+
+    env = gym.make("SoftGrasp-v4", **env_kwargs)
+    obs, _ = env.reset(seed=0)
+    policy = ScriptedGraspPolicy.for_env(env)
+    for _ in range(steps):
+        obs, *_ = env.step(policy(obs))
+    world = env.unwrapped.scene.world
+    return world.solver, world.state.copy(), _copy_colliders(world.colliders)
+
+
+def _packed_views(solver: TissueSolver) -> dict[str, np.ndarray]:
+    """The solver's packed model and scratch arrays by name (views, as _step sees them)."""
+    from softgrasp_env.tissue import solver as solver_module
+
+    f, i, b, layout = solver._packed
+    n_f, n_i = len(solver_module._F_PACK), len(solver_module._I_PACK)
+    out = {}
+    for k, (name, _, cols) in enumerate(solver_module._PACK):
+        buf = f if k < n_f else (i if k < n_f + n_i else b)
+        o, rows, c = layout[k]
+        out[name] = buf[o : o + rows * c].reshape(rows, c) if cols else buf[o : o + rows]
+    return out
+
+
+def bench_breakdown(converged: bool, repeats: int = 7) -> None:
+    """Where a tissue step's time goes on SoftGrasp-v4's pads pressed on the cylinder: the step at
+    1, 2, 3 and 6 iterations (its fixed cost and its cost per iteration, from the 3 -> 6 slope),
+    and the group sweep alone (compliant.compliant_sweep on the solver's own buffers after a step)."""
+    from dataclasses import replace
+
+    from softgrasp_env.tissue.compliant import compliant_sweep
+
+    for label, kwargs in (("default", {}), *((("converged", {"preset": "converged"}),) if converged else ())):
+        solver, state, col = capture_env(kwargs)
+        per = {}
+        for it in (1, 2, 3, 6):
+            sv = TissueSolver(solver.model, replace(solver.sim, iterations=it))
+            per[it] = time_steps(sv, state, col, 30, repeats)
+        slope = (per[6] - per[3]) / 3
+        s = state.copy()
+        solver.step(s, col)
+        v, sim = _packed_views(solver), solver.sim
+        args = (v["g_turn"], sim.rotation_iterations, v["body_off"], v["group_kappa"], sim.dt, v["g_off"], v["g_mem"],
+                v["g_pack"], v["g_frame"], v["attached"], v["fixed"], v["rest_q"], v["rest_moment"], s.particle_x,
+                v["xp"], v["qp"], s.group_q, v["moment"], v["g_u"], v["g_raw"], v["mass"], v["body_core_shape"],
+                col.shape_rigid, solver._rig_x, solver._rig_q, col.rigid_inv_mass, col.rigid_inv_inertia, col.rigid_axis,
+                col.rigid_in_solve, solver._imp_lin, solver._imp_ang, solver._coupling_imp, solver.model.continuum,
+                v["g_cont"])  # fmt: skip
+        compliant_sweep(*args)
+        sweep = np.inf
+        for _ in range(repeats):
+            tic = time.perf_counter()
+            for _ in range(50):
+                compliant_sweep(*args)
+            sweep = min(sweep, (time.perf_counter() - tic) / 50)
+        n, groups = solver.model.particle_count, len(v["g_off"]) - 1
+        members = len(v["g_mem"]) / groups
+        print(f"{label}: {n} particles, {groups} groups of {members:.1f} members; a step at 1 / 2 / 3 / 6 iterations "
+              + " / ".join(f"{per[k] * 1e6:.1f}" for k in (1, 2, 3, 6)) + " us")
+        print(f"  per iteration {slope * 1e6:.1f} us ({slope * 1e6 / n:.3f} us per particle), fixed "
+              f"{(per[3] - 3 * slope) * 1e6:.1f} us; at {sim.iterations} iterations "
+              f"{per[sim.iterations] * 1e6 / n / sim.iterations:.3f} us per particle and iteration")
+        print(f"  the group sweep alone {sweep * 1e6:.1f} us ({sweep * 1e6 / groups:.3f} us per group), "
+              f"{sweep / slope:.0%} of an iteration")
+
+
 STATE_FIELDS = ("particle_x", "particle_v", "particle_q", "particle_omega", "group_q")
 OUTPUT_FIELDS = ("rigid_pred_x", "rigid_pred_q", "rigid_impulse", "rigid_angular_impulse", "coupling_impulse")
 
@@ -286,6 +361,8 @@ def main(argv: list[str]) -> None:
         bench_scene()
     elif what == "demo":
         bench_demo()
+    elif what == "breakdown":
+        bench_breakdown("--converged" in argv)
     elif what == "record":
         record(Path(argv[1]))
     elif what == "compare":

@@ -531,3 +531,19 @@ def test_gpu_inputs_colour_the_groups_so_no_two_in_a_colour_share_a_particle():
         assert r["colours"] == colour.max() + 1 and sum(r["per colour"]) > 0
     finally:
         env.close()
+
+
+def test_solver_kernel_breakdown_prints_a_steps_fixed_cost_its_iterations_and_the_sweep(capsys):
+    """The kernel's breakdown on SoftGrasp-v4's pads pressed on the cylinder prints each figure (no
+    timing is asserted: the machines are shared). The group sweep runs on the solver's own buffers,
+    so this breaks if the sweep's arguments change and the benchmark is not updated."""
+    import re
+
+    from benchmarks.solver_kernel import bench_breakdown
+
+    bench_breakdown(converged=False, repeats=1)
+    out = capsys.readouterr().out
+    assert re.search(r"default: 60 particles, 60 groups of 8\.0 members", out), out
+    assert re.search(r"iterations [\d.]+ / [\d.]+ / [\d.]+ / [\d.]+ us", out), out
+    assert re.search(r"per iteration [\d.]+ us .* fixed -?[\d.]+ us", out), out
+    assert re.search(r"the group sweep alone [\d.]+ us \([\d.]+ us per group\), \d+% of an iteration", out), out
