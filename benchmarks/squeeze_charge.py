@@ -3,6 +3,7 @@
     PYTHONPATH=. python benchmarks/squeeze_charge.py run [--seeds 12] [--factors 0.8,1,...,3]
         [--ids SoftGraspGrip-v4,SoftGraspGripRigidTorsion-v3,SoftGraspGripRigid-v3] [--out CSV]
     PYTHONPATH=. python benchmarks/squeeze_charge.py curves [--csv CSV] [--plot PNG]
+    PYTHONPATH=. python benchmarks/squeeze_charge.py policies [--ids ...] [--seeds 10] [--weight-carry 1.0]
 
 ``run``: each episode squeezes with one constant force (policies/grip.py ``ConstantGripPolicy``),
 ``factor`` times the static least m g / (2 mu_s) of the episode's drawn mass and friction (read
@@ -12,12 +13,18 @@ of F / F_static and of (F / F_static)^2), the carry's success without the squeez
 task's ``carry_squeeze`` / ``least_squeeze``. The squeeze term does not act on the physics, so
 ``curves`` re-prices the same episodes under any charge: the expected return per factor, each
 kind, and where it peaks (the ids' charge and the candidates).
+
+``policies``: what a learner compares - the return of the tactile grip script the demonstrations
+come from (agents.demos.grip_script), of a hand left half closed (action 0) and of a hand held
+open, under the ids' charge and under the charge on the carry's steps alone
+(``squeeze_charge_steps="carry"``, weight ``--weight-carry``), the same episodes re-priced.
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import math
 import time
 from pathlib import Path
 
@@ -29,7 +36,7 @@ from benchmarks.slip_warning_grip import constant_grip
 from softgrasp_env.registration import SQUEEZE_WEIGHT_LEAST
 
 FIELDS = ("id", "factor", "seed", "mass", "mu", "static_least", "force", "steps", "base", "sum_f", "sum_r", "sum_r2",
-          "carried", "success", "carry_squeeze", "least_squeeze")  # fmt: skip
+          "carried", "success", "carry_squeeze", "least_squeeze", "sum_r_carry")  # fmt: skip
 SQUEEZE_FACTOR = 2.0
 """The grip ids' bound on the carry's mean squeeze, in least forces (registration.GRIP_TASK)."""
 OUT = Path("docs/results/squeeze_charge.csv")
@@ -40,7 +47,7 @@ def episode(env: gym.Env, factor: float, seed: int) -> dict:
     policy, mu, mass, static, force = constant_grip(env, factor, seed)
     obs, _ = env.reset(seed=seed)
     row = {"factor": factor, "seed": seed, "mass": mass, "mu": mu, "static_least": static, "force": force, "steps": 0,
-           "base": 0.0, "sum_f": 0.0, "sum_r": 0.0, "sum_r2": 0.0}  # fmt: skip
+           "base": 0.0, "sum_f": 0.0, "sum_r": 0.0, "sum_r2": 0.0, "sum_r_carry": 0.0}  # fmt: skip
     done, info = False, {}
     while not done:
         obs, _, term, trunc, info = env.step(policy(obs))
@@ -52,6 +59,8 @@ def episode(env: gym.Env, factor: float, seed: int) -> dict:
         row["sum_f"] += f
         row["sum_r"] += f / static
         row["sum_r2"] += (f / static) ** 2
+        if base.task.task.phase(base.scene.steps) is not None:  # the carry's steps as the task charges them
+            row["sum_r_carry"] += f / static
     least, mean = float(info["least_squeeze"]), float(info["carry_squeeze"])
     row["carried"] = bool(info["is_success"])  # the env is made without the squeeze bound: the carry's own
     row["success"] = row["carried"] and mean <= SQUEEZE_FACTOR * least
@@ -85,6 +94,9 @@ def load(path: Path) -> list[dict]:
         rows = list(csv.DictReader(fh))
     for r in rows:
         for k in FIELDS[1:]:
+            if k not in r:  # a file from before the column: NaN, so a charge that needs it says so
+                r[k] = math.nan
+                continue
             r[k] = r[k] == "True" if r[k] in ("True", "False") else float(r[k])
     return rows
 
@@ -105,9 +117,13 @@ CHARGES = {
     "0.2 F / F_least": lambda r: 0.2 * r["sum_r"],
     "0.4 F / F_least": lambda r: 0.4 * r["sum_r"],
     "0.15 (F / F_least)^2": lambda r: 0.15 * r["sum_r2"],
+    "carry only: 0.5 F / F_least": lambda r: 0.5 * r["sum_r_carry"],
+    "carry only: 0.75 F / F_least": lambda r: 0.75 * r["sum_r_carry"],
+    "carry only: 1.0 F / F_least": lambda r: 1.0 * r["sum_r_carry"],
 }
-"""Charges to price the episodes under: the v4 ids', the v5 ids' (registration.GRIP_TASK_LEAST)
-and neighbours of it."""
+"""Charges to price the episodes under: the v4 ids', the v5 ids' (registration.GRIP_TASK_LEAST),
+neighbours of it, and charges on the carry's steps alone (``squeeze_charge_steps="carry"``; they
+need the ``sum_r_carry`` column)."""
 
 
 def curves(path: Path, plot: Path | None = None) -> None:
@@ -149,18 +165,66 @@ def curves(path: Path, plot: Path | None = None) -> None:
         print(f"wrote {plot}")
 
 
+def policy_returns(env_id: str, seeds: int, weight_carry: float, first_seed: int = 1000) -> dict[str, dict]:
+    """Per policy (script, half closed, open): success count and the returns under the id's own
+    charge and under ``weight_carry`` x F / F_least on the carry's steps alone (the same episodes;
+    the charge does not act on the physics)."""
+    from agents.demos import grip_script
+
+    env = gym.make(env_id)
+    base = env.unwrapped
+    out = {}
+    for name in ("script", "half closed", "open"):
+        rets, carry_rets, wins = [], [], 0
+        for seed in range(first_seed, first_seed + seeds):
+            obs, _ = env.reset(seed=seed)
+            policy = grip_script(env) if name == "script" else None
+            static = base.task.mass * 9.81 / (2.0 * base.task.mu_s)
+            total = carry_total = 0.0
+            done, success = False, False
+            while not done:
+                if policy is not None:
+                    action = policy(obs)
+                else:
+                    action = np.zeros(env.action_space.shape)
+                    action[-1] = -1.0 if name == "open" else 0.0
+                obs, reward, term, trunc, info = env.step(action)
+                done = term or trunc
+                squeeze = float(info["reward_terms"]["squeeze"])
+                in_carry = base.task.task.phase(base.scene.steps) is not None
+                f = float(np.mean(base._last.force))
+                total += reward
+                carry_total += reward - squeeze - (weight_carry * f / static if in_carry else 0.0)
+                success = success or bool(info["is_success"])
+            rets.append(total)
+            carry_rets.append(carry_total)
+            wins += success
+        out[name] = {"success": wins, "return": (float(np.mean(rets)), float(np.min(rets))),
+                     "carry": (float(np.mean(carry_rets)), float(np.min(carry_rets)))}  # fmt: skip
+        print(f"{env_id:24s} {name:12s} success {wins}/{seeds}; return under the id's charge "
+              f"{out[name]['return'][0]:7.1f} (least {out[name]['return'][1]:7.1f}); on the carry's steps alone "
+              f"({weight_carry:g} F / F_least) {out[name]['carry'][0]:7.1f} (least {out[name]['carry'][1]:7.1f})",
+              flush=True)  # fmt: skip
+    env.close()
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("what", choices=("run", "curves"))
+    ap.add_argument("what", choices=("run", "curves", "policies"))
     ap.add_argument("--ids", default="SoftGraspGrip-v4,SoftGraspGripRigidTorsion-v3,SoftGraspGripRigid-v3")
     ap.add_argument("--factors", default="0.8,1.0,1.1,1.2,1.35,1.5,1.75,2.0,2.5,3.0")
     ap.add_argument("--seeds", type=int, default=12)
     ap.add_argument("--first-seed", type=int, default=1000)
     ap.add_argument("--out", "--csv", dest="csv", type=Path, default=OUT)
     ap.add_argument("--plot", type=Path, default=None, help="curves: draw the expected return per factor here")
+    ap.add_argument("--weight-carry", type=float, default=1.0, help="policies: the charge's weight on the carry's steps")
     a = ap.parse_args()
     if a.what == "run":
         run(a.ids.split(","), [float(f) for f in a.factors.split(",")], a.seeds, a.csv, a.first_seed)
+    elif a.what == "policies":
+        for env_id in a.ids.split(","):
+            policy_returns(env_id, a.seeds, a.weight_carry, a.first_seed)
     else:
         curves(a.csv, a.plot)
 

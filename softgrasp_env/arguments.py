@@ -43,7 +43,7 @@ from .tasks.carry import (
     sway_limits_error,
 )
 from .tasks.goal import DISTANCE_THRESHOLD, GOAL_HEIGHT_RANGE
-from .tasks.grip import SQUEEZE_REFERENCES
+from .tasks.grip import SQUEEZE_CHARGE_STEPS, SQUEEZE_REFERENCES
 from .tasks.reach import APPROACH
 from .validation import (
     check_bool,
@@ -245,6 +245,10 @@ KEYWORDS: tuple[Keyword, ...] = (
         " of the finger's full force, the same for every cylinder) or 'least' (SoftGraspGrip-v5: in least "
         "forces, m g / (2 mu_s) with this episode's mass and friction, so a squeeze 1.3 x the least costs the "
         "same on a light cylinder as on a heavy one)"),
+    _kw("squeeze_charge_steps", "grip_force", "str", "all",
+        "Which env steps pay the squeeze charge: 'all' (the registered grip ids) or 'carry' (only the carry's, "
+        "where the least force is judged: closing and lifting cost nothing, so a grasp carried through "
+        "pays more than leaving the cylinder alone)"),
     _kw("squeeze_factor", "grip_force", "float", None,
         "The grip-force task (SoftGraspGrip-v5: 2): success also needs the carry's mean squeeze at most this many"
         " times the least force that holds the cylinder through it (Coulomb, with its measured accelerations; "
@@ -496,12 +500,15 @@ class GripForceConfig:
     squeeze_reference: str = "finger_force"
     """The charge's unit of squeeze: the finger's full force, or the episode's static least force
     (tasks.grip.SQUEEZE_REFERENCES)."""
+    squeeze_charge_steps: str = "all"
+    """Which env steps pay the charge: every one, or the carry's (tasks.grip.SQUEEZE_CHARGE_STEPS)."""
 
     def __post_init__(self) -> None:
         check_range("squeeze_weight", self.squeeze_weight, 0.0, 10.0)
         if self.squeeze_factor is not None:
             check_range("squeeze_factor", self.squeeze_factor, 1.0, 100.0)
         check_choice("squeeze_reference", self.squeeze_reference, SQUEEZE_REFERENCES)
+        check_choice("squeeze_charge_steps", self.squeeze_charge_steps, SQUEEZE_CHARGE_STEPS)
 
     @property
     def on(self) -> bool:
@@ -696,7 +703,8 @@ class EnvArguments:
             lift=lift,
             ranges=ranges,
             carry_test=carry,
-            grip_force=GripForceConfig(v["squeeze_weight"], v["squeeze_factor"], v["squeeze_reference"]),
+            grip_force=GripForceConfig(v["squeeze_weight"], v["squeeze_factor"], v["squeeze_reference"],
+                                       v["squeeze_charge_steps"]),
             observation=ObservationConfig(v["observe_object"], _tuple(v["tactile"], integers=True),
                                           _given(v["observe_shape"], v["object"] is not None or
                                                  bool(ranges.object_scale)), v["tactile_history"]),
@@ -725,7 +733,8 @@ _FLAT: dict[str, tuple[str, str]] = {
     "carry": ("carry_test", "on"),
     "carry_start": ("carry_test", "start_time"),
     **{f"carry_{a}": ("carry_test", a) for a in ("duration", "frequency", "acceleration", "slide_limit")},
-    **{a: ("grip_force", a) for a in ("squeeze_weight", "squeeze_factor", "squeeze_reference")},
+    **{a: ("grip_force", a) for a in ("squeeze_weight", "squeeze_factor", "squeeze_reference",
+                                      "squeeze_charge_steps")},
     **{a: ("observation", a) for a in ("observe_object", "tactile", "observe_shape", "tactile_history")},
     "render_width": ("camera", "width"), "render_height": ("camera", "height"), "render_camera": ("camera", "mode"),
     **{f"camera_{a}": ("camera", a) for a in ("distance", "yaw", "pitch", "target")},
@@ -895,7 +904,8 @@ class EnvPlan:
         if not grip.on:
             return test
         return GripForceTask(test, squeeze_weight=grip.squeeze_weight, squeeze_factor=grip.squeeze_factor,
-                             finger_force=control.finger_force, squeeze_reference=grip.squeeze_reference)  # fmt: skip
+                             finger_force=control.finger_force, squeeze_reference=grip.squeeze_reference,
+                             squeeze_charge_steps=grip.squeeze_charge_steps)  # fmt: skip
 
     def make_actions(self) -> GripperActions:
         c = self.args.control

@@ -53,6 +53,10 @@ GRAVITY = np.array([0.0, 0.0, -9.81])
 GRIP_INFO = ("carry_squeeze", "least_squeeze")
 """The entries the grip-force task adds to ``info`` [N]."""
 SQUEEZE_REFERENCES = ("finger_force", "least")
+SQUEEZE_CHARGE_STEPS = ("all", "carry")
+"""Which env steps the squeeze is charged on (:class:`GripForceTask`): every one, or only the
+carry's (the task's least force is the carry's, so only the squeeze held through it is judged;
+closing and lifting cost nothing)."""
 """What the squeeze charge divides the squeeze by (:class:`GripForceTask`): the finger's full force,
 or the episode's static least force m g / (2 mu_s)."""
 
@@ -76,15 +80,21 @@ class GripForceTask(TaskWrapper):
     ``"finger_force"`` (``finger_force`` [N], the squeeze at full action) or ``"least"`` (the
     episode's static least force m g / (2 mu_s), so the charge is in least forces and the same
     grip margin costs the same on every cylinder); ``squeeze_factor`` (None: the carry's success
-    alone) bounds the carry's mean squeeze by that many times the least that holds."""
+    alone) bounds the carry's mean squeeze by that many times the least that holds.
+    ``squeeze_charge_steps`` ("all" or "carry") is which env steps pay the charge: every one, or
+    only the carry's."""
 
     def __init__(self, carry: CarryTest, *, squeeze_weight: float, squeeze_factor: float | None,
-                 finger_force: float, squeeze_reference: str = "finger_force") -> None:  # fmt: skip
+                 finger_force: float, squeeze_reference: str = "finger_force",
+                 squeeze_charge_steps: str = "all") -> None:  # fmt: skip
         if not isinstance(carry, CarryTest):
             raise TypeError(f"GripForceTask wraps a CarryTest (its accelerations judge the squeeze), got {carry!r}")
         if squeeze_reference not in SQUEEZE_REFERENCES:
             raise ValueError(f"squeeze_reference must be one of {SQUEEZE_REFERENCES}, got {squeeze_reference!r}")
+        if squeeze_charge_steps not in SQUEEZE_CHARGE_STEPS:
+            raise ValueError(f"squeeze_charge_steps must be one of {SQUEEZE_CHARGE_STEPS}, got {squeeze_charge_steps!r}")
         self.squeeze_reference = squeeze_reference
+        self.squeeze_charge_steps = squeeze_charge_steps
         super().__init__(carry)
         self.reward_terms = carry.reward_terms + ("squeeze",)
         self.info_keys = carry.info_keys + GRIP_INFO
@@ -127,7 +137,8 @@ class GripForceTask(TaskWrapper):
             self._squeeze_sum += squeeze
             self._squeeze_n += 1
         self._prev = (reading.time, reading.cyl_v.copy())
-        term = -self.squeeze_weight * squeeze / self.reference
+        charged = in_carry or self.squeeze_charge_steps == "all"
+        term = -self.squeeze_weight * squeeze / self.reference if charged else 0.0
         success = out.success
         least, mean = self.least, self.carry_squeeze
         if success and self.squeeze_factor is not None:
@@ -145,4 +156,4 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-__all__ = ["GRIP_INFO", "SQUEEZE_REFERENCES", "GripForceTask", "least_squeeze"]
+__all__ = ["GRIP_INFO", "SQUEEZE_CHARGE_STEPS", "SQUEEZE_REFERENCES", "GripForceTask", "least_squeeze"]

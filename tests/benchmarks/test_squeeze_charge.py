@@ -44,3 +44,28 @@ def test_the_shipped_measurement_peaks_where_the_docs_say():
     assert 1.2 <= peak["SoftGraspGrip-v4"] <= 1.5
     assert peak["SoftGraspGripRigid-v3"] == peak["SoftGraspGripRigidTorsion-v3"] == 1.1
     assert max(v4["SoftGraspGrip-v4"], key=lambda f: v4["SoftGraspGrip-v4"][f][0]) == 2.0
+
+
+def test_an_episode_repriced_on_the_carrys_steps_is_that_envs_own_return():
+    """The carry-only charge re-priced from a logged episode equals what an env made with
+    ``squeeze_charge_steps="carry"`` pays for the same constant grip."""
+    from softgrasp_env.policies.grip import ConstantGripPolicy
+
+    row = squeeze_charge.episode(gym.make("SoftGraspGripRigid-v4"), 1.3, 1001)
+    env = gym.make("SoftGraspGripRigid-v4", squeeze_charge_steps="carry", squeeze_weight=1.0)
+    obs, _ = env.reset(seed=1001)
+    policy, total, done = ConstantGripPolicy(env, row["force"]), 0.0, False
+    while not done:
+        obs, reward, terminated, truncated, _ = env.step(policy(obs))
+        total += reward
+        done = terminated or truncated
+    assert 0.0 < row["sum_r_carry"] < row["sum_r"]
+    assert total == pytest.approx(row["base"] - row["sum_r_carry"], rel=1e-5)
+
+
+def test_on_the_carrys_steps_alone_the_grip_script_pays_more_than_an_open_hand():
+    """What a learner compares on the rigid twin: under the carry-only charge the tactile script's
+    grasps (carried through) return well above a hand held open, at their worst seed."""
+    out = squeeze_charge.policy_returns("SoftGraspGripRigid-v4", 2, 1.0)
+    assert out["script"]["success"] == 2
+    assert out["script"]["carry"][1] > out["open"]["carry"][0] + 10.0

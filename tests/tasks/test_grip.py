@@ -102,6 +102,40 @@ def test_the_charge_in_least_forces_costs_a_margin_the_same_on_every_cylinder(ma
     assert charges[0] == pytest.approx(-0.5 * 1.5, rel=0.02) and charges[1] == pytest.approx(-0.5 * 1.5, rel=0.02)
 
 
+def test_the_charge_on_the_carrys_steps_alone_leaves_the_physics_and_the_carrys_charge(make_env):
+    """``squeeze_charge_steps="carry"``: the same grip gives the same observations; the squeeze
+    costs nothing before the carry and what the ids' charge costs in it, so a grasp carried through
+    pays more than leaving the cylinder alone."""
+    runs = {}
+    for steps in ("all", "carry"):
+        env = make_env("SoftGraspGripRigid-v4", squeeze_charge_steps=steps)
+        obs, _ = env.reset(seed=5)
+        policy = ConstantGripPolicy(env, 1.5 * env.unwrapped.task.reference)
+        rows = []
+        done = False
+        while not done:
+            obs, reward, term, trunc, info = env.step(policy(obs))
+            # the carry's steps as the task judges the squeeze: its last step included
+            in_carry = env.unwrapped.task.task.phase(env.unwrapped.scene.steps) is not None
+            rows.append((obs.copy(), info["reward_terms"]["squeeze"], in_carry, reward, info["is_success"]))
+            done = term or trunc
+        runs[steps] = rows
+    assert len(runs["all"]) == len(runs["carry"])
+    carried = 0
+    for (o1, q1, c1, r1, _), (o2, q2, c2, r2, _) in zip(runs["all"], runs["carry"], strict=True):
+        assert np.array_equal(o1, o2) and c1 == c2
+        if c1:
+            carried += 1
+            assert q2 == q1 and r2 == r1
+        else:
+            assert q2 == 0.0 and r2 == pytest.approx(r1 - q1, rel=1e-12, abs=1e-12)
+    assert carried > 0 and runs["carry"][-1][4], "the 1.5 x least grip carries the cylinder through"
+    before = sum(q for _, q, c, _, _ in runs["all"] if not c)
+    assert before < -1.0, "the ids' charge costs the closing and the lift"
+    ret = {k: sum(r[3] for r in v) for k, v in runs.items()}
+    assert ret["carry"] == pytest.approx(ret["all"] - before, rel=1e-9)
+
+
 def test_success_needs_the_squeeze_within_the_factor(make_env):
     """The same held episode succeeds or not by the factor alone."""
     for factor, expect in ((2.0, False), (100.0, True)):
@@ -120,6 +154,7 @@ def test_success_needs_the_squeeze_within_the_factor(make_env):
     ({"squeeze_weight": -1.0}, "squeeze_weight"),
     ({"observe_object": "no"}, "observe_object"),
     ({"squeeze_weight": 0.5, "squeeze_reference": "weight"}, "squeeze_reference"),
+    ({"squeeze_weight": 0.5, "squeeze_charge_steps": "lift"}, "squeeze_charge_steps"),
 ])  # fmt: skip
 def test_bad_grip_arguments_are_named(kwargs, match):
     with pytest.raises(ValueError, match=match):
