@@ -54,6 +54,17 @@ def time_steps(solver: TissueSolver, state: TissueState, col: Colliders, steps: 
     return best
 
 
+def best_per_call(fn, args: tuple, calls: int, repeats: int) -> float:
+    """Best-of-``repeats`` mean seconds per call of ``fn(*args)`` over ``calls`` calls."""
+    best = np.inf
+    for _ in range(repeats):
+        tic = time.perf_counter()
+        for _ in range(calls):
+            fn(*args)
+        best = min(best, (time.perf_counter() - tic) / calls)
+    return best
+
+
 def bench_block(repeats: int = 7) -> None:
     model, sim, state = free_block()
     solver = TissueSolver(model, sim)
@@ -82,12 +93,7 @@ def bench_dispatch(repeats: int = 7) -> None:
             col.rigid_inv_mass, col.rigid_inv_inertia, col.rigid_axis, col.rigid_force, col.rigid_gravity,
             col.rigid_in_solve, col.shape_kind, col.shape_params, col.shape_rigid, col.shape_local_x,
             col.shape_local_q, *solver._tail_args)  # fmt: skip
-    raw = np.inf
-    for _ in range(repeats):
-        tic = time.perf_counter()
-        for _ in range(3000):
-            _step(*args)
-        raw = min(raw, (time.perf_counter() - tic) / 3000)
+    raw = best_per_call(_step, args, 3000, repeats)
     fixed = 2.0 * t[1] - t[2]
     print(f"dispatch, {model.particle_count} particles (best of {repeats}): {t[1] * 1e6:.2f} us/step at 1 iteration, "
           f"{t[2] * 1e6:.2f} at 2; fixed cost per call {fixed * 1e6:.2f} us, of which the Python front end "
@@ -253,12 +259,7 @@ def bench_breakdown(converged: bool, repeats: int = 7) -> None:
                 col.rigid_in_solve, solver._imp_lin, solver._imp_ang, solver._coupling_imp, solver.model.continuum,
                 v["g_cont"])  # fmt: skip
         compliant_sweep(*args)
-        sweep = np.inf
-        for _ in range(repeats):
-            tic = time.perf_counter()
-            for _ in range(50):
-                compliant_sweep(*args)
-            sweep = min(sweep, (time.perf_counter() - tic) / 50)
+        sweep = best_per_call(compliant_sweep, args, 50, repeats)
         n, groups = solver.model.particle_count, len(v["g_off"]) - 1
         members = len(v["g_mem"]) / groups
         print(f"{label}: {n} particles, {groups} groups of {members:.1f} members; a step at 1 / 2 / 3 / 6 iterations "

@@ -14,6 +14,19 @@ from softgrasp_env.registration import SQUEEZE_WEIGHT_LEAST
 ROOT = Path(__file__).resolve().parents[2]
 
 
+def constant_grip_return(env: gym.Env, force: float, seed: int) -> float:
+    """The env's own return for an episode squeezing ``force`` [N] throughout."""
+    from softgrasp_env.policies.grip import ConstantGripPolicy
+
+    obs, _ = env.reset(seed=seed)
+    policy, total, done = ConstantGripPolicy(env, force), 0.0, False
+    while not done:
+        obs, reward, terminated, truncated, _ = env.step(policy(obs))
+        total += reward
+        done = terminated or truncated
+    return total
+
+
 def test_an_episode_repriced_is_the_v5_ids_own_return():
     """The v5 charge applied to an episode logged on the v4-charged id gives the return the v5 id
     pays for the same episode (the charge does not touch the physics; same seed, same actions)."""
@@ -22,14 +35,7 @@ def test_an_episode_repriced_is_the_v5_ids_own_return():
     again = squeeze_charge.episode(env, 1.3, 1001)
     assert again["base"] == pytest.approx(row["base"], rel=1e-12) and again["sum_r"] == pytest.approx(row["sum_r"])
     # the v5 id's own return, stepped here with the same constant grip
-    from softgrasp_env.policies.grip import ConstantGripPolicy
-
-    obs, _ = env.reset(seed=1001)
-    policy, total, done = ConstantGripPolicy(env, row["force"]), 0.0, False
-    while not done:
-        obs, reward, terminated, truncated, _ = env.step(policy(obs))
-        total += reward
-        done = terminated or truncated
+    total = constant_grip_return(env, row["force"], 1001)
     assert total == pytest.approx(row["base"] - SQUEEZE_WEIGHT_LEAST * row["sum_r"], rel=1e-5)
 
 
@@ -49,16 +55,9 @@ def test_the_shipped_measurement_peaks_where_the_docs_say():
 def test_an_episode_repriced_on_the_carrys_steps_is_that_envs_own_return():
     """The carry-only charge re-priced from a logged episode equals what an env made with
     ``squeeze_charge_steps="carry"`` pays for the same constant grip."""
-    from softgrasp_env.policies.grip import ConstantGripPolicy
-
     row = squeeze_charge.episode(gym.make("SoftGraspGripRigid-v4"), 1.3, 1001)
     env = gym.make("SoftGraspGripRigid-v4", squeeze_charge_steps="carry", squeeze_weight=1.0)
-    obs, _ = env.reset(seed=1001)
-    policy, total, done = ConstantGripPolicy(env, row["force"]), 0.0, False
-    while not done:
-        obs, reward, terminated, truncated, _ = env.step(policy(obs))
-        total += reward
-        done = terminated or truncated
+    total = constant_grip_return(env, row["force"], 1001)
     assert 0.0 < row["sum_r_carry"] < row["sum_r"]
     assert total == pytest.approx(row["base"] - row["sum_r_carry"], rel=1e-5)
 
