@@ -15,9 +15,10 @@ task's ``carry_squeeze`` / ``least_squeeze``. The squeeze term does not act on t
 kind, and where it peaks (the ids' charge and the candidates).
 
 ``policies``: what a learner compares - the return of the tactile grip script the demonstrations
-come from (agents.demos.grip_script), of a hand left half closed (action 0) and of a hand held
-open, under the ids' charge and under the charge on the carry's steps alone
-(``squeeze_charge_steps="carry"``, weight ``--weight-carry``), the same episodes re-priced.
+come from (agents.demos.grip_script), of the same script letting go when the carry begins, of a
+hand held open and of one left half closed, under the ids' charge and under charges on the carry's
+steps alone (weight ``--weight-carry``: on the squeeze, or on its margin over the least), the same
+episodes re-priced.
 """
 
 from __future__ import annotations
@@ -36,7 +37,8 @@ from benchmarks.slip_warning_grip import constant_grip
 from softgrasp_env.registration import SQUEEZE_WEIGHT_LEAST
 
 FIELDS = ("id", "factor", "seed", "mass", "mu", "static_least", "force", "steps", "base", "sum_f", "sum_r", "sum_r2",
-          "carried", "success", "carry_squeeze", "least_squeeze", "sum_r_carry")  # fmt: skip
+          "carried", "success", "carry_squeeze", "least_squeeze", "sum_r_carry",
+          "sum_m_carry")  # fmt: skip
 SQUEEZE_FACTOR = 2.0
 """The grip ids' bound on the carry's mean squeeze, in least forces (registration.GRIP_TASK)."""
 OUT = Path("docs/results/squeeze_charge.csv")
@@ -47,7 +49,8 @@ def episode(env: gym.Env, factor: float, seed: int) -> dict:
     policy, mu, mass, static, force = constant_grip(env, factor, seed)
     obs, _ = env.reset(seed=seed)
     row = {"factor": factor, "seed": seed, "mass": mass, "mu": mu, "static_least": static, "force": force, "steps": 0,
-           "base": 0.0, "sum_f": 0.0, "sum_r": 0.0, "sum_r2": 0.0, "sum_r_carry": 0.0}  # fmt: skip
+           "base": 0.0, "sum_f": 0.0, "sum_r": 0.0, "sum_r2": 0.0, "sum_r_carry": 0.0,
+           "sum_m_carry": 0.0}  # fmt: skip
     done, info = False, {}
     while not done:
         obs, _, term, trunc, info = env.step(policy(obs))
@@ -61,6 +64,7 @@ def episode(env: gym.Env, factor: float, seed: int) -> dict:
         row["sum_r2"] += (f / static) ** 2
         if base.task.task.phase(base.scene.steps) is not None:  # the carry's steps as the task charges them
             row["sum_r_carry"] += f / static
+            row["sum_m_carry"] += max(0.0, f / static - 1.0)
     least, mean = float(info["least_squeeze"]), float(info["carry_squeeze"])
     row["carried"] = bool(info["is_success"])  # the env is made without the squeeze bound: the carry's own
     row["success"] = row["carried"] and mean <= SQUEEZE_FACTOR * least
@@ -120,10 +124,12 @@ CHARGES = {
     "carry only: 0.5 F / F_least": lambda r: 0.5 * r["sum_r_carry"],
     "carry only: 0.75 F / F_least": lambda r: 0.75 * r["sum_r_carry"],
     "carry only: 1.0 F / F_least": lambda r: 1.0 * r["sum_r_carry"],
+    "carry only, the margin: 1.0 max(0, F / F_least - 1)": lambda r: 1.0 * r["sum_m_carry"],
 }
 """Charges to price the episodes under: the v4 ids', the v5 ids' (registration.GRIP_TASK_LEAST),
-neighbours of it, and charges on the carry's steps alone (``squeeze_charge_steps="carry"``; they
-need the ``sum_r_carry`` column)."""
+neighbours of it, and charges on the carry's steps alone (``squeeze_charge_steps="carry"``, on the
+squeeze or, with ``squeeze_free=1``, on its margin over the least; they need the ``sum_r_carry`` and
+``sum_m_carry`` columns)."""
 
 
 def curves(path: Path, plot: Path | None = None) -> None:
@@ -165,46 +171,55 @@ def curves(path: Path, plot: Path | None = None) -> None:
         print(f"wrote {plot}")
 
 
+POLICY_PRICES = ("the ids' charge", "the carry's steps", "the carry's margin")
+"""How ``policies`` prices each episode: the id's own return; ``w F / F_least`` on the carry's steps
+alone (``squeeze_charge_steps="carry"``); ``w max(0, F / F_least - 1)`` on them (and
+``squeeze_free=1``: only the margin over the least)."""
+
+
 def policy_returns(env_id: str, seeds: int, weight_carry: float, first_seed: int = 1000) -> dict[str, dict]:
-    """Per policy (script, half closed, open): success count and the returns under the id's own
-    charge and under ``weight_carry`` x F / F_least on the carry's steps alone (the same episodes;
-    the charge does not act on the physics)."""
+    """Per policy: success count and (mean, worst) return under each of POLICY_PRICES, the same
+    episodes re-priced (the charge does not act on the physics). The policies: the tactile grip
+    script the demonstrations come from (agents.demos.grip_script), the same script letting go when
+    the carry begins (what a learner can do if carrying costs more than it pays), a hand held open
+    and one left half closed (action 0)."""
     from agents.demos import grip_script
 
     env = gym.make(env_id)
     base = env.unwrapped
     out = {}
-    for name in ("script", "half closed", "open"):
-        rets, carry_rets, wins = [], [], 0
+    for name in ("script", "script, let go at the carry", "open", "half closed"):
+        prices, wins = {k: [] for k in POLICY_PRICES}, 0
         for seed in range(first_seed, first_seed + seeds):
             obs, _ = env.reset(seed=seed)
-            policy = grip_script(env) if name == "script" else None
+            policy = grip_script(env) if name.startswith("script") else None
             static = base.task.mass * 9.81 / (2.0 * base.task.mu_s)
-            total = carry_total = 0.0
+            total = free = carry = margin = 0.0
             done, success = False, False
             while not done:
-                if policy is not None:
+                in_carry_next = base.task.task.phase(base.scene.steps + base.plan.substeps) is not None
+                if policy is not None and not (name.endswith("carry") and in_carry_next):
                     action = policy(obs)
                 else:
                     action = np.zeros(env.action_space.shape)
-                    action[-1] = -1.0 if name == "open" else 0.0
+                    action[-1] = 0.0 if name == "half closed" else -1.0
                 obs, reward, term, trunc, info = env.step(action)
                 done = term or trunc
-                squeeze = float(info["reward_terms"]["squeeze"])
                 in_carry = base.task.task.phase(base.scene.steps) is not None
-                f = float(np.mean(base._last.force))
+                ratio = float(np.mean(base._last.force)) / static
                 total += reward
-                carry_total += reward - squeeze - (weight_carry * f / static if in_carry else 0.0)
+                free += reward - float(info["reward_terms"]["squeeze"])
+                if in_carry:
+                    carry += ratio
+                    margin += max(0.0, ratio - 1.0)
                 success = success or bool(info["is_success"])
-            rets.append(total)
-            carry_rets.append(carry_total)
+            for key, value in zip(POLICY_PRICES, (total, free - weight_carry * carry, free - weight_carry * margin),
+                                  strict=True):  # fmt: skip
+                prices[key].append(value)
             wins += success
-        out[name] = {"success": wins, "return": (float(np.mean(rets)), float(np.min(rets))),
-                     "carry": (float(np.mean(carry_rets)), float(np.min(carry_rets)))}  # fmt: skip
-        print(f"{env_id:24s} {name:12s} success {wins}/{seeds}; return under the id's charge "
-              f"{out[name]['return'][0]:7.1f} (least {out[name]['return'][1]:7.1f}); on the carry's steps alone "
-              f"({weight_carry:g} F / F_least) {out[name]['carry'][0]:7.1f} (least {out[name]['carry'][1]:7.1f})",
-              flush=True)  # fmt: skip
+        out[name] = {"success": wins, **{k: (float(np.mean(v)), float(np.min(v))) for k, v in prices.items()}}
+        print(f"{env_id:24s} {name:28s} success {wins}/{seeds}; return (mean / worst) "
+              + "; ".join(f"{k} {out[name][k][0]:7.1f} / {out[name][k][1]:7.1f}" for k in POLICY_PRICES), flush=True)
     env.close()
     return out
 

@@ -249,6 +249,10 @@ KEYWORDS: tuple[Keyword, ...] = (
         "Which env steps pay the squeeze charge: 'all' (the registered grip ids) or 'carry' (only the carry's, "
         "where the least force is judged: closing and lifting cost nothing, so a grasp carried through "
         "pays more than leaving the cylinder alone)"),
+    _kw("squeeze_free", "grip_force", "float", 0.0,
+        "The part of the squeeze, in units of squeeze_reference, that the charge leaves free: the charge is "
+        "squeeze_weight * max(0, F / reference - squeeze_free) (with squeeze_reference='least', 1 charges only "
+        "the margin over the static least force; the registered grip ids: 0)"),
     _kw("squeeze_factor", "grip_force", "float", None,
         "The grip-force task (SoftGraspGrip-v5: 2): success also needs the carry's mean squeeze at most this many"
         " times the least force that holds the cylinder through it (Coulomb, with its measured accelerations; "
@@ -502,6 +506,8 @@ class GripForceConfig:
     (tasks.grip.SQUEEZE_REFERENCES)."""
     squeeze_charge_steps: str = "all"
     """Which env steps pay the charge: every one, or the carry's (tasks.grip.SQUEEZE_CHARGE_STEPS)."""
+    squeeze_free: float = 0.0
+    """The squeeze the charge leaves free, in references (tasks.grip.GripForceTask)."""
 
     def __post_init__(self) -> None:
         check_range("squeeze_weight", self.squeeze_weight, 0.0, 10.0)
@@ -509,6 +515,7 @@ class GripForceConfig:
             check_range("squeeze_factor", self.squeeze_factor, 1.0, 100.0)
         check_choice("squeeze_reference", self.squeeze_reference, SQUEEZE_REFERENCES)
         check_choice("squeeze_charge_steps", self.squeeze_charge_steps, SQUEEZE_CHARGE_STEPS)
+        check_range("squeeze_free", self.squeeze_free, 0.0, 100.0)
 
     @property
     def on(self) -> bool:
@@ -704,7 +711,7 @@ class EnvArguments:
             ranges=ranges,
             carry_test=carry,
             grip_force=GripForceConfig(v["squeeze_weight"], v["squeeze_factor"], v["squeeze_reference"],
-                                       v["squeeze_charge_steps"]),
+                                       v["squeeze_charge_steps"], v["squeeze_free"]),
             observation=ObservationConfig(v["observe_object"], _tuple(v["tactile"], integers=True),
                                           _given(v["observe_shape"], v["object"] is not None or
                                                  bool(ranges.object_scale)), v["tactile_history"]),
@@ -734,7 +741,7 @@ _FLAT: dict[str, tuple[str, str]] = {
     "carry_start": ("carry_test", "start_time"),
     **{f"carry_{a}": ("carry_test", a) for a in ("duration", "frequency", "acceleration", "slide_limit")},
     **{a: ("grip_force", a) for a in ("squeeze_weight", "squeeze_factor", "squeeze_reference",
-                                      "squeeze_charge_steps")},
+                                      "squeeze_charge_steps", "squeeze_free")},
     **{a: ("observation", a) for a in ("observe_object", "tactile", "observe_shape", "tactile_history")},
     "render_width": ("camera", "width"), "render_height": ("camera", "height"), "render_camera": ("camera", "mode"),
     **{f"camera_{a}": ("camera", a) for a in ("distance", "yaw", "pitch", "target")},
@@ -905,7 +912,8 @@ class EnvPlan:
             return test
         return GripForceTask(test, squeeze_weight=grip.squeeze_weight, squeeze_factor=grip.squeeze_factor,
                              finger_force=control.finger_force, squeeze_reference=grip.squeeze_reference,
-                             squeeze_charge_steps=grip.squeeze_charge_steps)  # fmt: skip
+                             squeeze_charge_steps=grip.squeeze_charge_steps,
+                             squeeze_free=grip.squeeze_free)  # fmt: skip
 
     def make_actions(self) -> GripperActions:
         c = self.args.control

@@ -82,11 +82,13 @@ class GripForceTask(TaskWrapper):
     grip margin costs the same on every cylinder); ``squeeze_factor`` (None: the carry's success
     alone) bounds the carry's mean squeeze by that many times the least that holds.
     ``squeeze_charge_steps`` ("all" or "carry") is which env steps pay the charge: every one, or
-    only the carry's."""
+    only the carry's; ``squeeze_free`` is the part of the squeeze, in references, that costs
+    nothing: the charge is ``squeeze_weight * max(0, F / reference - squeeze_free)`` (with the
+    least force as the reference, 1 charges only the margin over it)."""
 
     def __init__(self, carry: CarryTest, *, squeeze_weight: float, squeeze_factor: float | None,
                  finger_force: float, squeeze_reference: str = "finger_force",
-                 squeeze_charge_steps: str = "all") -> None:  # fmt: skip
+                 squeeze_charge_steps: str = "all", squeeze_free: float = 0.0) -> None:  # fmt: skip
         if not isinstance(carry, CarryTest):
             raise TypeError(f"GripForceTask wraps a CarryTest (its accelerations judge the squeeze), got {carry!r}")
         if squeeze_reference not in SQUEEZE_REFERENCES:
@@ -95,6 +97,9 @@ class GripForceTask(TaskWrapper):
             raise ValueError(f"squeeze_charge_steps must be one of {SQUEEZE_CHARGE_STEPS}, got {squeeze_charge_steps!r}")
         self.squeeze_reference = squeeze_reference
         self.squeeze_charge_steps = squeeze_charge_steps
+        if not (math.isfinite(squeeze_free) and squeeze_free >= 0.0):
+            raise ValueError(f"squeeze_free must be a finite number >= 0, got {squeeze_free!r}")
+        self.squeeze_free = float(squeeze_free)
         super().__init__(carry)
         self.reward_terms = carry.reward_terms + ("squeeze",)
         self.info_keys = carry.info_keys + GRIP_INFO
@@ -138,7 +143,7 @@ class GripForceTask(TaskWrapper):
             self._squeeze_n += 1
         self._prev = (reading.time, reading.cyl_v.copy())
         charged = in_carry or self.squeeze_charge_steps == "all"
-        term = -self.squeeze_weight * squeeze / self.reference if charged else 0.0
+        term = -self.squeeze_weight * max(0.0, squeeze / self.reference - self.squeeze_free) if charged else 0.0
         success = out.success
         least, mean = self.least, self.carry_squeeze
         if success and self.squeeze_factor is not None:

@@ -62,12 +62,19 @@ def test_an_episode_repriced_on_the_carrys_steps_is_that_envs_own_return():
     assert total == pytest.approx(row["base"] - row["sum_r_carry"], rel=1e-5)
 
 
-def test_on_the_carrys_steps_alone_the_grip_script_pays_more_than_an_open_hand():
-    """What a learner compares on the rigid twin: under the carry-only charge the tactile script's
-    grasps (carried through) return well above a hand held open, at their worst seed."""
+def test_on_the_carrys_margin_a_grasp_carried_through_pays_more_than_letting_go():
+    """What a learner compares on the rigid twin: on the carry's steps alone the tactile script's
+    grasps return well above an open hand; charged on the whole squeeze, letting go when the carry
+    begins returns more still (what SAC learned), and charged on the margin over the least the
+    carry pays."""
     out = squeeze_charge.policy_returns("SoftGraspGripRigid-v4", 2, 1.0)
-    assert out["script"]["success"] == 2
-    assert out["script"]["carry"][1] > out["open"]["carry"][0] + 10.0
+    steps, margin = "the carry's steps", "the carry's margin"
+    assert out["script"]["success"] == 2 and out["script, let go at the carry"]["success"] == 0
+    assert out["script"][steps][1] > out["open"][steps][0] + 10.0
+    # charged on the whole squeeze, a carry costs more than it pays: letting go returns more
+    assert out["script, let go at the carry"][steps][0] > out["script"][steps][0]
+    # charged on the margin over the least, carrying through pays
+    assert out["script"][margin][1] > out["script, let go at the carry"][margin][0] + 5.0
 
 
 def test_the_shipped_measurement_puts_the_carry_only_charges_peak_where_the_ids_charge_has_it():

@@ -136,6 +136,24 @@ def test_the_charge_on_the_carrys_steps_alone_leaves_the_physics_and_the_carrys_
     assert ret["carry"] == pytest.approx(ret["all"] - before, rel=1e-9)
 
 
+def test_the_free_squeeze_is_not_charged(make_env):
+    """``squeeze_free=1`` with the least force as the reference charges only the margin over the
+    least, w max(0, F / F_least - 1), step by step; a grip below the least costs nothing."""
+    for factor in (1.5, 0.8):
+        env = make_env("SoftGraspGripRigid-v4", squeeze_free=1.0, squeeze_weight=1.0)
+        obs, _ = env.reset(seed=3, options={"cylinder_mass": 0.2, "friction_scale": 1.0})
+        static = env.unwrapped.task.reference
+        policy = ConstantGripPolicy(env, factor * static)
+        for _ in range(40):
+            obs, _, _, _, info = env.step(policy(obs))
+            f = float(np.mean(env.unwrapped._last.force))
+            assert info["reward_terms"]["squeeze"] == pytest.approx(-max(0.0, f / static - 1.0), rel=1e-12, abs=1e-15)
+        if factor > 1.0:
+            assert info["reward_terms"]["squeeze"] == pytest.approx(-(factor - 1.0), rel=0.05)
+        else:
+            assert info["reward_terms"]["squeeze"] == 0.0
+
+
 def test_success_needs_the_squeeze_within_the_factor(make_env):
     """The same held episode succeeds or not by the factor alone."""
     for factor, expect in ((2.0, False), (100.0, True)):
@@ -155,6 +173,7 @@ def test_success_needs_the_squeeze_within_the_factor(make_env):
     ({"observe_object": "no"}, "observe_object"),
     ({"squeeze_weight": 0.5, "squeeze_reference": "weight"}, "squeeze_reference"),
     ({"squeeze_weight": 0.5, "squeeze_charge_steps": "lift"}, "squeeze_charge_steps"),
+    ({"squeeze_weight": 0.5, "squeeze_free": -1.0}, "squeeze_free"),
 ])  # fmt: skip
 def test_bad_grip_arguments_are_named(kwargs, match):
     with pytest.raises(ValueError, match=match):
