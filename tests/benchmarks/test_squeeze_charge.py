@@ -79,11 +79,13 @@ def test_on_the_carrys_margin_a_grasp_carried_through_pays_more_than_letting_go(
 
 def test_the_shipped_measurement_puts_the_carry_only_charges_peak_where_the_ids_charge_has_it():
     """docs/results/squeeze_charge_carry.csv (36 seeds per factor and kind, the carry's squeeze
-    logged): charged on the carry's steps alone at 1.0 F / F_least, the tissue's expected return
-    is still highest between 1.2 and 1.5 times the least, and the rigid kinds' at 1.1; the ids'
-    own charge re-priced from the same episodes peaks in the same places."""
+    logged): charged on the carry's steps alone at 1.0 F / F_least, or on the margin over the
+    least there, the tissue's expected return is still highest between 1.2 and 1.5 times the
+    least, and the rigid kinds' at 1.1; the ids' own charge re-priced from the same episodes peaks
+    in the same places."""
     rows = squeeze_charge.load(ROOT / "docs" / "results" / "squeeze_charge_carry.csv")
-    for price in (lambda r: 1.0 * r["sum_r_carry"], lambda r: SQUEEZE_WEIGHT_LEAST * r["sum_r"]):
+    prices = (lambda r: 1.0 * r["sum_r_carry"], lambda r: 1.0 * r["sum_m_carry"], lambda r: SQUEEZE_WEIGHT_LEAST * r["sum_r"])
+    for price in prices:
         d = squeeze_charge.expected(rows, price)
         peak = {i: max(v, key=lambda f: v[f][0]) for i, v in d.items()}
         assert 1.2 <= peak["SoftGraspGrip-v5"] <= 1.5, d["SoftGraspGrip-v5"]
