@@ -53,12 +53,12 @@ GRAVITY = np.array([0.0, 0.0, -9.81])
 GRIP_INFO = ("carry_squeeze", "least_squeeze")
 """The entries the grip-force task adds to ``info`` [N]."""
 SQUEEZE_REFERENCES = ("finger_force", "least")
+"""What the squeeze charge divides the squeeze by (:class:`GripForceTask`): the finger's full force,
+or the episode's static least force m g / (2 mu_s)."""
 SQUEEZE_CHARGE_STEPS = ("all", "carry")
 """Which env steps the squeeze is charged on (:class:`GripForceTask`): every one, or only the
 carry's (the task's least force is the carry's, so only the squeeze held through it is judged;
 closing and lifting cost nothing)."""
-"""What the squeeze charge divides the squeeze by (:class:`GripForceTask`): the finger's full force,
-or the episode's static least force m g / (2 mu_s)."""
 
 
 def least_squeeze(mass: float, mu_s: float, accelerations: np.ndarray, jaw_axis: np.ndarray) -> float:

@@ -452,7 +452,7 @@ def _apply_deformation(i, start, end, g_mem, g_pack, frame, xs, xp, g_u, g_raw):
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _held_step(b0, b1, b2, inv_m, zx, zy, zz, y00, y01, y02, y10, y11, y12, y20, y21, y22, hb, opm, gx, gy, gz):
-    """continuum_groups's step of a free member with the core held: dx_j = -(z_j - Y^T b_j / m_j),
+    """The group solve's step of a free member (continuum_groups) with the core held: dx_j = -(z_j - Y^T b_j / m_j),
     with the hourglass term / (1 + hb) - t (sum m z - Y^T sum b) (g)."""
     dx = (y00 * b0 + y10 * b1 + y20 * b2) * inv_m - zx
     dy = (y01 * b0 + y11 * b1 + y21 * b2) * inv_m - zy
@@ -466,7 +466,7 @@ def _held_step(b0, b1, b2, inv_m, zx, zy, zz, y00, y01, y02, y10, y11, y12, y20,
 
 @nb.njit(cache=True, inline="always", error_model="numpy", fastmath={"contract"})
 def _core_column(b0, b1, b2, inv_m, m, o0, o1, o2, h, hb, bf0, bf1, bf2, wfix, yc0, yc1, yc2, opm, tq):
-    """continuum_groups's coupling of a free member to a sliding core: gamma_j (its residual's change
+    """The group solve's coupling of a free member (continuum_groups) to a sliding core: gamma_j (its residual's change
     per unit of the core's move, along the axis) and q_j (the free block's solve of that column,
     along the axis)."""
     gam = h * (b0 * bf0 + b1 * bf1 + b2 * bf2)
