@@ -50,7 +50,7 @@ from agents.baselines import ALGOS, ASYMMETRIC_ALGOS, default_algo, make_model, 
 from agents.cards import hyperparameters, quote_arg
 from agents.cli import kwargs_dict as _kwargs_dict
 from agents.cli import parse_kwarg
-from agents.demos import MAX_DEMOS, add_demonstrations
+from agents.demos import MAX_DEMOS, add_demonstrations, demo_buffer
 from agents.evaluate import evaluate
 from agents.runs import CHECKPOINT_PREFIX, deterministic_policy, load_model, make_env, run_files
 from agents.threads import DEFAULT_TORCH_THREADS, set_threads, threads_error
@@ -237,6 +237,10 @@ def main(argv: list[str] | None = None) -> int:
                         help="start an off-policy learner's replay buffer with N episodes of the scripted grasp, on the "
                              "grip ids a tactile grip script (agents/demos.py: HER on the goal id never "
                              "lifts the cylinder by itself)")
+    parser.add_argument("--demo-share", type=float, default=None, metavar="F",
+                        help="with --demos (sac): keep the demonstrations for the whole run and draw the fraction F "
+                             "of every batch from them (agents/demos.py DemoReplayBuffer; 0.5 is RLPD's symmetric "
+                             "sampling); default: they are ordinary transitions")  # fmt: skip
     parser.add_argument(
         "--checkpoint-every",
         type=int,
@@ -273,6 +277,11 @@ def main(argv: list[str] | None = None) -> int:
             parser.error(f"--{name.replace('_', '-')} must be >= 1, got {getattr(ns, name)}")
     if ns.demos is not None and ns.demos > MAX_DEMOS:
         parser.error(f"--demos must be <= {MAX_DEMOS}, got {ns.demos}")
+    if ns.demo_share is not None:
+        if ns.demos is None:
+            parser.error("--demo-share keeps the demonstrations in every batch: give --demos N too")
+        if not 0.0 < ns.demo_share < 1.0:
+            parser.error(f"--demo-share is a fraction of each batch, in (0, 1); got {ns.demo_share}")
 
     files = None
     if ns.resume is not None:
@@ -312,7 +321,8 @@ def main(argv: list[str] | None = None) -> int:
         meta = {"env": env_id, "env_kwargs": env_kwargs, "algo": algo, "algo_kwargs": algo_kwargs, "seed": seed,
                 "n_envs": n_envs, "timesteps": ns.timesteps, "eval_every": ns.eval_every,
                 "eval_episodes": ns.eval_episodes, "learning_starts": ns.learning_starts,
-                "checkpoint_every": ns.checkpoint_every, "demos": ns.demos, "asymmetric": ns.asymmetric,
+                "checkpoint_every": ns.checkpoint_every, "demos": ns.demos, "demo_share": ns.demo_share,
+                "asymmetric": ns.asymmetric,
                 "out": str(ns.out),
                 "normalized_observations": default_algo(env_id) != "her-sac",  # the goal env runs raw (HER)
                 "softgrasp_env": softgrasp_env.__version__}  # fmt: skip
@@ -328,6 +338,10 @@ def main(argv: list[str] | None = None) -> int:
                      "observations are HER's)")  # fmt: skip
     if ns.demos is not None and algo == "ppo":
         parser.error("--demos fills a replay buffer; ppo has none (an off-policy algo: sac, her-sac)")
+    if ns.demo_share is not None and algo != "sac":
+        parser.error(f"--demo-share is built for sac's buffer, not {algo}'s (HER relabels in a buffer of its own)")
+    if ns.demo_share is not None and "replay_buffer_class" in algo_kwargs:
+        parser.error("--demo-share sets the replay buffer; --algo-kwargs gives replay_buffer_class too")
     if ns.demos is not None and n_envs != 1:
         parser.error("--demos runs with --n-envs 1 (the demonstrations fill a single-env buffer)")
     if files is None:
@@ -391,6 +405,8 @@ def main(argv: list[str] | None = None) -> int:
         overrides = dict(algo_kwargs)
         if ns.learning_starts is not None and algo != "ppo":
             overrides["learning_starts"] = ns.learning_starts
+        if ns.demo_share is not None:
+            overrides.update(demo_buffer(asymmetric, ns.demo_share))
         try:
             model = make_model(algo, venv, seed=seed, asymmetric=asymmetric, **overrides)
         except (TypeError, ValueError, AssertionError) as exc:  # a value SB3 refuses (the keys are checked)

@@ -117,6 +117,10 @@ def hyperparameters(meta: dict[str, Any]) -> dict[str, Any]:
         out["policy"] = asymmetric_policy(meta["algo"])
     if meta.get("learning_starts") is not None and meta["algo"] != "ppo":
         out["learning_starts"] = meta["learning_starts"]
+    if meta.get("demo_share") is not None:
+        from agents.demos import demo_buffer
+
+        out.update(demo_buffer(bool(meta.get("asymmetric")), meta["demo_share"]))
     return _jsonable(out)
 
 
@@ -345,7 +349,9 @@ def _card_extras(card: dict[str, Any]) -> list[str]:
             demos.get("policy"), "the scripted grasp")
         rows.append(f"| demonstrations | {demos['episodes']} episodes of {script} (seeds {demos['seeds']}; "
                     f"{demos['successes']} successful, {demos['transitions']:,} transitions) in the replay buffer "
-                    "before training (`--demos`, agents/demos.py) |")  # fmt: skip
+                    "before training (`--demos`, agents/demos.py)"
+                    + (f", kept for the whole run as {demos['share']:.0%} of every batch (`--demo-share`)"
+                       if demos.get("share") else "") + " |")  # fmt: skip
     return rows
 
 
@@ -355,7 +361,10 @@ def policy_label(card: dict[str, Any]) -> str:
     each a group of its own."""
     demos = card.get("demonstrations")
     algo = f"{card['algo']} asymmetric" if card.get("asymmetric") else card["algo"]
-    return f"{algo} + {demos['episodes']} demos" if demos else algo
+    if not demos:
+        return algo
+    kept = f" ({demos['share']:.0%} of each batch)" if demos.get("share") else ""
+    return f"{algo} + {demos['episodes']} demos{kept}"
 
 
 def env_label(card: dict[str, Any]) -> str:

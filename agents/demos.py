@@ -22,6 +22,15 @@ physics), so learners with and without touch start from the same demonstrations.
 each observation as ``PrivilegedObservation`` gives it to the learner: ``sensed`` and
 ``privileged``.
 
+By default the demonstrations are ordinary transitions: sampled as often as any other, a fading
+share of each batch as the learner's own fill the buffer (100 episodes are 10,000 transitions, 3 %
+of a 300k run's). ``train.py --demo-share F`` keeps them in every batch instead: the replay
+buffer (:class:`DemoReplayBuffer`) never overwrites them and draws a fixed fraction F of each batch
+from them, the rest from the learner's own transitions. That is the symmetric sampling of Ball et
+al. 2023 ("Efficient online reinforcement learning with offline data", RLPD: F = 0.5) and the kept
+demonstrations of Vecerik et al. 2017; a learner whose reward only pays after a long carry meets
+the carried episodes in every update, not once in thirty.
+
 The transitions are stored as SB3's off-policy loop stores its own
 (OffPolicyAlgorithm._store_transition): the raw observations (a VecNormalize run normalises at
 sampling; its running statistics are updated with the demonstrations' observations as they would
@@ -36,6 +45,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from stable_baselines3.common.buffers import DictReplayBuffer, ReplayBuffer
 from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 from stable_baselines3.common.vec_env import VecNormalize
 
@@ -51,6 +61,96 @@ def demo_seeds(seed: int, episodes: int) -> list[int]:
     if not 0 <= episodes <= MAX_DEMOS:
         raise ValueError(f"demonstrations: 0 to {MAX_DEMOS} episodes, got {episodes}")
     return [DEMO_SEED_BASE + MAX_DEMOS * seed + i for i in range(episodes)]
+
+
+class _KeptDemonstrations:
+    """What :class:`DemoReplayBuffer` and :class:`DictDemoReplayBuffer` add to SB3's buffers: the
+    first ``kept`` transitions (the demonstrations, marked by :meth:`keep_demonstrations`) are never
+    overwritten, and ``demo_share`` of each sampled batch comes from them (module docstring)."""
+
+    demo_share: float
+    kept: int
+    buffer_size: int
+    pos: int
+    full: bool
+
+    def _init_share(self, demo_share: float, optimize_memory_usage: bool) -> None:
+        if not 0.0 < demo_share < 1.0:
+            raise ValueError(f"demo_share: the fraction of each batch drawn from the demonstrations, in (0, 1); "
+                             f"got {demo_share}")  # fmt: skip
+        if optimize_memory_usage:  # its next observation is the following slot: a kept block breaks that
+            raise ValueError("demo_share needs optimize_memory_usage=False")
+        self.demo_share = float(demo_share)
+        self.kept = 0
+
+    def keep_demonstrations(self) -> int:
+        """Keep the transitions stored so far (the demonstrations) for the rest of training; returns
+        their number. Call it once, after the demonstrations are added and before the learner's own."""
+        if self.kept:
+            raise RuntimeError(f"the buffer keeps {self.kept} demonstration transitions already")
+        if self.full or self.pos == 0 or self.pos >= self.buffer_size - 1:
+            raise ValueError(f"keep_demonstrations: {self.pos} transitions stored in a buffer of "
+                             f"{self.buffer_size}{' (full)' if self.full else ''}; the demonstrations must leave room "
+                             "for the learner's own")  # fmt: skip
+        self.kept = self.pos
+        return self.kept
+
+    def _wrap(self) -> None:
+        # SB3 wrapped to slot 0 after filling the last one: the learner's own transitions go round
+        # behind the kept block instead
+        if self.full and self.pos == 0 and self.kept:
+            self.pos = self.kept
+
+    def _batch_indices(self, batch_size: int) -> np.ndarray:
+        upper = self.buffer_size if self.full else self.pos
+        own = upper - self.kept
+        if own <= 0:  # nothing of the learner's yet
+            return np.random.randint(0, max(upper, 1), size=batch_size)
+        if self.kept == 0:
+            return np.random.randint(0, upper, size=batch_size)
+        # a fixed count per batch, not a draw per sample: every update sees the same share
+        n_demo = int(round(self.demo_share * batch_size))
+        return np.concatenate([np.random.randint(0, self.kept, size=n_demo),
+                               np.random.randint(self.kept, upper, size=batch_size - n_demo)])  # fmt: skip
+
+
+class DemoReplayBuffer(_KeptDemonstrations, ReplayBuffer):
+    """SB3's ReplayBuffer keeping the demonstrations in every batch (module docstring): ``demo_share``
+    of each batch from them. ``train.py --demo-share``; built by SB3 from ``replay_buffer_class`` and
+    ``replay_buffer_kwargs={"demo_share": F}``."""
+
+    def __init__(self, *args: Any, demo_share: float, optimize_memory_usage: bool = False, **kwargs: Any) -> None:
+        super().__init__(*args, optimize_memory_usage=optimize_memory_usage, **kwargs)
+        self._init_share(demo_share, optimize_memory_usage)
+
+    def add(self, *args: Any, **kwargs: Any) -> None:
+        super().add(*args, **kwargs)
+        self._wrap()
+
+    def sample(self, batch_size: int, env: VecNormalize | None = None) -> Any:
+        return self._get_samples(self._batch_indices(batch_size), env=env)
+
+
+class DictDemoReplayBuffer(_KeptDemonstrations, DictReplayBuffer):
+    """:class:`DemoReplayBuffer` for dict observations (an asymmetric learner's)."""
+
+    def __init__(self, *args: Any, demo_share: float, optimize_memory_usage: bool = False, **kwargs: Any) -> None:
+        super().__init__(*args, optimize_memory_usage=optimize_memory_usage, **kwargs)
+        self._init_share(demo_share, optimize_memory_usage)
+
+    def add(self, *args: Any, **kwargs: Any) -> None:  # type: ignore[override]
+        super().add(*args, **kwargs)
+        self._wrap()
+
+    def sample(self, batch_size: int, env: VecNormalize | None = None) -> Any:  # type: ignore[override]
+        return self._get_samples(self._batch_indices(batch_size), env=env)
+
+
+def demo_buffer(asymmetric: bool, demo_share: float) -> dict[str, Any]:
+    """The SB3 keywords of a buffer that keeps the demonstrations in every batch (``demo_share`` of
+    it): ``replay_buffer_class`` and ``replay_buffer_kwargs``."""
+    cls = DictDemoReplayBuffer if asymmetric else DemoReplayBuffer
+    return {"replay_buffer_class": cls, "replay_buffer_kwargs": {"demo_share": demo_share}}
 
 
 def _batched(obs: Any) -> Any:
@@ -122,7 +222,9 @@ def add_demonstrations(model: OffPolicyAlgorithm, env_id: str, env_kwargs: dict[
     """Run ``episodes`` episodes of the scripted policy (:func:`demonstrator`) on ``env_id`` (with
     ``env_kwargs``, an env of its own) and add every transition to ``model``'s replay buffer (see
     the module docstring); ``privileged``: observations as PrivilegedObservation gives them (an
-    asymmetric learner's). Returns ``{"episodes", "transitions", "successes", "seeds", "policy"}``."""
+    asymmetric learner's). A buffer that keeps them (:func:`demo_buffer`) keeps them from here on.
+    Returns ``{"episodes", "transitions", "successes", "seeds", "policy"}``, and with a keeping
+    buffer ``"share"``, the fraction of each batch drawn from them."""
     if not isinstance(model, OffPolicyAlgorithm):
         raise TypeError(
             f"demonstrations fill a replay buffer; {type(model).__name__} has none (an off-policy algo: sac, her-sac)"
@@ -170,9 +272,13 @@ def add_demonstrations(model: OffPolicyAlgorithm, env_id: str, env_kwargs: dict[
                     break
     finally:
         env.close()
-    return {"episodes": episodes, "transitions": transitions, "successes": successes,
-            "seeds": f"{seeds[0]}-{seeds[-1]}" if seeds else "", "policy": type(policy).__name__}  # fmt: skip
+    out = {"episodes": episodes, "transitions": transitions, "successes": successes,
+           "seeds": f"{seeds[0]}-{seeds[-1]}" if seeds else "", "policy": type(policy).__name__}  # fmt: skip
+    if isinstance(model.replay_buffer, _KeptDemonstrations):
+        model.replay_buffer.keep_demonstrations()
+        out["share"] = model.replay_buffer.demo_share
+    return out
 
 
-__all__ = ["DEMO_SEED_BASE", "MAX_DEMOS", "TAXEL_KEYWORDS", "add_demonstrations", "demo_seeds", "demonstrator",
-           "grip_script"]
+__all__ = ["DEMO_SEED_BASE", "MAX_DEMOS", "TAXEL_KEYWORDS", "DemoReplayBuffer", "DictDemoReplayBuffer",
+           "add_demonstrations", "demo_buffer", "demo_seeds", "demonstrator", "grip_script"]

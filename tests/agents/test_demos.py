@@ -163,3 +163,82 @@ def test_the_grip_script_is_the_shear_lag_one_on_the_tissue_and_the_slip_one_on_
     assert type(grip_script(gym.make("SoftGraspGrip-v5"))).__name__ == "ShearLagGripPolicy"
     for env_id in ("SoftGraspGripRigid-v4", "SoftGraspGripRigidTorsion-v4"):
         assert type(grip_script(gym.make(env_id))).__name__ == "TactileGripPolicy"
+
+
+def _filled(buf, n, start=0):
+    """Add n one-env transitions to ``buf`` whose reward is their running number from ``start``."""
+    obs = np.zeros((1, *buf.obs_shape), dtype=np.float32)
+    for k in range(n):
+        buf.add(obs, obs, np.zeros((1, buf.action_dim), dtype=np.float32), np.array([start + k], dtype=np.float32),
+                np.array([False]), [{}])  # fmt: skip
+
+
+def test_a_keeping_buffer_never_overwrites_the_demonstrations_and_gives_them_their_share_of_every_batch():
+    from gymnasium import spaces
+
+    from agents.demos import DemoReplayBuffer
+
+    box = spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
+    buf = DemoReplayBuffer(50, box, box, device="cpu", demo_share=0.25)
+    _filled(buf, 10)  # the demonstrations: rewards 0-9
+    assert buf.keep_demonstrations() == 10
+    _filled(buf, 100, start=100)  # the learner's own: 100-199, wrapping twice round the 40 free slots
+    rewards = buf.rewards[:, 0]
+    np.testing.assert_array_equal(rewards[:10], np.arange(10))  # kept
+    assert rewards[10:].min() >= 100 + 100 - 40  # the newest 40 of the learner's, each once
+    assert len(set(rewards[10:])) == 40 and buf.pos == 10 + 100 % 40
+    np.random.seed(0)
+    for batch in (4, 256):
+        r = buf.sample(batch).rewards.numpy()[:, 0]
+        assert (r < 10).sum() == round(0.25 * batch)  # a fixed count per batch
+        assert set(r[r >= 10]) <= set(rewards[10:])
+    # before the learner has a transition of its own the demonstrations are all there is
+    fresh = DemoReplayBuffer(50, box, box, device="cpu", demo_share=0.5)
+    _filled(fresh, 5)
+    fresh.keep_demonstrations()
+    assert (fresh.sample(32).rewards.numpy() < 5).all()
+    with pytest.raises(RuntimeError, match="keeps 5"):
+        fresh.keep_demonstrations()
+    for share in (0.0, 1.0, 1.5):
+        with pytest.raises(ValueError, match="demo_share"):
+            DemoReplayBuffer(50, box, box, device="cpu", demo_share=share)
+    with pytest.raises(ValueError, match="optimize_memory_usage"):
+        DemoReplayBuffer(50, box, box, device="cpu", demo_share=0.5, optimize_memory_usage=True)
+    full = DemoReplayBuffer(20, box, box, device="cpu", demo_share=0.5)
+    _filled(full, 19)
+    with pytest.raises(ValueError, match="room"):
+        full.keep_demonstrations()
+
+
+def test_train_keeps_the_demonstrations_in_every_batch_with_demo_share(tmp_path, capsys):
+    """--demo-share on an asymmetric grip run: the dict buffer keeps the demonstrations through
+    training and a resume, the card's hyperparameters name it; bad combinations are refused."""
+    import pickle
+
+    from agents.cards import hyperparameters, policy_label
+    from agents.demos import DictDemoReplayBuffer
+
+    common = ["--timesteps", "120", "--learning-starts", "60", "--eval-every", "1000", "--eval-episodes", "1",
+              "--checkpoint-every", "120", "--no-progress", "--out", str(tmp_path)]  # fmt: skip
+    assert train.main(["--env", GRIP, "--asymmetric", "--demos", "1", "--demo-share", "0.25",
+                       "--algo-kwargs", "buffer_size=400", *common]) == 0  # fmt: skip
+    run = tmp_path / f"{GRIP}_sac-asymmetric_0"
+    meta = json.loads((run / "run.json").read_text())
+    assert meta["demo_share"] == 0.25 and meta["demonstrations"]["share"] == 0.25
+    assert hyperparameters(meta)["replay_buffer_class"] == "DictDemoReplayBuffer"
+    assert policy_label({"algo": "sac", "asymmetric": True, "demonstrations": meta["demonstrations"]}) == (
+        "sac asymmetric + 1 demos (25% of each batch)")
+    with open(run / "replay_buffer.pkl", "rb") as f:
+        buf = pickle.load(f)
+    assert isinstance(buf, DictDemoReplayBuffer) and buf.kept == meta["demonstrations"]["transitions"] == 100
+    assert buf.pos == 100 + 120
+    assert train.main(["--resume", str(run), "--timesteps", "10", "--no-progress"]) == 0
+    with open(run / "replay_buffer.pkl", "rb") as f:
+        buf = pickle.load(f)
+    assert isinstance(buf, DictDemoReplayBuffer) and buf.kept == 100 and buf.pos == 100 + 130
+    for bad, message in ((["--env", GRIP, "--demo-share", "0.5"], "give --demos"),
+                         (["--env", GRIP, "--demos", "1", "--demo-share", "1"], "in (0, 1)"),
+                         (["--env", GOAL, "--demos", "1", "--demo-share", "0.5"], "not her-sac")):  # fmt: skip
+        with pytest.raises(SystemExit):
+            train.main([*bad, *common])
+        assert message in capsys.readouterr().err
