@@ -489,7 +489,8 @@ def runs_table(*, versions: tuple[int, ...] | None = None) -> str:
         change = "-" if conv.get("change_points") is None else f"{conv['change_points']:+.1f} ± {conv['stderr_points']:.1f}"
         verdict = {True: "yes", False: "no"}.get(conv.get("converged"), "undecided" if conv else "-")
         minutes = "-" if card["train_seconds"] is None else f"{card['train_seconds'] / 60:.0f}"
-        label = f"{policy_label(card).upper().replace(' DEMOS', ' demos')} {env_label(card)} seed {card['seed']}"
+        learner, plus, demos = policy_label(card).partition(" + ")  # the algo in capitals, the demos as they read
+        label = f"{learner.upper()}{plus}{demos} {env_label(card)} seed {card['seed']}"
         row = (f"| {label} | {card['timesteps']:,} | **{ev['success_rate']:.0%}** ({lo:.0%}-{hi:.0%}) | "
                f"{change.replace('-0.0 ', '+0.0 ')} | {verdict} | {minutes} |")  # fmt: skip
         rows.append(((env_label(card), card["algo"], card["seed"]), row))
