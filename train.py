@@ -7,7 +7,7 @@
     python train.py --resume runs/SoftGrasp-v3_sac_0 --timesteps 50000   # 50k more steps
     python train.py --env SoftGrasp-v3 --force       # start runs/SoftGrasp-v3_sac_0 anew (deletes the old run)
     python train.py --env SoftGrasp-v3 --torch-threads 2   # the learner on 2 torch threads (default 1)
-    python train.py --env SoftGraspGrip-v4 --asymmetric     # the critic also reads the object's mass, friction, pose
+    python train.py --env SoftGraspGrip-v6 --asymmetric     # the critic also reads the object's mass, friction, pose
 
 Writes ``<out>/<env>_<algo>_<seed>/``: ``model.zip``, ``vecnormalize.pkl`` (observation statistics,
 except for HER), ``replay_buffer.pkl`` (off-policy algos, for --resume), ``run.json`` (the

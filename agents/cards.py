@@ -369,14 +369,14 @@ def policy_label(card: dict[str, Any]) -> str:
 
 def env_label(card: dict[str, Any]) -> str:
     """The env a card's model was trained on as the table names it: the id, and the ``--env-kwargs``
-    it was made with (a variant, e.g. ``SoftGraspGrip-v4 tactile=None``, is a group of its own)."""
+    it was made with (a variant, e.g. ``SoftGraspGrip-v6 tactile=None``, is a group of its own)."""
     kwargs = card.get("env_kwargs") or {}
     return " ".join([card["env"], *(f"{k}={v!r}" for k, v in sorted(kwargs.items()))])
 
 
 SCRIPTED_IDS = ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspGoal-v4",
+                "SoftGraspGrip-v6", "SoftGraspGripRigid-v5", "SoftGraspGripRigidTorsion-v5",
                 "SoftGraspGrip-v5", "SoftGraspGripRigid-v4", "SoftGraspGripRigidTorsion-v4",
-                "SoftGraspGrip-v4", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3",
                 "SoftGraspObjects-v1", "SoftGraspObjectsRigid-v1", "SoftGraspObjectsRigidTorsion-v1",
                 "SoftGraspObjectsGrip-v1", "SoftGraspObjectsGripRigid-v1", "SoftGraspObjectsGripRigidTorsion-v1")
 """The ids whose scripted policy the tables measure live."""

@@ -13,7 +13,7 @@ measures what the data alone gives.
 
 On the grip-force ids (finger_action "force") the demonstrations come from the tactile grip
 script that does best on the id's fingers (:func:`grip_script`): on the tissue the shear-lag
-script (ShearLagGripPolicy: 46 of 50 on SoftGraspGrip-v4), on rigid pads, which do not shear,
+script (ShearLagGripPolicy: 46 of 50 on the soft grip id), on rigid pads, which do not shear,
 the slip script (TactileGripPolicy: 89 % on the rigid grip ids' cards). Both set the squeeze from
 the taxels. A run without the taxels (``--env-kwargs tactile=None tactile_history=1``) gets the
 same episodes: the script runs on the id's own taxels and the buffer stores the observation the

@@ -5,8 +5,8 @@ gone.
     python benchmarks/friction_glue.py                    # seed 1013, the default then the cones, ~1 min
     python benchmarks/friction_glue.py --laws cones
 
-The grip-force scene with the thesis tissue (SoftGraspGrip-v3, retired: the rigid twin's
-SoftGraspGripRigid-v3 with ``fingers="tissue"`` is the same env) with the cylinder's pose observed, so that the scripted
+The grip-force scene with the thesis tissue (the retired SoftGraspGrip-v3's: the rigid twin's grip
+id with ``fingers="tissue"``, here SoftGraspGripRigid-v5, has its physics) with the cylinder's pose observed, so that the scripted
 grasp takes the grip down onto the cylinder's centre with the fingers squeezing 4 N all the way
 (they close on the way down, the pads dragged along the cylinder), lifts it, and then lowers the
 squeeze as the tactile policy's search does - by 0.8 per step to W / 0.4, then by 0.9 every second
@@ -114,7 +114,7 @@ def glue(seed: int = 1013, report=print, cones: bool = False, law: str | None = 
     Coulomb's least force (``least``)."""
     law = law or ("cones" if cones else "patch")
     sim = None if coupling is None else SimConfig(coupling=coupling)  # the tissue's coupling (SimConfig.coupling)
-    env = gym.make("SoftGraspGripRigid-v3", fingers="tissue", observe_object=True, friction_kinetic=friction_kinetic,
+    env = gym.make("SoftGraspGripRigid-v5", fingers="tissue", observe_object=True, friction_kinetic=friction_kinetic,
                    sim=sim, particle_density=particle_density, **LAWS[law])  # fmt: skip
     obs, _ = env.reset(seed=seed)
     u = env.unwrapped

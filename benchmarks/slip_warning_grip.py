@@ -1,7 +1,7 @@
 """The slip warning in the grip-force task: lift, hold and carry at a constant squeeze near the least.
 
     PYTHONPATH=. python benchmarks/slip_warning_grip.py [--seeds 12] [--factors 1.0,1.2,1.5,2.0]
-        [--ids SoftGraspGrip-v4,SoftGraspGripRigidTorsion-v3,SoftGraspGripRigid-v3]
+        [--ids SoftGraspGrip-v6,SoftGraspGripRigidTorsion-v5,SoftGraspGripRigid-v5]
 
 Each episode squeezes with a constant force (policies/grip.py ``ConstantGripPolicy``) of ``factor``
 times the static least, m g / (2 mu) with the episode's drawn mass and friction (read from the
@@ -84,7 +84,7 @@ def episode(env: gym.Env, factor: float, seed: int) -> dict[str, float | bool]:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--ids", default="SoftGraspGrip-v4,SoftGraspGripRigidTorsion-v3,SoftGraspGripRigid-v3")
+    parser.add_argument("--ids", default="SoftGraspGrip-v6,SoftGraspGripRigidTorsion-v5,SoftGraspGripRigid-v5")
     parser.add_argument("--seeds", type=int, default=12)
     parser.add_argument("--first-seed", type=int, default=1000)
     parser.add_argument("--factors", default="1.0,1.2,1.5,2.0", help="squeeze over the static least m g / (2 mu)")

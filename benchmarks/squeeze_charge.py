@@ -1,7 +1,7 @@
 """Where the grip-force task's reward peaks over constant grips: the squeeze charge measured.
 
     PYTHONPATH=. python benchmarks/squeeze_charge.py run [--seeds 12] [--factors 0.8,1,...,3]
-        [--ids SoftGraspGrip-v4,SoftGraspGripRigidTorsion-v3,SoftGraspGripRigid-v3] [--out CSV]
+        [--ids SoftGraspGrip-v6,SoftGraspGripRigidTorsion-v5,SoftGraspGripRigid-v5] [--out CSV]
     PYTHONPATH=. python benchmarks/squeeze_charge.py curves [--csv CSV] [--plot PNG]
     PYTHONPATH=. python benchmarks/squeeze_charge.py policies [--ids ...] [--seeds 10] [--weight-carry 1.0]
 
@@ -12,11 +12,12 @@ the reward's other terms (lift, reach), the squeeze the fingers measured (sum ov
 of F / F_static and of (F / F_static)^2), the carry's success without the squeeze bound, and the
 task's ``carry_squeeze`` / ``least_squeeze``. The squeeze term does not act on the physics, so
 ``curves`` re-prices the same episodes under any charge: the expected return per factor, each
-kind, and where it peaks (the ids' charge and the candidates).
+kind, and where it peaks (the grip ids' charges and the candidates). The ids only name the
+rows: the ids of one kind run the same physics.
 
 ``policies``: what a learner compares - the return of the tactile grip script the demonstrations
 come from (agents.demos.grip_script), of the same script letting go when the carry begins, of a
-hand held open and of one left half closed, under the ids' charge and under charges on the carry's
+hand held open and of one left half closed, under the id's own charge and under charges on the carry's
 steps alone (weight ``--weight-carry``: on the squeeze, or on its margin over the least), the same
 episodes re-priced.
 """
@@ -116,7 +117,7 @@ def expected(rows: list[dict], price) -> dict[str, dict[float, tuple[float, floa
 
 
 CHARGES = {
-    "v4: 0.5 F / finger_force": lambda r: 0.5 * r["sum_f"] / 6.0,
+    "v4 (retired): 0.5 F / finger_force": lambda r: 0.5 * r["sum_f"] / 6.0,
     f"v5: {SQUEEZE_WEIGHT_LEAST:g} F / F_least": lambda r: SQUEEZE_WEIGHT_LEAST * r["sum_r"],
     "0.2 F / F_least": lambda r: 0.2 * r["sum_r"],
     "0.4 F / F_least": lambda r: 0.4 * r["sum_r"],
@@ -124,9 +125,10 @@ CHARGES = {
     "carry only: 0.5 F / F_least": lambda r: 0.5 * r["sum_r_carry"],
     "carry only: 0.75 F / F_least": lambda r: 0.75 * r["sum_r_carry"],
     "carry only: 1.0 F / F_least": lambda r: 1.0 * r["sum_r_carry"],
-    "carry only, the margin: 1.0 max(0, F / F_least - 1)": lambda r: 1.0 * r["sum_m_carry"],
+    "v6, carry only, the margin: 1.0 max(0, F / F_least - 1)": lambda r: 1.0 * r["sum_m_carry"],
 }
-"""Charges to price the episodes under: the v4 ids', the v5 ids' (registration.GRIP_TASK_LEAST),
+"""Charges to price the episodes under (the soft grip id's versions; the rigid kinds' are one
+lower): the retired v4's, v5's (registration.GRIP_TASK_LEAST), v6's (GRIP_TASK_CARRY),
 neighbours of it, and charges on the carry's steps alone (``squeeze_charge_steps="carry"``, on the
 squeeze or, with ``squeeze_free=1``, on its margin over the least; they need the ``sum_r_carry`` and
 ``sum_m_carry`` columns)."""
@@ -171,7 +173,7 @@ def curves(path: Path, plot: Path | None = None) -> None:
         print(f"wrote {plot}")
 
 
-POLICY_PRICES = ("the ids' charge", "the carry's steps", "the carry's margin")
+POLICY_PRICES = ("the id's charge", "the carry's steps", "the carry's margin")
 """How ``policies`` prices each episode: the id's own return; ``w F / F_least`` on the carry's steps
 alone (``squeeze_charge_steps="carry"``); ``w max(0, F / F_least - 1)`` on them (and
 ``squeeze_free=1``: only the margin over the least)."""
@@ -227,7 +229,7 @@ def policy_returns(env_id: str, seeds: int, weight_carry: float, first_seed: int
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("what", choices=("run", "curves", "policies"))
-    ap.add_argument("--ids", default="SoftGraspGrip-v4,SoftGraspGripRigidTorsion-v3,SoftGraspGripRigid-v3")
+    ap.add_argument("--ids", default="SoftGraspGrip-v6,SoftGraspGripRigidTorsion-v5,SoftGraspGripRigid-v5")
     ap.add_argument("--factors", default="0.8,1.0,1.1,1.2,1.35,1.5,1.75,2.0,2.5,3.0")
     ap.add_argument("--seeds", type=int, default=12)
     ap.add_argument("--first-seed", type=int, default=1000)

@@ -238,23 +238,23 @@ KEYWORDS: tuple[Keyword, ...] = (
         "Success needs the cylinder held at every step of the carry and its in-hand slide at most this [m]"),
     # grip_force
     _kw("squeeze_weight", "grip_force", "float", 0.0,
-        "The grip-force task (SoftGraspGrip-v5: 0.3, v4: 0.5): the reward charges squeeze_weight * mean finger "
+        "The grip-force task (SoftGraspGrip-v6: 1, v5: 0.3): the reward charges squeeze_weight * mean finger "
         "force / the reference of squeeze_reference per step (info['reward_terms']['squeeze']); needs carry=True"),
     _kw("squeeze_reference", "grip_force", "str", "finger_force",
-        "What the squeeze charge measures the squeeze in: 'finger_force' (SoftGraspGrip-v4 and before: its share"
-        " of the finger's full force, the same for every cylinder) or 'least' (SoftGraspGrip-v5: in least "
+        "What the squeeze charge measures the squeeze in: 'finger_force' (the object-set grip ids: its share"
+        " of the finger's full force, the same for every cylinder) or 'least' (SoftGraspGrip-v5 on: in least "
         "forces, m g / (2 mu_s) with this episode's mass and friction, so a squeeze 1.3 x the least costs the "
         "same on a light cylinder as on a heavy one)"),
     _kw("squeeze_charge_steps", "grip_force", "str", "all",
-        "Which env steps pay the squeeze charge: 'all' (the registered grip ids) or 'carry' (only the carry's, "
+        "Which env steps pay the squeeze charge: 'all' (SoftGraspGrip-v5 and before) or 'carry' (v6: only the carry's, "
         "where the least force is judged: closing and lifting cost nothing, so a grasp carried through "
         "pays more than leaving the cylinder alone)"),
     _kw("squeeze_free", "grip_force", "float", 0.0,
         "The part of the squeeze, in units of squeeze_reference, that the charge leaves free: the charge is "
         "squeeze_weight * max(0, F / reference - squeeze_free) (with squeeze_reference='least', 1 charges only "
-        "the margin over the static least force; the registered grip ids: 0)"),
+        "the margin over the static least force; SoftGraspGrip-v6: 1, before it 0)"),
     _kw("squeeze_factor", "grip_force", "float", None,
-        "The grip-force task (SoftGraspGrip-v5: 2): success also needs the carry's mean squeeze at most this many"
+        "The grip-force task (SoftGraspGrip-v5, v6: 2): success also needs the carry's mean squeeze at most this many"
         " times the least force that holds the cylinder through it (Coulomb, with its measured accelerations; "
         "info['carry_squeeze'], info['least_squeeze']); needs carry=True. None: off"),
     # observation

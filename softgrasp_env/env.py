@@ -221,23 +221,25 @@ class SoftGraspEnv(gym.Env):
     at ``converged`` (the package's documentation: Finger kinds, the tissue's settings).
 
     ## Grip-force task
-    The grip ids (``SoftGraspGrip-v5``, ``SoftGraspGripRigid-v4``, ``SoftGraspGripRigidTorsion-v4``;
-    the versions before: ``SoftGraspGrip-v4``, ``SoftGraspGripRigid-v3``, ``SoftGraspGripRigidTorsion-v3``)
+    The grip ids (``SoftGraspGrip-v6``, ``SoftGraspGripRigid-v5``, ``SoftGraspGripRigidTorsion-v5``;
+    the versions before: ``SoftGraspGrip-v5``, ``SoftGraspGripRigid-v4``, ``SoftGraspGripRigidTorsion-v4``)
     ask for the least squeeze that holds. They take the easy start with the carry test; the
     action's last entry is the squeeze itself (``finger_action="force"``, up to ``finger_force`` =
     6 N); the cylinder's mass (0.17 kg × U(1 ± 0.75)) and every friction (× U(1 ± 0.45)) are drawn
     per episode and not observed, so the least force that holds spans 0.16-3.0 N; the observation
     leaves out the cylinder (``observe_object=False``) and adds a 4 × 4 taxel grid on each pad
     (``tactile=(4, 4)``). The reward adds a squeeze charge, its own term in
-    ``info["reward_terms"]``: on v5 (the rigid kinds' v4) ``squeeze = -0.3 * mean(force_left,
-    force_right) / F_least`` with ``F_least = m g / (2 mu_s)`` of the episode's cylinder
-    (``squeeze_reference="least"``, ``squeeze_weight`` 0.3), so a grip margin costs the same on a
-    light cylinder as on a heavy one, and the observation keeps the taxels of the last three env
-    steps (``tactile_history=3``: a slip is a change, one frame does not show it). Over constant
-    grips its expected return is highest from 1.2 to 1.5 times the least on the tissue (the
-    package's documentation: where the grip reward peaks). The versions before charge ``0.5 *
-    mean(force_left, force_right) / finger_force``, whose optimum on the tissue sits at the
-    success bound, 2 x the least. Success also needs the carry's mean squeeze ``info["carry_squeeze"]``
+    ``info["reward_terms"]``, on the carry's steps alone: on v6 (the rigid kinds' v5) ``squeeze =
+    -max(0, mean(force_left, force_right) / F_least - 1)`` with ``F_least = m g / (2 mu_s)`` of the
+    episode's cylinder (``squeeze_reference="least"``, ``squeeze_charge_steps="carry"``,
+    ``squeeze_free=1``, ``squeeze_weight=1``): the margin over the least, the same on a light
+    cylinder as on a heavy one, and nothing for the closing and the lift, so carrying through pays
+    more than letting go. The observation keeps the taxels of the last three env steps
+    (``tactile_history=3``: a slip is a change, one frame does not show it). Over constant grips the
+    expected return is highest from 1.2 to 1.5 times the least on the tissue (the package's
+    documentation: where the grip reward peaks). The versions before (v5, the rigid kinds' v4)
+    charge ``0.3 * mean(force_left, force_right) / F_least`` on every step, under which a hand held
+    open returns more than a carried grasp on the rigid twin. Success also needs the carry's mean squeeze ``info["carry_squeeze"]``
     at most ``squeeze_factor`` (2) times ``info["least_squeeze"]``, the least force per finger that
     holds this cylinder through this carry: Coulomb, ``m max|a - g| / (2 mu_s)`` across the jaw axis
     with the cylinder's accelerations over each env step of the carry (both 0 before it;

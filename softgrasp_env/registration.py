@@ -26,12 +26,25 @@ observation (a gripper's own sensors do not give them; the documentation's Tacti
 what a learner does with them)."""
 GRIP_TASK_LEAST: dict[str, object] = {**GRIP_TASK, "squeeze_reference": "least", "squeeze_weight": SQUEEZE_WEIGHT_LEAST,
                                       "tactile_history": 3}  # fmt: skip
-"""The grip-force task whose optimum is a grip just above the least force (SoftGraspGrip-v5 and the
-rigid kinds' v4): the squeeze charged in least forces, ``SQUEEZE_WEIGHT_LEAST`` x F / (m g / (2 mu_s))
-per env step, so a margin costs the same on every cylinder, and the taxels of the last three env
-steps in the observation (a slip is a change: one frame does not show it). Over constant grips
-the expected return peaks at 1.2-1.5 x the least on the tissue, at 1.1 on the rigid kinds, which
-hold from there (the package's documentation, Results: where the grip reward peaks)."""
+"""The grip-force task of SoftGraspGrip-v5 and the rigid kinds' v4: the squeeze charged in least
+forces, ``SQUEEZE_WEIGHT_LEAST`` x F / (m g / (2 mu_s)) per env step, so a margin costs the same on
+every cylinder, and the taxels of the last three env steps in the observation (a slip is a change:
+one frame does not show it). Over constant grips the expected return peaks at 1.2-1.5 x the least
+on the tissue, at 1.1 on the rigid kinds, which hold from there (the package's documentation,
+Results: where the grip reward peaks). The charge is paid from the first step, though, and on the
+rigid twin a hand held open returns more than a carried grasp: :data:`GRIP_TASK_CARRY` mends that."""
+GRIP_TASK_CARRY: dict[str, object] = {**GRIP_TASK_LEAST, "squeeze_charge_steps": "carry", "squeeze_free": 1.0,
+                                      "squeeze_weight": 1.0}  # fmt: skip
+"""The grip-force task whose best policy is to carry the cylinder through on a grip just above the
+least force (SoftGraspGrip-v6 and the rigid kinds' v5): only the carry's steps pay, and they pay
+for the margin over the least alone, ``max(0, F / (m g / (2 mu_s)) - 1)`` per env step (a grip at
+1.2 x the least costs 0.2 a step against the lift's reward of at most 1). Under
+:data:`GRIP_TASK_LEAST`'s charge, paid from the first step on the whole squeeze, the closing, the
+probing and the lift cost more than the carry pays: on the rigid twin a hand held open returns
+more than the grip script's successful grasps, and a learner is right to leave the cylinder alone.
+Here carrying through pays 14-16 more than letting go when the carry begins, and over constant
+grips the tissue's expected return still peaks at 1.2-1.5 x the least (the package's
+documentation, Results: where the grip reward peaks, "What a learner compares")."""
 _ENV, _GOAL = "softgrasp_env.env:SoftGraspEnv", "softgrasp_env.env:SoftGraspGoalEnv"
 
 OBJECT_SET: tuple[str, ...] = ("cylinder", "rod", "sphere", "cube", "slab", "capsule", "cone", "elliptic", "pebble-0",
@@ -76,17 +89,18 @@ _SPECS: dict[str, tuple[str, dict]] = {
     "SoftGraspEasyRigid-v3": (_ENV, {"fingers": "rigid", "reward_type": "dense", "start": "easy"}),
     "SoftGraspRigidTorsion-v3": (_ENV, {"fingers": "rigid_torsion", "reward_type": "dense", "carry": True}),
     "SoftGraspEasyRigidTorsion-v3": (_ENV, {"fingers": "rigid_torsion", "reward_type": "dense", "start": "easy"}),
-    # the grip-force task: v5 (the rigid kinds' v4) charges the squeeze in least forces and keeps
-    # three taxel frames; v4 is v3's task on the v4 tissue
+    # the grip-force task: v6 (the rigid kinds' v5) charges the margin over the least force on the
+    # carry's steps alone; v5 (v4) the whole squeeze in least forces from the first step. Both keep
+    # three taxel frames.
+    "SoftGraspGrip-v6": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", "carry": True,
+                                **GRIP_TASK_CARRY, **TISSUE_V4}),
     "SoftGraspGrip-v5": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", "carry": True,
                                 **GRIP_TASK_LEAST, **TISSUE_V4}),
-    "SoftGraspGrip-v4": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", "carry": True,
-                                **GRIP_TASK, **TISSUE_V4}),
+    **{f"SoftGraspGrip{name}-v5": (_ENV, {"fingers": kind, "reward_type": "dense", "start": "easy", "carry": True,
+                                          **GRIP_TASK_CARRY})
+       for name, kind in (("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion"))},
     **{f"SoftGraspGrip{name}-v4": (_ENV, {"fingers": kind, "reward_type": "dense", "start": "easy", "carry": True,
                                           **GRIP_TASK_LEAST})
-       for name, kind in (("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion"))},
-    **{f"SoftGraspGrip{name}-v3": (_ENV, {"fingers": kind, "reward_type": "dense", "start": "easy", "carry": True,
-                                          **GRIP_TASK})
        for name, kind in (("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion"))},
     # the object-set family: the carry task and the grip-force task on every object
     "SoftGraspObjects-v1": (_ENV, {"fingers": "tissue", "reward_type": "dense", "carry": True, **OBJECTS_TASK,
@@ -112,8 +126,9 @@ a knocked-over cylinder does not end its episode since SoftGraspGoal-v4) and the
 the physics; the grip-force task (SoftGraspGrip, soft / rigid / torsional: the gentle start with
 the carry, the squeeze as the action, mass and friction drawn and not observed, the squeeze charged
 and success within 2 x the least that holds, 4 x 4 taxels per pad, the cylinder's pose and motion
-not observed: softgrasp_env/tasks/grip.py; its v5, the rigid kinds' v4, charges the squeeze in least
-forces and keeps three taxel frames: :data:`GRIP_TASK_LEAST`); the object set (SoftGraspObjects, soft / rigid /
+not observed: softgrasp_env/tasks/grip.py; its v6, the rigid kinds' v5, charges the margin over the
+least force on the carry's steps (:data:`GRIP_TASK_CARRY`), v5 and v4 the whole squeeze in least
+forces from the first step (:data:`GRIP_TASK_LEAST`), both keeping three taxel frames); the object set (SoftGraspObjects, soft / rigid /
 torsional, and its grip-force variants: one of :data:`OBJECT_SET` drawn per episode, at a drawn
 size, mass and friction, its kind and extents observed). The arm moves the palm at the action's velocity along a
 smooth path (at most 0.15 m/s and 1.5 m/s^2). The soft ids' v4 (the goal's v5) is the same task on
@@ -126,6 +141,7 @@ RETIRED: dict[str, str] = {
     **{f"SoftGrasp{family}-v1": "0.6.0" for family in ("Goal", "Easy", "EasyRigid")},
     "SoftGraspGoal-v3": "0.6.0",
     "SoftGraspGrip-v3": "0.6.0",
+    **{f"SoftGraspGrip{kind}-{v}": "0.7.0" for kind, v in (("", "v4"), ("Rigid", "v3"), ("RigidTorsion", "v3"))},
 }
 """Retired id -> the last release that registers it. ``gym.make`` of one raises
 :class:`gymnasium.error.DeprecatedEnv` naming that release (:func:`retired_env`); they are not in

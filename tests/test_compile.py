@@ -95,7 +95,7 @@ def test_the_env_warms_its_finger_kind_once_per_process(monkeypatch):
 
     monkeypatch.setattr(_jit_cache, "_warmed", set())
     monkeypatch.setattr(scene_pkg, "GraspScene", counting)
-    for env_id in ("SoftGraspRigid-v3", "SoftGraspGripRigid-v3", "SoftGraspEasyRigid-v3"):
+    for env_id in ("SoftGraspRigid-v3", "SoftGraspGripRigid-v5", "SoftGraspEasyRigid-v3"):
         gym.make(env_id).close()
     assert built == ["rigid"]  # the first rigid env warmed the kind; the others found it warm
 

@@ -19,7 +19,7 @@ import softgrasp_env
 from softgrasp_env import ENV_IDS
 from softgrasp_env.env import SoftGraspEnv
 from softgrasp_env.observation import OBS_NAMES, obs_slice
-from softgrasp_env.registration import RETIRED, SQUEEZE_WEIGHT_LEAST, TISSUE_V4, retired_message
+from softgrasp_env.registration import GRIP_TASK, RETIRED, SQUEEZE_WEIGHT_LEAST, TISSUE_V4, retired_message
 from tests.helpers import assert_same, obs_vector, rollout, run_episode
 
 # Gymnasium's checker notes unbounded observation boxes; like its MuJoCo envs, ours are unbounded.
@@ -34,8 +34,8 @@ def test_ids_are_registered_with_time_limits():
     assert ENV_IDS == ("SoftGrasp-v4", "SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspSparse-v4", "SoftGraspSparse-v3",
                        "SoftGraspGoal-v5", "SoftGraspGoal-v4", "SoftGraspEasy-v4", "SoftGraspEasy-v3",
                        "SoftGraspEasyRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspEasyRigidTorsion-v3",
-                       "SoftGraspGrip-v5", "SoftGraspGrip-v4", "SoftGraspGripRigid-v4",
-                       "SoftGraspGripRigidTorsion-v4", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3",
+                       "SoftGraspGrip-v6", "SoftGraspGrip-v5", "SoftGraspGripRigid-v5", "SoftGraspGripRigidTorsion-v5",
+                       "SoftGraspGripRigid-v4", "SoftGraspGripRigidTorsion-v4",
                        "SoftGraspObjects-v1", "SoftGraspObjectsRigid-v1",
                        "SoftGraspObjectsRigidTorsion-v1", "SoftGraspObjectsGrip-v1", "SoftGraspObjectsGripRigid-v1",
                        "SoftGraspObjectsGripRigidTorsion-v1")  # fmt: skip
@@ -50,14 +50,17 @@ def test_ids_are_registered_with_time_limits():
     for new, old in (("SoftGrasp-v4", "SoftGrasp-v3"), ("SoftGraspSparse-v4", "SoftGraspSparse-v3"),
                      ("SoftGraspEasy-v4", "SoftGraspEasy-v3"), ("SoftGraspGoal-v5", "SoftGraspGoal-v4")):  # fmt: skip
         assert gym.spec(new).kwargs == {**gym.spec(old).kwargs, **TISSUE_V4}, new
-    # the grip-force task: v4 is the retired v3 (the rigid kinds' v3 with the tissue) on the v4
-    # tissue; v5 (the rigid kinds' v4) charges the squeeze in least forces and keeps three taxel frames
-    v3_grip = {**gym.spec("SoftGraspGripRigid-v3").kwargs, "fingers": "tissue"}
-    assert gym.spec("SoftGraspGrip-v4").kwargs == {**v3_grip, **TISSUE_V4}
+    # the grip-force task: v5 (the rigid kinds' v4) is the first task, GRIP_TASK, with the squeeze
+    # charged in least forces and three taxel frames, the soft one on the v4 tissue; v6 (v5) charges
+    # only the margin over the least, on the carry's steps
     least = {"squeeze_reference": "least", "squeeze_weight": SQUEEZE_WEIGHT_LEAST, "tactile_history": 3}
-    assert gym.spec("SoftGraspGrip-v5").kwargs == {**gym.spec("SoftGraspGrip-v4").kwargs, **least}
-    for kind in ("Rigid", "RigidTorsion"):
-        assert gym.spec(f"SoftGraspGrip{kind}-v4").kwargs == {**gym.spec(f"SoftGraspGrip{kind}-v3").kwargs, **least}
+    carry = {"squeeze_charge_steps": "carry", "squeeze_free": 1.0, "squeeze_weight": 1.0}
+    easy_carry = {"reward_type": "dense", "start": "easy", "carry": True}
+    assert gym.spec("SoftGraspGrip-v5").kwargs == {"fingers": "tissue", **easy_carry, **GRIP_TASK, **least, **TISSUE_V4}
+    assert gym.spec("SoftGraspGrip-v6").kwargs == {**gym.spec("SoftGraspGrip-v5").kwargs, **carry}
+    for kind, fingers in (("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion")):
+        assert gym.spec(f"SoftGraspGrip{kind}-v4").kwargs == {"fingers": fingers, **easy_carry, **GRIP_TASK, **least}
+        assert gym.spec(f"SoftGraspGrip{kind}-v5").kwargs == {**gym.spec(f"SoftGraspGrip{kind}-v4").kwargs, **carry}
     assert gym.spec("SoftGraspGoal-v4").kwargs["end_when_knocked_over"] is False
     assert gym.spec("SoftGrasp-v3").kwargs["fingers"] == "tissue"
     assert gym.spec("SoftGraspRigid-v3").kwargs["fingers"] == "rigid"
@@ -78,12 +81,12 @@ def test_the_v4_tissue_is_the_continuum_with_coulomb_per_contact():
 
 @pytest.mark.parametrize("env_id", sorted(RETIRED))
 def test_a_retired_id_names_the_release_that_has_it(env_id):
-    """The v1/v2 ids (and SoftGraspGoal-v1, -v3, SoftGraspGrip-v3) are retired: gym.make of one, with any
-    arguments, is gymnasium's DeprecatedEnv naming release 0.6.0 and its tag; they are not in ENV_IDS."""
-    assert env_id not in ENV_IDS and (env_id.endswith(("-v1", "-v2")) or env_id in ("SoftGraspGoal-v3",
-                                                                                    "SoftGraspGrip-v3"))
-    message = (rf"{env_id} was retired; `pip install softgrasp-env==0\.6\.0` \(git tag v0\.6\.0\) reproduces its "
-               "results")  # fmt: skip
+    """A retired id (the v1/v2 ids, SoftGraspGoal-v1 and -v3, the grip task's first versions): gym.make
+    of one, with any arguments, is gymnasium's DeprecatedEnv naming the last release that has it
+    and its tag; they are not in ENV_IDS."""
+    assert env_id not in ENV_IDS
+    release = RETIRED[env_id].replace(".", r"\.")
+    message = rf"{env_id} was retired; `pip install softgrasp-env=={release}` \(git tag v{release}\) reproduces its results"
     with pytest.warns(DeprecationWarning, match="is out of date"):  # gymnasium's own, on any older version
         with pytest.raises(gym.error.DeprecatedEnv, match=message):
             gym.make(env_id)
@@ -91,11 +94,14 @@ def test_a_retired_id_names_the_release_that_has_it(env_id):
         gym.make(env_id, arm="jump", disable_env_checker=True)
 
 
-def test_the_retired_table_is_the_ids_0_6_0_had_beyond_these():
-    assert sorted(RETIRED) == sorted([*(f"SoftGrasp{f}-{v}" for f in ("", "Rigid", "Sparse") for v in ("v1", "v2")),
-                                      "SoftGraspGoal-v1", "SoftGraspEasy-v1", "SoftGraspEasyRigid-v1",
-                                      "SoftGraspGoal-v3", "SoftGraspGrip-v3"])  # fmt: skip
-    assert set(RETIRED.values()) == {"0.6.0"}
+def test_the_retired_table_names_the_last_release_of_each():
+    assert {i: r for i, r in RETIRED.items() if r == "0.6.0"} == {
+        i: "0.6.0" for i in [*(f"SoftGrasp{f}-{v}" for f in ("", "Rigid", "Sparse") for v in ("v1", "v2")),
+                             "SoftGraspGoal-v1", "SoftGraspEasy-v1", "SoftGraspEasyRigid-v1", "SoftGraspGoal-v3",
+                             "SoftGraspGrip-v3"]}  # fmt: skip
+    # the grip task's first charge, re-versioned after 0.7.0
+    assert {i: r for i, r in RETIRED.items() if r != "0.6.0"} == {
+        "SoftGraspGrip-v4": "0.7.0", "SoftGraspGripRigid-v3": "0.7.0", "SoftGraspGripRigidTorsion-v3": "0.7.0"}
     assert "This release registers SoftGraspGoal-v5, SoftGraspGoal-v4" in retired_message("SoftGraspGoal-v1")
 
 

@@ -125,7 +125,7 @@ def test_tactile_history_keeps_the_frames_before(fingers, make_env):
 @pytest.mark.parametrize("bad", [0, 17, 2.5, "3", True])
 def test_tactile_history_refuses_a_bad_count(bad, make_env):
     with pytest.raises((ValueError, TypeError), match="tactile_history"):
-        make_env("SoftGraspGripRigid-v3", tactile_history=bad)
+        make_env("SoftGraspGripRigid-v5", tactile_history=bad)
 
 
 def test_tactile_history_needs_the_taxels(make_env):

@@ -149,7 +149,7 @@ def test_the_shear_lag_grip_feels_slip_coming_and_holds_lightly(make_env, seed):
     gives. Measured: seed 1000 (mu 0.65, least 1.77 N) warned 1.75 s in, read 0.88 mu, carried at
     1.45 x the least that holds; seed 1001 (mu 0.66, least 0.50 N) 2.00 s, 0.88 mu, 1.49 x
     (benchmarks/grip_force.py: 46 of 50 seeds, median 1.43 x)."""
-    env = make_env("SoftGraspGrip-v4")
+    env = make_env("SoftGraspGrip-v6")
     policy = ShearLagGripPolicy(env)
     info = _grip_episode(env, policy, seed)
     assert info["is_success"], info
@@ -163,7 +163,7 @@ def test_the_shear_lag_grip_on_rigid_pads_falls_back_to_gross_slip(make_env):
     """The rigid twin's pads do not shear: the lag never warns, and the policy holds 1.5 x the last
     squeeze that held once the traction falls below the weight (measured: seed 1002 carried at
     1.64 x the least)."""
-    env = make_env("SoftGraspGripRigid-v3")
+    env = make_env("SoftGraspGripRigid-v5")
     policy = ShearLagGripPolicy(env)
     info = _grip_episode(env, policy, 1002)
     assert np.isnan(policy.fired_lag) and policy.phase == "hold"
@@ -177,11 +177,11 @@ def test_the_shear_lag_grip_on_rigid_pads_falls_back_to_gross_slip(make_env):
 ])  # fmt: skip
 def test_bad_shear_lag_grip_settings_are_named(make_env, kwargs, match):
     with pytest.raises(ValueError, match=match):
-        ShearLagGripPolicy(make_env("SoftGraspGripRigid-v3"), **kwargs)
+        ShearLagGripPolicy(make_env("SoftGraspGripRigid-v5"), **kwargs)
 
 
 def test_the_shear_lag_grip_needs_the_taxels_and_the_squeeze_action(make_env):
     with pytest.raises(ValueError, match="tactile"):
-        ShearLagGripPolicy(make_env("SoftGraspGripRigid-v3", tactile=None))
+        ShearLagGripPolicy(make_env("SoftGraspGripRigid-v5", tactile=None, tactile_history=1))
     with pytest.raises(ValueError, match="finger_action='force'"):
         ShearLagGripPolicy(make_env("SoftGraspEasyRigid-v3"))

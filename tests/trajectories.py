@@ -36,11 +36,22 @@ INFO_FLAGS = ("is_success", "held", "carrying", "diverged", "action_clipped")
 # (clipping exercised) and resets after an episode ends; "scripted" runs the scripted policy.
 V3_IDS = ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspSparse-v3", "SoftGraspGoal-v3", "SoftGraspEasy-v3",
           "SoftGraspEasyRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspEasyRigidTorsion-v3")
-RETIRED_AS: dict[str, tuple[str, dict]] = {"SoftGraspGoal-v3": ("SoftGraspGoal-v4", {"end_when_knocked_over": True}),
-                                           "SoftGraspGrip-v3": ("SoftGraspGripRigid-v3", {"fingers": "tissue"})}
+GRIP_V3_TASK = {"squeeze_reference": "finger_force", "squeeze_weight": 0.5, "squeeze_charge_steps": "all",
+                "squeeze_free": 0.0, "tactile_history": 1}  # fmt: skip
+"""The keywords that take the grip ids' latest task back to the first one (the v3 grip ids', and
+SoftGraspGrip-v4's on the v4 tissue): the whole squeeze charged in shares of the finger's force,
+one taxel frame. The physics is the same."""
+RETIRED_AS: dict[str, tuple[str, dict]] = {
+    "SoftGraspGoal-v3": ("SoftGraspGoal-v4", {"end_when_knocked_over": True}),
+    "SoftGraspGrip-v3": ("SoftGraspGripRigid-v5", {**GRIP_V3_TASK, "fingers": "tissue"}),
+    "SoftGraspGrip-v4": ("SoftGraspGrip-v6", GRIP_V3_TASK),
+    "SoftGraspGripRigid-v3": ("SoftGraspGripRigid-v5", GRIP_V3_TASK),
+    "SoftGraspGripRigidTorsion-v3": ("SoftGraspGripRigidTorsion-v5", GRIP_V3_TASK),
+}
 """A recorded id that is retired, and the registered id with the keywords that are it (the goal's
-v3 is v4's physics with the lift task's ends; the soft grip's v3 is the rigid twin's v3 with the
-v3 tissue)."""
+v3 is v4's physics with the lift task's ends; the grip ids' v3 and the soft grip's v4 are the
+latest grip ids with the first task, :data:`GRIP_V3_TASK`, the soft v3 on the rigid twin's v3
+tissue)."""
 
 
 def _case(name: str, env_id: str, policy: str, steps: int) -> tuple[str, str, dict, str, int]:
@@ -70,16 +81,19 @@ MORE_CASES: tuple[tuple[str, str, dict, str, int], ...] = (
     ("fast-preset/scripted", "SoftGrasp-v3", {"preset": "fast"}, "scripted", 60),
     ("ranges/random", "SoftGraspRigid-v3",
      {"friction_range": 0.3, "cylinder_mass_range": 0.5, "cylinder_radius_range": 0.005}, "random", 60),
+    ("SoftGraspGripRigid-v5/random", "SoftGraspGripRigid-v5", {}, "random", 130),
 )  # fmt: skip
 """What the v3 recording does not reach: the v4 goal id, the grip-force ids (the squeeze as the
 action, taxels), and the settings reached only through kwargs - the segmented and FEM fingers, tissue
 on every face with the consistent coupling, the fast preset, the randomised ranges. Recorded after
-the v1/v2 ids (which covered these settings) were retired, on the same physics."""
+the v1/v2 ids (which covered these settings) were retired, on the same physics; the grip task's
+margin charge on the carry's steps (the rigid twin's v5, recorded when it was registered: the
+soft grip's v6 has the same charge on the physics the v4 cases replay)."""
 
 V4_IDS = ("SoftGrasp-v4", "SoftGraspSparse-v4", "SoftGraspGoal-v5", "SoftGraspEasy-v4", "SoftGraspGrip-v4")
 V4_CASES: tuple[tuple[str, str, dict, str, int], ...] = (
-    *((f"{env_id}/random", env_id, {}, "random", 130) for env_id in V4_IDS),
-    *((f"{env_id}/scripted", env_id, {}, "scripted", 100) for env_id in V4_IDS if "Grip" not in env_id),
+    *(_case(f"{env_id}/random", env_id, "random", 130) for env_id in V4_IDS),
+    *(_case(f"{env_id}/scripted", env_id, "scripted", 100) for env_id in V4_IDS if "Grip" not in env_id),
     ("v4-fine/scripted", "SoftGraspEasy-v4", {"preset": "fine"}, "scripted", 40),
     ("v4-consistent/scripted", "SoftGrasp-v4", {"sim": "consistent"}, "scripted", 100),
 )  # fmt: skip

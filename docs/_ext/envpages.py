@@ -135,7 +135,8 @@ def goal_sections(text: str) -> tuple[str, dict[str, str]]:
 
 def family_of(env_id: str) -> str:
     """The family an id is in, from its registration: the goal env class; the object set
-    (``registration.OBJECT_SET``); the grip-force task's settings (``registration.GRIP_TASK``);
+    (``registration.OBJECT_SET``); the grip-force task (the squeeze as the action,
+    ``finger_action="force"``, whatever its charge: each version of the task sets its own);
     else the lift family."""
     import gymnasium as gym
 
@@ -151,8 +152,7 @@ def family_of(env_id: str) -> str:
         return "goal"
     if spec.kwargs.get("object") == registration.OBJECT_SET:
         return "objects"
-    grip = getattr(registration, "GRIP_TASK", {})
-    if grip and all(spec.kwargs.get(k) == v for k, v in grip.items()):
+    if spec.kwargs.get("finger_action") == "force":
         return "grip"
     return "lift"
 

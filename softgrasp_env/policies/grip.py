@@ -1,4 +1,4 @@
-"""Scripted policies for the grip-force task (SoftGraspGrip-v4, v3 and their rigid twins).
+"""Scripted policies for the grip-force task (SoftGraspGrip-v6, v5 and their rigid twins).
 
 All read only what the gripper senses (the grip ids observe neither the cylinder's pose nor its
 motion): from the easy start around the cylinder's top they go down 3 cm with the fingers open,

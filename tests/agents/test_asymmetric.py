@@ -19,7 +19,7 @@ from softgrasp_env.observation import PRIVILEGED_NAMES
 from softgrasp_env.policies.asymmetric import AsymmetricActorCriticPolicy, AsymmetricSACPolicy, KeysExtractor
 from softgrasp_env.wrappers import PRIVILEGED, SENSED, PrivilegedObservation
 
-GRIP = "SoftGraspGripRigid-v3"  # a grip id (no object state observed), on the fast rigid fingers
+GRIP = "SoftGraspGripRigid-v5"  # a grip id (no object state observed), on the fast rigid fingers
 P = {n: k for k, n in enumerate(PRIVILEGED_NAMES)}
 
 

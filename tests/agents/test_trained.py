@@ -167,7 +167,7 @@ def test_results_table_lists_every_group_with_its_cards_rates():
     assert v3 and all(line.split(" | ")[1].split()[0].endswith("-v3") for line in v3), v3
     assert len(v3) == len({(cards.policy_label(cards.read_card(d)), cards.env_label(cards.read_card(d))) for d in MODELS
                            if cards.read_card(d)["env_version"] == 3})  # fmt: skip
-    assert cards.env_label({"env": "SoftGraspGrip-v4", "env_kwargs": {"tactile": None}}) == "SoftGraspGrip-v4 tactile=None"
+    assert cards.env_label({"env": "SoftGraspGrip-v6", "env_kwargs": {"tactile": None}}) == "SoftGraspGrip-v6 tactile=None"
     # The per-run table: a row per model, its success and convergence verdict from its card.
     per_run = cards.runs_table(versions=(3, 4)).splitlines()[2:]
     current = [cards.read_card(d) for d in MODELS if cards.read_card(d)["env_version"] >= 3]
@@ -218,12 +218,12 @@ def test_learning_curves_by_kind_wrap_into_rows():
 
 
 def test_learning_curves_draw_a_variant_by_env_kwargs_as_a_group_of_its_own(tmp_path):
-    """The grip task with and without taxels: one id, two groups (the second by its env kwargs)."""
+    """An id with and without a keyword (here the taxels): one id, two groups (the second by its env kwargs)."""
     import shutil
 
     from benchmarks import learning_curves
 
-    src = cards.TRAINED / "SoftGraspGripRigidTorsion-v3_sac_0"
+    src = cards.TRAINED / "SoftGraspObjectsRigidTorsion-v1_sac_0"
     for name, kwargs in (("with", {}), ("without", {"tactile": None})):
         shutil.copytree(src, tmp_path / "models" / name)
         meta = json.loads((src / "run.json").read_text())
@@ -231,7 +231,7 @@ def test_learning_curves_draw_a_variant_by_env_kwargs_as_a_group_of_its_own(tmp_
     assert learning_curves.main(["--models", str(tmp_path / "models"), "--out", str(tmp_path), "--by", "kind"]) == 0
     with open(tmp_path / "learning_curves.csv", newline="") as f:
         groups = {(r["algo"], r["env"]) for r in csv.DictReader(f)}
-    assert groups == {("sac", "SoftGraspGripRigidTorsion-v3"), ("sac", "SoftGraspGripRigidTorsion-v3 tactile=None")}
+    assert groups == {("sac", "SoftGraspObjectsRigidTorsion-v1"), ("sac", "SoftGraspObjectsRigidTorsion-v1 tactile=None")}
 
 @pytest.mark.slow
 @pytest.mark.parametrize("model_dir", MODELS, ids=[d.name for d in MODELS])

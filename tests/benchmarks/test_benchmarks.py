@@ -238,8 +238,8 @@ def test_slip_warning_tables_the_lead_per_kind_and_writes_every_run(tmp_path):
 
 
 def test_slip_warning_grip_reads_the_margin_of_a_held_tissue_grip():
-    out = _run_plain("slip_warning_grip.py", "--ids", "SoftGraspGrip-v4", "--seeds", "2", "--factors", "1.2,2")
-    rows = [line.split(" | ") for line in out.splitlines() if line.startswith("| SoftGraspGrip-v4")]
+    out = _run_plain("slip_warning_grip.py", "--ids", "SoftGraspGrip-v6", "--seeds", "2", "--factors", "1.2,2")
+    rows = [line.split(" | ") for line in out.splitlines() if line.startswith("| SoftGraspGrip-v6")]
     assert [r[1] for r in rows] == ["1.2", "2"], out
     near, far = rows
     # measured over 12 seeds: 9 of 9 holds at 1.2 x the least read "on", 1 of 12 at 2 x
@@ -348,10 +348,10 @@ def test_convergence_reads_monotone_series_and_the_pad_rows_against_coulomb():
 def test_grip_force_runs_every_policy_and_writes_each_episode(tmp_path):
     out = tmp_path / "grip.json"
     proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "grip_force.py"), "--seeds", "3", "--ids",
-                           "SoftGraspGripRigid-v3", "--json", str(out)], cwd=ROOT, capture_output=True, text=True,
+                           "SoftGraspGripRigid-v5", "--json", str(out)], cwd=ROOT, capture_output=True, text=True,
                           timeout=900, env={"PYTHONPATH": str(ROOT), "PATH": ""}, check=False)  # fmt: skip
     assert proc.returncode == 0, proc.stderr[-2000:]
-    lines = [line for line in proc.stdout.splitlines() if line.startswith("SoftGraspGripRigid-v3")]
+    lines = [line for line in proc.stdout.splitlines() if line.startswith("SoftGraspGripRigid-v5")]
     assert [line.split()[1] for line in lines] == ["tactile", "open", "shear-lag", "constant", "constant", "constant",
                                                    "constant"]  # fmt: skip
     import json
@@ -360,8 +360,8 @@ def test_grip_force_runs_every_policy_and_writes_each_episode(tmp_path):
     assert len(runs) == 7 and all(len(r) == 3 for r in runs.values())
     # the tactile policy holds all three seeds within the factor; 3 N holds them all, and succeeds
     # exactly where that is within twice the least
-    assert all(r["success"] for r in runs["SoftGraspGripRigid-v3 tactile"])
-    for r in runs["SoftGraspGripRigid-v3 constant 3 N"]:
+    assert all(r["success"] for r in runs["SoftGraspGripRigid-v5 tactile"])
+    for r in runs["SoftGraspGripRigid-v5 constant 3 N"]:
         assert r["held"] and r["success"] == (r["carry_squeeze"] <= 2 * r["least_squeeze"])
 
 

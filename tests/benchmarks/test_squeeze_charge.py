@@ -28,9 +28,9 @@ def constant_grip_return(env: gym.Env, force: float, seed: int) -> float:
 
 
 def test_an_episode_repriced_is_the_v5_ids_own_return():
-    """The v5 charge applied to an episode logged on the v4-charged id gives the return the v5 id
+    """The v5 charge applied to an episode logged on the v6-charged id gives the return the v5 id
     pays for the same episode (the charge does not touch the physics; same seed, same actions)."""
-    row = squeeze_charge.episode(gym.make("SoftGraspGripRigid-v3"), 1.3, 1001)
+    row = squeeze_charge.episode(gym.make("SoftGraspGripRigid-v5"), 1.3, 1001)
     env = gym.make("SoftGraspGripRigid-v4")
     again = squeeze_charge.episode(env, 1.3, 1001)
     assert again["base"] == pytest.approx(row["base"], rel=1e-12) and again["sum_r"] == pytest.approx(row["sum_r"])
@@ -67,8 +67,10 @@ def test_on_the_carrys_margin_a_grasp_carried_through_pays_more_than_letting_go(
     grasps return well above an open hand; charged on the whole squeeze, letting go when the carry
     begins returns more still (what SAC learned), and charged on the margin over the least the
     carry pays."""
-    out = squeeze_charge.policy_returns("SoftGraspGripRigid-v4", 2, 1.0)
+    out = squeeze_charge.policy_returns("SoftGraspGripRigid-v5", 2, 1.0)
     steps, margin = "the carry's steps", "the carry's margin"
+    for policy in out.values():  # the id's own return is the carry's margin charge
+        assert policy["the id's charge"] == pytest.approx(policy[margin], rel=1e-9, abs=1e-9)
     assert out["script"]["success"] == 2 and out["script, let go at the carry"]["success"] == 0
     assert out["script"][steps][1] > out["open"][steps][0] + 10.0
     # charged on the whole squeeze, a carry costs more than it pays: letting go returns more

@@ -108,6 +108,11 @@ def test_the_grip_force_section_is_on_the_grip_page_only(pages):
     assert "## Grip-force task" in grip
     assert grip.index("## Grip-force task") < grip.index("## Action Space")
     assert "## Grip-force task" not in pages["lift.md"] and "## Grip-force task" not in pages["goal.md"]
+    # every version of the task is on it, whatever its charge, and on no other page
+    grip_ids = [i for i in registration.ENV_IDS if i.startswith("SoftGraspGrip")]
+    assert len(grip_ids) == 6
+    for env_id in grip_ids:
+        assert f"| `{env_id}` |" in grip and f"| `{env_id}` |" not in pages["lift.md"], env_id
 
 
 def test_a_changed_argument_changes_the_arguments_table(monkeypatch):

@@ -11,10 +11,11 @@ import numpy as np
 import pytest
 
 from softgrasp_env.policies.grip import ConstantGripPolicy, TactileGripPolicy
-from softgrasp_env.registration import GRIP_TASK, GRIP_TASK_LEAST
+from softgrasp_env.registration import GRIP_TASK_CARRY, GRIP_TASK_LEAST
 from softgrasp_env.tasks import CarryTest, GripForceTask
 from softgrasp_env.tasks.grip import least_squeeze
 from tests.helpers import assert_same, rollout
+from tests.trajectories import GRIP_V3_TASK
 
 G = 9.81
 
@@ -34,19 +35,21 @@ def test_least_squeeze_is_coulomb_off_the_jaw_axis():
 
 
 def test_grip_ids_are_the_task(make_env):
-    for env_id, kind, task in (("SoftGraspGrip-v4", "tissue", GRIP_TASK), ("SoftGraspGripRigid-v3", "rigid", GRIP_TASK),
-                               ("SoftGraspGripRigidTorsion-v3", "rigid_torsion", GRIP_TASK),
+    for env_id, kind, task in (("SoftGraspGrip-v6", "tissue", GRIP_TASK_CARRY),
+                               ("SoftGraspGripRigid-v5", "rigid", GRIP_TASK_CARRY),
+                               ("SoftGraspGripRigidTorsion-v5", "rigid_torsion", GRIP_TASK_CARRY),
                                ("SoftGraspGrip-v5", "tissue", GRIP_TASK_LEAST),
                                ("SoftGraspGripRigid-v4", "rigid", GRIP_TASK_LEAST),
                                ("SoftGraspGripRigidTorsion-v4", "rigid_torsion", GRIP_TASK_LEAST)):  # fmt: skip
         spec = gym.spec(env_id)
         assert spec.kwargs["fingers"] == kind and spec.kwargs["start"] == "easy" and spec.kwargs["carry"] is True
         assert {k: spec.kwargs[k] for k in task} == task
-    env = make_env("SoftGraspGripRigid-v3")
+    env = make_env("SoftGraspGripRigid-v5")
     u = env.unwrapped
     assert isinstance(u.task, GripForceTask) and isinstance(u.task.find(CarryTest), CarryTest)
     assert u.task.reward_terms == ("lift", "reach", "squeeze")
-    assert u.obs_names[-1] == "tactile_right_r3_c3_shear_z" and len(u.obs_names) == 11 + 2 * 16 * 5
+    # this step's taxels and the two steps' before them
+    assert u.obs_names[-1] == "tactile_past2_right_r3_c3_shear_z" and len(u.obs_names) == 11 + 3 * 2 * 16 * 5
     # what the gripper itself senses: not the cylinder's pose or motion
     assert not {"cyl_rel_x", "cyl_vz", "cyl_wx", "cyl_axis_z", "lift"} & set(u.obs_names)
     assert {"grip_z", "grip_vz", "finger_gap", "force_left", "force_right", "time"} <= set(u.obs_names)
@@ -60,7 +63,8 @@ def test_grip_ids_are_the_task(make_env):
 
 
 def test_reward_charges_the_squeeze_and_info_reports_it(make_env):
-    env = make_env("SoftGraspGripRigid-v3")
+    """The grip task's first charge (the squeeze in shares of the finger's force, every step)."""
+    env = make_env("SoftGraspGripRigid-v5", **GRIP_V3_TASK)
     obs, info = env.reset(seed=3)
     assert info["carry_squeeze"] == 0.0 and info["least_squeeze"] == 0.0  # before the carry
     policy = ConstantGripPolicy(env, 3.0)
@@ -87,7 +91,7 @@ def test_the_charge_in_least_forces_costs_a_margin_the_same_on_every_cylinder(ma
     least, pay the same charge per step once the fingers press steadily."""
     charges = []
     for mass in (0.05, 0.2):
-        env = make_env("SoftGraspGripRigid-v3", squeeze_reference="least")
+        env = make_env("SoftGraspGripRigid-v5", **{**GRIP_V3_TASK, "squeeze_reference": "least"})
         obs, _ = env.reset(seed=3, options={"cylinder_mass": mass, "friction_scale": 1.0})
         cfg = env.unwrapped.scene.config
         static = cfg.cylinder_mass * G / (2 * cfg.tissue.friction_static)
@@ -104,7 +108,7 @@ def test_the_charge_in_least_forces_costs_a_margin_the_same_on_every_cylinder(ma
 
 def test_the_charge_on_the_carrys_steps_alone_leaves_the_physics_and_the_carrys_charge(make_env):
     """``squeeze_charge_steps="carry"``: the same grip gives the same observations; the squeeze
-    costs nothing before the carry and what the ids' charge costs in it, so a grasp carried through
+    costs nothing before the carry and what the v4 id's charge costs in it, so a grasp carried through
     pays more than leaving the cylinder alone."""
     runs = {}
     for steps in ("all", "carry"):
@@ -131,7 +135,7 @@ def test_the_charge_on_the_carrys_steps_alone_leaves_the_physics_and_the_carrys_
             assert q2 == 0.0 and r2 == pytest.approx(r1 - q1, rel=1e-12, abs=1e-12)
     assert carried > 0 and runs["carry"][-1][4], "the 1.5 x least grip carries the cylinder through"
     before = sum(q for _, q, c, _, _ in runs["all"] if not c)
-    assert before < -1.0, "the ids' charge costs the closing and the lift"
+    assert before < -1.0, "the v4 id's charge costs the closing and the lift"
     ret = {k: sum(r[3] for r in v) for k, v in runs.items()}
     assert ret["carry"] == pytest.approx(ret["all"] - before, rel=1e-9)
 
@@ -157,7 +161,7 @@ def test_the_free_squeeze_is_not_charged(make_env):
 def test_success_needs_the_squeeze_within_the_factor(make_env):
     """The same held episode succeeds or not by the factor alone."""
     for factor, expect in ((2.0, False), (100.0, True)):
-        env = make_env("SoftGraspGripRigid-v3", squeeze_factor=factor)
+        env = make_env("SoftGraspGripRigid-v5", squeeze_factor=factor)
         obs, _ = env.reset(seed=3, options={"cylinder_mass": 0.05, "friction_scale": 1.0})  # least 0.27 N
         policy = ConstantGripPolicy(env, 3.0)
         for _ in range(100):
@@ -184,9 +188,9 @@ def test_grip_policies_refuse_what_they_cannot_drive(make_env):
     with pytest.raises(ValueError, match="finger_action='force'"):
         TactileGripPolicy(make_env("SoftGraspEasyRigid-v3"))
     with pytest.raises(ValueError, match="tactile"):
-        TactileGripPolicy(make_env("SoftGraspGripRigid-v3", tactile=None))
+        TactileGripPolicy(make_env("SoftGraspGripRigid-v5", tactile=None, tactile_history=1))
     with pytest.raises(ValueError, match="force"):
-        ConstantGripPolicy(make_env("SoftGraspGripRigid-v3"), 7.0)
+        ConstantGripPolicy(make_env("SoftGraspGripRigid-v5"), 7.0)
 
 
 def test_grip_task_is_deterministic(make_env):
@@ -213,7 +217,7 @@ def test_feeling_the_pads_beats_every_force_blind_grip(make_env):
     20 seeded episodes each. Measured: tactile 19 / 20 (squeeze 1.56 x the least that holds,
     median); constant 0.5 / 1 / 2 / 3 N 4 / 8 / 6 / 3 of 20 (benchmarks/grip_force.py: 50 seeds
     of every kind)."""
-    env = make_env("SoftGraspGripRigid-v3")
+    env = make_env("SoftGraspGripRigid-v5")
     seeds = range(1000, 1020)
     tactile = _episodes(env, TactileGripPolicy(env), seeds)
     wins = sum(i["is_success"] for i in tactile)
@@ -226,7 +230,7 @@ def test_feeling_the_pads_beats_every_force_blind_grip(make_env):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("env_id", "least_wins", "margin"), [("SoftGraspGrip-v4", 15, 8)])
+@pytest.mark.parametrize(("env_id", "least_wins", "margin"), [("SoftGraspGrip-v6", 15, 8)])
 def test_feeling_the_tissue_pads_beats_every_force_blind_grip(make_env, env_id, least_wins, margin):
     """As above with the soft fingers. Measured on v3 (the patch law, whose pads read less cleanly:
     a patch slides all at once): tactile 13 / 20; constant 0.5 / 1 / 2 / 3 N 3 / 1 / 3 / 4 of 20.
@@ -266,13 +270,13 @@ def test_the_light_grip_holds_six_times_longer_than_an_episode(make_env):
     """The tactile policy's squeeze (1.5 x the last that held) held for 30 s, 25 s past the carry:
     the rigid twin, seeds 1000-1009. Measured (seeds 1000-1019): 19 of 19 held, the cylinder at
     most 0.45 mm lower at 30 s than at 5 s (the torsional peer 0.46 mm; the tissue, slow test, 0)."""
-    runs = _soak(make_env("SoftGraspGripRigid-v3", max_episode_steps=600), range(1000, 1010))
+    runs = _soak(make_env("SoftGraspGripRigid-v5", max_episode_steps=600), range(1000, 1010))
     assert len(runs) >= 9
     assert all(at30 > 0.0 and at5 - at30 < 1.5e-3 for at5, at30 in runs), runs
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("env_id", "least_runs", "settle"), [("SoftGraspGrip-v4", 15, 1.0e-3)])
+@pytest.mark.parametrize(("env_id", "least_runs", "settle"), [("SoftGraspGrip-v6", 15, 1.0e-3)])
 def test_the_light_tissue_grip_holds_six_times_longer_than_an_episode(make_env, env_id, least_runs, settle):
     """As above with the soft fingers: measured on v3 13 of 13 held, 0.00 mm lower at 30 s; on v4
     18 of 18 held, at most 0.37 mm lower."""
@@ -286,7 +290,7 @@ def test_the_converged_pads_grip_holds_six_times_longer_than_an_episode(make_env
     """The same soak on the converged preset's pads (64,000 particles per m^2 in two element layers,
     1,140 particles): 7-9 minutes an episode. Measured, seeds 1000-1002: the two the policy succeeds
     in at 5 s (1000, 1001) held to 30 s, the cylinder 0.000 and 0.007 mm lower than at 5 s."""
-    runs = _soak(make_env("SoftGraspGrip-v4", max_episode_steps=600, preset="converged"), range(1000, 1003))
+    runs = _soak(make_env("SoftGraspGrip-v6", max_episode_steps=600, preset="converged"), range(1000, 1003))
     assert len(runs) >= 2
     assert all(at30 > 0.0 and at5 - at30 < 0.05e-3 for at5, at30 in runs), runs
 

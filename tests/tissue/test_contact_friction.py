@@ -63,7 +63,7 @@ def test_no_contact_leaves_its_cone_and_the_grip_needs_coulombs_least_force(seed
                           pytest.param(1003, "thesis", 16_000.0, 1.25, 0.5, marks=pytest.mark.slow)])  # fmt: skip
 def test_the_v4_tissue_keeps_every_contact_in_its_cone_and_needs_coulombs_squeeze(seed, coupling, density, most,
                                                                                    excess):  # fmt: skip
-    """The glue scene on the v4 tissue (SoftGraspGrip-v4's physics). Every contact stays in its cone
+    """The glue scene on the v4 tissue (the soft grip ids' physics). Every contact stays in its cone
     in every world step and a squeeze lowered below Coulomb's least lets the cylinder go. Measured
     at the default 4,000 per m^2 (seeds 1013, 1000, 1001, 1002, 1003): held down to 1.016, 1.188,
     1.070, 1.004, 1.045 x the least under the thesis coupling, and the same under the consistent
