@@ -378,6 +378,7 @@ SCRIPTED_IDS = ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3",
                 "SoftGraspGrip-v6", "SoftGraspGripRigid-v5", "SoftGraspGripRigidTorsion-v5",
                 "SoftGraspGrip-v5", "SoftGraspGripRigid-v4", "SoftGraspGripRigidTorsion-v4",
                 "SoftGraspObjects-v1", "SoftGraspObjectsRigid-v1", "SoftGraspObjectsRigidTorsion-v1",
+                "SoftGraspObjectsGrip-v2", "SoftGraspObjectsGripRigid-v2", "SoftGraspObjectsGripRigidTorsion-v2",
                 "SoftGraspObjectsGrip-v1", "SoftGraspObjectsGripRigid-v1", "SoftGraspObjectsGripRigidTorsion-v1")
 """The ids whose scripted policy the tables measure live."""
 

@@ -254,9 +254,9 @@ class SoftGraspEnv(gym.Env):
     task (``SoftGraspObjects-v1`` on the tissue, ``SoftGraspObjectsRigid-v1``,
     ``SoftGraspObjectsRigidTorsion-v1``) each object's size is drawn too (every dimension × U(1 ±
     0.15), ``object_scale_range``), its mass (0.1 kg × U(1 ± 0.5)) and every friction (× U(1 ±
-    0.2)). The grip-force variants (``SoftGraspObjectsGrip-v1``, ``SoftGraspObjectsGripRigid-v1``,
-    ``SoftGraspObjectsGripRigidTorsion-v1``) are the grip-force task on every object at its own
-    size: the gentle start's open fingers leave the cone and the elliptic cylinder about a
+    0.2)). The grip-force variants (``SoftGraspObjectsGrip-v2``, ``SoftGraspObjectsGripRigid-v2``,
+    ``SoftGraspObjectsGripRigidTorsion-v2``, with the grip ids' latest charge; their v1 with the
+    first) are the grip-force task on every object at its own size: the gentle start's open fingers leave the cone and the elliptic cylinder about a
     millimetre. The observation adds the object's kind one-hot and its half extents
     (``observe_shape``), which is all a policy is told of it; ``info["object"]`` names it and the
     reset option ``object_scale`` fixes its size. The scripted grasp (``ScriptedGraspPolicy``)

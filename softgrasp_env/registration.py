@@ -108,8 +108,14 @@ _SPECS: dict[str, tuple[str, dict]] = {
     "SoftGraspObjectsRigid-v1": (_ENV, {"fingers": "rigid", "reward_type": "dense", "carry": True, **OBJECTS_TASK}),
     "SoftGraspObjectsRigidTorsion-v1": (_ENV, {"fingers": PATCH_TORSION, "reward_type": "dense", "carry": True,
                                                **OBJECTS_TASK}),
+    # the grip-force variants: v2 takes the grip ids' latest charge (GRIP_TASK_CARRY), v1 the first
+    "SoftGraspObjectsGrip-v2": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", "carry": True,
+                                       **GRIP_TASK_CARRY, **OBJECTS_GRIP_TASK, **TISSUE_V4}),
     "SoftGraspObjectsGrip-v1": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", "carry": True,
                                        **GRIP_TASK, **OBJECTS_GRIP_TASK, **TISSUE_V4}),
+    **{f"SoftGraspObjectsGrip{name}-v2": (_ENV, {"fingers": kind, "reward_type": "dense", "start": "easy",
+                                                 "carry": True, **GRIP_TASK_CARRY, **OBJECTS_GRIP_TASK})
+       for name, kind in (("Rigid", "rigid"), ("RigidTorsion", PATCH_TORSION))},
     **{f"SoftGraspObjectsGrip{name}-v1": (_ENV, {"fingers": kind, "reward_type": "dense", "start": "easy",
                                                  "carry": True, **GRIP_TASK, **OBJECTS_GRIP_TASK})
        for name, kind in (("Rigid", "rigid"), ("RigidTorsion", PATCH_TORSION))},
@@ -129,8 +135,9 @@ and success within 2 x the least that holds, 4 x 4 taxels per pad, the cylinder'
 not observed: softgrasp_env/tasks/grip.py; its v6, the rigid kinds' v5, charges the margin over the
 least force on the carry's steps (:data:`GRIP_TASK_CARRY`), v5 and v4 the whole squeeze in least
 forces from the first step (:data:`GRIP_TASK_LEAST`), both keeping three taxel frames); the object set (SoftGraspObjects, soft / rigid /
-torsional, and its grip-force variants: one of :data:`OBJECT_SET` drawn per episode, at a drawn
-size, mass and friction, its kind and extents observed). The arm moves the palm at the action's velocity along a
+torsional, and its grip-force variants, whose v2 takes the grip ids' latest charge and v1 the
+first: one of :data:`OBJECT_SET` drawn per episode, at a drawn size, mass and friction, its kind
+and extents observed). The arm moves the palm at the action's velocity along a
 smooth path (at most 0.15 m/s and 1.5 m/s^2). The soft ids' v4 (the goal's v5) is the same task on
 the v4 tissue (:data:`TISSUE_V4`); v3 (the goal's v4) keeps the thesis' shape matching with a
 friction law per patch. The rigid kinds have no tissue and stay v3. Older versions live in the

@@ -30,15 +30,16 @@ _INF_BOUND = "observation space m"
 
 
 def test_ids_are_registered_with_time_limits():
-    """Per family the latest version and the one before it: 24 ids."""
+    """Per family the latest version and the one before it: 27 ids."""
     assert ENV_IDS == ("SoftGrasp-v4", "SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspSparse-v4", "SoftGraspSparse-v3",
                        "SoftGraspGoal-v5", "SoftGraspGoal-v4", "SoftGraspEasy-v4", "SoftGraspEasy-v3",
                        "SoftGraspEasyRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspEasyRigidTorsion-v3",
                        "SoftGraspGrip-v6", "SoftGraspGrip-v5", "SoftGraspGripRigid-v5", "SoftGraspGripRigidTorsion-v5",
                        "SoftGraspGripRigid-v4", "SoftGraspGripRigidTorsion-v4",
                        "SoftGraspObjects-v1", "SoftGraspObjectsRigid-v1",
-                       "SoftGraspObjectsRigidTorsion-v1", "SoftGraspObjectsGrip-v1", "SoftGraspObjectsGripRigid-v1",
-                       "SoftGraspObjectsGripRigidTorsion-v1")  # fmt: skip
+                       "SoftGraspObjectsRigidTorsion-v1", "SoftGraspObjectsGrip-v2", "SoftGraspObjectsGrip-v1",
+                       "SoftGraspObjectsGripRigid-v2", "SoftGraspObjectsGripRigidTorsion-v2",
+                       "SoftGraspObjectsGripRigid-v1", "SoftGraspObjectsGripRigidTorsion-v1")  # fmt: skip
     gym.register_envs(softgrasp_env)  # the documented idiom is accepted
     for env_id in ENV_IDS:
         spec = gym.spec(env_id)

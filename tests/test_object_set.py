@@ -11,7 +11,7 @@ import pytest
 import softgrasp_env  # noqa: F401  (registers the ids)
 from softgrasp_env.fingers import TorsionalRigidConfig
 from softgrasp_env.policies import ScriptedGraspPolicy
-from softgrasp_env.registration import ENV_IDS, GRIP_TASK, OBJECT_SET, OBJECTS_TASK
+from softgrasp_env.registration import ENV_IDS, GRIP_TASK, GRIP_TASK_CARRY, OBJECT_SET, OBJECTS_TASK
 from softgrasp_env.scene.objects import PRESETS
 
 IDS = tuple(i for i in ENV_IDS if i.startswith("SoftGraspObjects"))
@@ -19,16 +19,20 @@ IDS = tuple(i for i in ENV_IDS if i.startswith("SoftGraspObjects"))
 
 def test_the_family_is_soft_rigid_and_torsional_on_the_carry_and_the_grip_force_tasks():
     assert IDS == ("SoftGraspObjects-v1", "SoftGraspObjectsRigid-v1", "SoftGraspObjectsRigidTorsion-v1",
-                   "SoftGraspObjectsGrip-v1", "SoftGraspObjectsGripRigid-v1", "SoftGraspObjectsGripRigidTorsion-v1")
+                   "SoftGraspObjectsGrip-v2", "SoftGraspObjectsGrip-v1", "SoftGraspObjectsGripRigid-v2",
+                   "SoftGraspObjectsGripRigidTorsion-v2", "SoftGraspObjectsGripRigid-v1",
+                   "SoftGraspObjectsGripRigidTorsion-v1")  # fmt: skip
     assert OBJECT_SET == tuple(PRESETS)  # every named object, the cylinder included
     kinds = [gym.spec(i).kwargs["fingers"] for i in IDS]
-    assert kinds == ["tissue", "rigid", TorsionalRigidConfig(spinning_friction="patch")] * 2
+    patch = TorsionalRigidConfig(spinning_friction="patch")
+    assert kinds == ["tissue", "rigid", patch, "tissue", "tissue", "rigid", patch, "rigid", patch]
     for env_id in IDS:
         kw = gym.spec(env_id).kwargs
         assert kw["object"] == OBJECT_SET and kw["carry"] is True
-        grip = "Grip" in env_id
-        assert all(kw[k] == v for k, v in (GRIP_TASK if grip else OBJECTS_TASK).items())
-        assert kw.get("start", "reach") == ("easy" if grip else "reach")
+        # the grip variants' v2 takes the grip ids' latest charge, v1 the first
+        task = OBJECTS_TASK if "Grip" not in env_id else GRIP_TASK_CARRY if env_id.endswith("-v2") else GRIP_TASK
+        assert all(kw[k] == v for k, v in task.items()), env_id
+        assert kw.get("start", "reach") == ("easy" if "Grip" in env_id else "reach")
     # the soft ids are on the v4 tissue
     assert gym.make("SoftGraspObjects-v1").unwrapped.args.physics.tissue.group_energy == "continuum"
 
@@ -192,7 +196,7 @@ def test_the_tactile_grip_holds_a_low_and_a_tapered_object(obj):
     both, benchmarks/object_set.py; the squeeze within twice the least on 2 and 3 of 10)."""
     from softgrasp_env.policies.grip import TactileGripPolicy
 
-    env = gym.make("SoftGraspObjectsGrip-v1", object=obj)
+    env = gym.make("SoftGraspObjectsGrip-v2", object=obj)
     policy = TactileGripPolicy(env)
     obs, _ = env.reset(seed=0)
     names = env.unwrapped.obs_names
@@ -206,3 +210,28 @@ def test_the_tactile_grip_holds_a_low_and_a_tapered_object(obj):
     env.close()
     assert info["held"] and info["lift_height"] > 0.05, (obj, info)
     assert abs(lowest - aim) < 0.003, (lowest, aim)
+
+
+def test_the_grip_variants_v2_charge_the_carrys_margin_over_the_least_on_every_object():
+    """SoftGraspObjectsGrip*-v2 take the grip ids' latest charge: nothing before the carry, then
+    max(0, F / F_least - 1) a step with F_least = m g / (2 mu_s) of the episode's object."""
+    from softgrasp_env.policies.grip import ConstantGripPolicy
+
+    env = gym.make("SoftGraspObjectsGripRigid-v2", object="cube")
+    obs, _ = env.reset(seed=4)
+    u = env.unwrapped
+    least = u.task.reference
+    assert least == pytest.approx(u.task.mass * 9.81 / (2.0 * u.task.mu_s), rel=1e-12)
+    policy = ConstantGripPolicy(env, 1.5 * least)
+    charged = 0
+    done = False
+    while not done:
+        obs, _, term, trunc, info = env.step(policy(obs))
+        in_carry = u.task.task.phase(u.scene.steps) is not None
+        f = float(np.mean(u._last.force))
+        want = -max(0.0, f / least - 1.0) if in_carry else 0.0
+        assert info["reward_terms"]["squeeze"] == pytest.approx(want, rel=1e-12, abs=1e-15)
+        charged += want < 0.0
+        done = term or trunc
+    env.close()
+    assert charged > 10 and info["held"], (charged, info)
