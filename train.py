@@ -30,6 +30,7 @@ import csv
 import difflib
 import inspect
 import json
+import math
 import os
 import shutil
 import sys
@@ -50,7 +51,7 @@ from agents.baselines import ALGOS, ASYMMETRIC_ALGOS, default_algo, make_model, 
 from agents.cards import hyperparameters, quote_arg
 from agents.cli import kwargs_dict as _kwargs_dict
 from agents.cli import parse_kwarg
-from agents.demos import MAX_DEMOS, add_demonstrations, demo_buffer
+from agents.demos import MAX_DEMOS, DemoSAC, add_demonstrations, demo_buffer
 from agents.evaluate import evaluate
 from agents.runs import CHECKPOINT_PREFIX, deterministic_policy, load_model, make_env, run_files
 from agents.threads import DEFAULT_TORCH_THREADS, set_threads, threads_error
@@ -241,6 +242,10 @@ def main(argv: list[str] | None = None) -> int:
                         help="with --demos (sac): keep the demonstrations for the whole run and draw the fraction F "
                              "of every batch from them (agents/demos.py DemoReplayBuffer; 0.5 is RLPD's symmetric "
                              "sampling); default: they are ordinary transitions")  # fmt: skip
+    parser.add_argument("--demo-bc", type=float, default=None, metavar="LAMBDA",
+                        help="with --demo-share: after each round of SAC's updates, a behaviour-cloning step on the "
+                             "kept demonstrations with Nair et al.'s Q-filter, weight LAMBDA (agents/demos.py "
+                             "DemoSAC); default none")  # fmt: skip
     parser.add_argument(
         "--checkpoint-every",
         type=int,
@@ -282,6 +287,11 @@ def main(argv: list[str] | None = None) -> int:
             parser.error("--demo-share keeps the demonstrations in every batch: give --demos N too")
         if not 0.0 < ns.demo_share < 1.0:
             parser.error(f"--demo-share is a fraction of each batch, in (0, 1); got {ns.demo_share}")
+    if ns.demo_bc is not None:
+        if ns.demo_share is None:
+            parser.error("--demo-bc clones the kept demonstrations: give --demos N and --demo-share F too")
+        if not (math.isfinite(ns.demo_bc) and ns.demo_bc > 0.0):
+            parser.error(f"--demo-bc is a weight > 0; got {ns.demo_bc}")
 
     files = None
     if ns.resume is not None:
@@ -322,6 +332,7 @@ def main(argv: list[str] | None = None) -> int:
                 "n_envs": n_envs, "timesteps": ns.timesteps, "eval_every": ns.eval_every,
                 "eval_episodes": ns.eval_episodes, "learning_starts": ns.learning_starts,
                 "checkpoint_every": ns.checkpoint_every, "demos": ns.demos, "demo_share": ns.demo_share,
+                "demo_bc": ns.demo_bc,
                 "asymmetric": ns.asymmetric,
                 "out": str(ns.out),
                 "normalized_observations": default_algo(env_id) != "her-sac",  # the goal env runs raw (HER)
@@ -407,6 +418,8 @@ def main(argv: list[str] | None = None) -> int:
             overrides["learning_starts"] = ns.learning_starts
         if ns.demo_share is not None:
             overrides.update(demo_buffer(asymmetric, ns.demo_share))
+        if ns.demo_bc is not None:
+            overrides["demo_bc"] = ns.demo_bc
         try:
             model = make_model(algo, venv, seed=seed, asymmetric=asymmetric, **overrides)
         except (TypeError, ValueError, AssertionError) as exc:  # a value SB3 refuses (the keys are checked)
@@ -423,6 +436,8 @@ def main(argv: list[str] | None = None) -> int:
             meta["demonstrations"] = add_demonstrations(model, env_id, env_kwargs, ns.demos, seed=seed, norm=norm,
                                                           privileged=asymmetric)
             meta["demonstrations"]["seconds"] = round(time.perf_counter() - tic, 1)
+            if ns.demo_bc is not None:
+                meta["demonstrations"]["bc"] = ns.demo_bc
             _log(f"{ns.demos} scripted demonstrations in the replay buffer: {meta['demonstrations']['transitions']} "
                  f"transitions, {meta['demonstrations']['successes']} successes")  # fmt: skip
             (run / "run.json").write_text(json.dumps(meta, indent=2))
@@ -434,7 +449,7 @@ def main(argv: list[str] | None = None) -> int:
                 )
             venv = norm = VecNormalize.load(str(files.vecnormalize), venv)
             norm.training, norm.norm_reward = True, False
-        model = load_model(algo, files.model, env=venv)
+        model = load_model(algo, files.model, env=venv, cls=DemoSAC if meta.get("demo_bc") else None)
         start = model.num_timesteps
         if isinstance(model, OffPolicyAlgorithm):
             if files.replay_buffer.exists():

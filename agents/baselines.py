@@ -95,6 +95,12 @@ def make_model(algo: str, env: gym.Env | VecEnv, *, seed: int | None = None, asy
     policy = asymmetric_policy(algo) if asymmetric else kwargs.pop("policy")
     kwargs.pop("policy", None)
     cls = PPO if algo == "ppo" else SAC
+    if "demo_bc" in kwargs:  # behaviour cloning on the kept demonstrations (train.py --demo-bc)
+        if algo != "sac":
+            raise ValueError(f"demo_bc is built for sac, not {algo}")
+        from agents.demos import DemoSAC
+
+        cls = DemoSAC
     return cls(policy, env, seed=seed, device="cpu", verbose=0, **kwargs)
 
 

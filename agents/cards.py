@@ -121,6 +121,8 @@ def hyperparameters(meta: dict[str, Any]) -> dict[str, Any]:
         from agents.demos import demo_buffer
 
         out.update(demo_buffer(bool(meta.get("asymmetric")), meta["demo_share"]))
+    if meta.get("demo_bc") is not None:
+        out["demo_bc"] = meta["demo_bc"]
     return _jsonable(out)
 
 
@@ -351,7 +353,9 @@ def _card_extras(card: dict[str, Any]) -> list[str]:
                     f"{demos['successes']} successful, {demos['transitions']:,} transitions) in the replay buffer "
                     "before training (`--demos`, agents/demos.py)"
                     + (f", kept for the whole run as {demos['share']:.0%} of every batch (`--demo-share`)"
-                       if demos.get("share") else "") + " |")  # fmt: skip
+                       if demos.get("share") else "")
+                    + (f", cloned with weight {demos['bc']:g} under the Q-filter (`--demo-bc`)" if demos.get("bc") else "")
+                    + " |")  # fmt: skip
     return rows
 
 
@@ -363,7 +367,8 @@ def policy_label(card: dict[str, Any]) -> str:
     algo = f"{card['algo']} asymmetric" if card.get("asymmetric") else card["algo"]
     if not demos:
         return algo
-    kept = f" ({demos['share']:.0%} of each batch)" if demos.get("share") else ""
+    kept = f" ({demos['share']:.0%} of each batch{', BC %g' % demos['bc'] if demos.get('bc') else ''})" if demos.get(
+        "share") else ""
     return f"{algo} + {demos['episodes']} demos{kept}"
 
 

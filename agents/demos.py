@@ -41,6 +41,7 @@ a truncation, not a termination. The demonstrations use their own reset seeds
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import gymnasium as gym
@@ -48,6 +49,7 @@ import numpy as np
 from stable_baselines3.common.buffers import DictReplayBuffer, ReplayBuffer
 from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 from stable_baselines3.common.vec_env import VecNormalize
+from stable_baselines3.sac import SAC
 
 from softgrasp_env.wrappers import PRIVILEGED, SENSED, PrivilegedObservation
 
@@ -101,6 +103,12 @@ class _KeptDemonstrations:
         if self.full and self.pos == 0 and self.kept:
             self.pos = self.kept
 
+    def sample_kept(self, batch_size: int, env: VecNormalize | None = None) -> Any:
+        """A batch of the kept demonstrations alone (:class:`DemoSAC`'s behaviour cloning)."""
+        if not self.kept:
+            raise RuntimeError("the buffer keeps no demonstrations (keep_demonstrations was not called)")
+        return self._get_samples(np.random.randint(0, self.kept, size=batch_size), env=env)  # type: ignore[attr-defined]
+
     def _batch_indices(self, batch_size: int) -> np.ndarray:
         upper = self.buffer_size if self.full else self.pos
         own = upper - self.kept
@@ -144,6 +152,50 @@ class DictDemoReplayBuffer(_KeptDemonstrations, DictReplayBuffer):
 
     def sample(self, batch_size: int, env: VecNormalize | None = None) -> Any:  # type: ignore[override]
         return self._get_samples(self._batch_indices(batch_size), env=env)
+
+
+class DemoSAC(SAC):
+    """SB3's SAC with a behaviour-cloning step on the kept demonstrations after each round of its
+    own updates (``train.py --demo-bc LAMBDA``; needs a :class:`DemoReplayBuffer`): for each of the
+    round's gradient steps one batch of demonstrations, and the actor moved toward their actions
+    where the critic rates them above its own, loss ``LAMBDA * mean(filter * |mu(s) - a_demo|^2)``
+    with ``mu`` the actor's deterministic action (both in SB3's [-1, 1] action scale). That is Nair
+    et al. 2018's behaviour-cloning loss with its Q-filter (``filter = Q(s, a_demo) > Q(s,
+    mu(s))``, the lesser of the twin critics): the learner imitates a demonstration only while it
+    knows nothing better there, and the RL objective takes over where it does. Taken as a step of
+    its own (same optimiser) rather than a term of the actor's loss, so SAC's own update is SB3's
+    unchanged. ``train/bc_loss`` and ``train/bc_filter`` (the share of demonstrations kept by the
+    filter) are logged."""
+
+    def __init__(self, *args: Any, demo_bc: float = 0.0, **kwargs: Any) -> None:
+        if not (math.isfinite(demo_bc) and demo_bc >= 0.0):
+            raise ValueError(f"demo_bc: the behaviour-cloning weight, finite and >= 0; got {demo_bc}")
+        super().__init__(*args, **kwargs)
+        self.demo_bc = float(demo_bc)
+
+    def train(self, gradient_steps: int, batch_size: int = 64) -> None:
+        super().train(gradient_steps, batch_size)
+        buffer = self.replay_buffer
+        if self.demo_bc == 0.0 or not isinstance(buffer, _KeptDemonstrations) or not buffer.kept:
+            return
+        import torch as th
+
+        losses, kept = [], []
+        for _ in range(gradient_steps):
+            data = buffer.sample_kept(batch_size, env=self._vec_normalize_env)
+            mu = self.actor(data.observations, deterministic=True)
+            with th.no_grad():
+                q_demo = th.min(th.cat(self.critic(data.observations, data.actions), dim=1), dim=1).values
+                q_mu = th.min(th.cat(self.critic(data.observations, mu.detach()), dim=1), dim=1).values
+                better = (q_demo > q_mu).float()
+            loss = self.demo_bc * (better * ((mu - data.actions) ** 2).sum(dim=1)).mean()
+            self.actor.optimizer.zero_grad()
+            loss.backward()
+            self.actor.optimizer.step()
+            losses.append(loss.item())
+            kept.append(better.mean().item())
+        self.logger.record("train/bc_loss", float(np.mean(losses)))
+        self.logger.record("train/bc_filter", float(np.mean(kept)))
 
 
 def demo_buffer(asymmetric: bool, demo_share: float) -> dict[str, Any]:
@@ -280,5 +332,5 @@ def add_demonstrations(model: OffPolicyAlgorithm, env_id: str, env_kwargs: dict[
     return out
 
 
-__all__ = ["DEMO_SEED_BASE", "MAX_DEMOS", "TAXEL_KEYWORDS", "DemoReplayBuffer", "DictDemoReplayBuffer",
+__all__ = ["DEMO_SEED_BASE", "MAX_DEMOS", "TAXEL_KEYWORDS", "DemoReplayBuffer", "DemoSAC", "DictDemoReplayBuffer",
            "add_demonstrations", "demo_buffer", "demo_seeds", "demonstrator", "grip_script"]

@@ -70,15 +70,16 @@ def saved_algo(model: Path) -> str | None:
     return None
 
 
-def load_model(algo: str, path: str | Path, *, env: Any = None):
+def load_model(algo: str, path: str | Path, *, env: Any = None, cls: Any = None):
     """``model_class(algo).load(path)`` on the CPU, onto ``env`` if given (HER's buffer needs one;
     a resumed training run continues on its envs).
 
     A model saved before the observation Box got its finite bounds (the unit axis, the forces, the
     yaw, the clock) recorded ``Box(-inf, inf)``; SB3 refuses an env whose space differs in anything,
     bounds included. The bounds do not enter an MLP policy (SB3 rescales only image spaces), so
-    when only they differ the env's space replaces the saved one."""
-    cls = model_class(algo)
+    when only they differ the env's space replaces the saved one. ``cls``: a subclass of the algo's
+    SB3 class to load as (a resumed run that trained with one)."""
+    cls = model_class(algo) if cls is None else cls
     custom: dict[str, Any] = {}
     if env is not None:
         from stable_baselines3.common.save_util import json_to_data

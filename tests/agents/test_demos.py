@@ -242,3 +242,84 @@ def test_train_keeps_the_demonstrations_in_every_batch_with_demo_share(tmp_path,
         with pytest.raises(SystemExit):
             train.main([*bad, *common])
         assert message in capsys.readouterr().err
+
+
+def test_behaviour_cloning_moves_the_actor_to_the_demonstrations_the_critic_rates_higher(monkeypatch):
+    """DemoSAC's step: with the critic rating every demonstration above the actor's own action (a
+    critic that is the negative distance to the demonstrations' action), the actor's deterministic
+    action moves toward it; rated below, nothing is cloned and the actor is left as it was. SAC's
+    own update is taken out, so what moves is the cloning alone."""
+    import torch as th
+    from gymnasium import spaces
+    from stable_baselines3 import SAC
+    from stable_baselines3.common.logger import configure
+
+    from agents.demos import DemoReplayBuffer, DemoSAC
+
+    class Still(gym.Env):
+        observation_space = spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
+        action_space = spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
+
+        def reset(self, *, seed=None, options=None):
+            return np.zeros(3, dtype=np.float32), {}
+
+        def step(self, action):
+            return np.zeros(3, dtype=np.float32), 0.0, False, False, {}
+
+    monkeypatch.setattr(SAC, "train", lambda self, gradient_steps, batch_size=64: None)
+    target = np.array([0.6, -0.4], dtype=np.float32)
+    for sign, moves in ((1.0, True), (-1.0, False)):
+        model = DemoSAC("MlpPolicy", DummyVecEnv([Still]), demo_bc=1.0, learning_starts=10_000, seed=0,
+                        replay_buffer_class=DemoReplayBuffer, replay_buffer_kwargs={"demo_share": 0.5},
+                        learning_rate=3e-3, device="cpu")  # fmt: skip
+        model.set_logger(configure(None, [""]))
+        rng = np.random.default_rng(0)
+        for k in range(72):  # 64 demonstrations of ``target``, then 8 of the learner's own
+            o = rng.uniform(-1, 1, (1, 3)).astype(np.float32)
+            act = target[None] if k < 64 else np.zeros((1, 2), np.float32)
+            model.replay_buffer.add(o, o, act, np.zeros(1, np.float32), np.array([False]), [{}])
+            if k == 63:
+                model.replay_buffer.keep_demonstrations()
+
+        def critic(obs, act, sign=sign):  # the demonstrations' action best (sign 1) or worst (-1)
+            q = -sign * ((act - th.as_tensor(target)) ** 2).sum(1, keepdim=True)
+            return q, q
+
+        model.critic.forward = critic
+        obs = th.as_tensor(rng.uniform(-1, 1, (32, 3)).astype(np.float32))
+        before = model.actor(obs, deterministic=True).detach().numpy()
+        for _ in range(30):
+            model.train(gradient_steps=1, batch_size=32)
+        after = model.actor(obs, deterministic=True).detach().numpy()
+        d0, d1 = np.abs(before - target).mean(), np.abs(after - target).mean()
+        if moves:
+            assert d1 < 0.5 * d0, (d0, d1)
+        else:
+            np.testing.assert_array_equal(after, before)
+    with pytest.raises(ValueError, match="demo_bc"):
+        DemoSAC("MlpPolicy", DummyVecEnv([Still]), demo_bc=-1.0, device="cpu")
+
+
+def test_train_runs_behaviour_cloning_through_a_resume(tmp_path, capsys):
+    from agents.cards import hyperparameters, policy_label
+    from agents.demos import DemoSAC
+    from softgrasp_env.policies._sb3 import load_model
+
+    common = ["--timesteps", "120", "--learning-starts", "60", "--eval-every", "1000", "--eval-episodes", "1",
+              "--no-progress", "--out", str(tmp_path)]  # fmt: skip
+    assert train.main(["--env", GRIP, "--demos", "1", "--demo-share", "0.5", "--demo-bc", "2",
+                       "--algo-kwargs", "buffer_size=400", *common]) == 0  # fmt: skip
+    run = tmp_path / f"{GRIP}_sac_0"
+    meta = json.loads((run / "run.json").read_text())
+    assert meta["demo_bc"] == 2.0 and meta["demonstrations"]["bc"] == 2.0
+    assert hyperparameters(meta)["demo_bc"] == 2.0
+    assert policy_label({"algo": "sac", "demonstrations": meta["demonstrations"]}) == (
+        "sac + 1 demos (50% of each batch, BC 2)")
+    progress = (run / "logs" / "progress.csv").read_text()
+    assert "train/bc_loss" in progress and "train/bc_filter" in progress
+    assert train.main(["--resume", str(run), "--timesteps", "70", "--no-progress"]) == 0
+    assert isinstance(load_model("sac", run / "model.zip", cls=DemoSAC), DemoSAC)
+    assert "train/bc_loss" in (run / "logs" / "progress_from_120.csv").read_text()
+    with pytest.raises(SystemExit):
+        train.main(["--env", GRIP, "--demos", "1", "--demo-bc", "1", *common])
+    assert "give --demos N and --demo-share F too" in capsys.readouterr().err
