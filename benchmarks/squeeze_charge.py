@@ -2,7 +2,7 @@
 
     PYTHONPATH=. python benchmarks/squeeze_charge.py run [--seeds 12] [--factors 0.8,1,...,3]
         [--ids SoftGraspGrip-v6,SoftGraspGripRigidTorsion-v5,SoftGraspGripRigid-v5] [--out CSV]
-    PYTHONPATH=. python benchmarks/squeeze_charge.py curves [--csv CSV] [--plot PNG]
+    PYTHONPATH=. python benchmarks/squeeze_charge.py curves [--csv CSV] [--plot PNG] [--plot-charges v5,v6]
     PYTHONPATH=. python benchmarks/squeeze_charge.py policies [--ids ...] [--seeds 10] [--weight-carry 1.0]
 
 ``run``: each episode squeezes with one constant force (policies/grip.py ``ConstantGripPolicy``),
@@ -134,7 +134,21 @@ squeeze or, with ``squeeze_free=1``, on its margin over the least; they need the
 ``sum_m_carry`` columns)."""
 
 
-def curves(path: Path, plot: Path | None = None) -> None:
+def plotted_charges(prefixes: str | None) -> list[str]:
+    """The charges ``curves --plot`` draws: those of :data:`CHARGES` whose name starts with one of the
+    comma-separated ``prefixes`` (in that order), or the first two (the retired v4's and v5's)."""
+    if not prefixes:
+        return list(CHARGES)[:2]
+    out = []
+    for prefix in prefixes.split(","):
+        found = [n for n in CHARGES if n.startswith(prefix)]
+        if len(found) != 1:
+            raise ValueError(f"--plot-charges: {prefix!r} names {len(found)} of the charges {list(CHARGES)}")
+        out.append(found[0])
+    return out
+
+
+def curves(path: Path, plot: Path | None = None, names: list[str] | None = None) -> None:
     rows = load(path)
     for name, price in CHARGES.items():
         print(f"\n{name}: expected return (+- standard error) per factor of the static least")
@@ -155,7 +169,7 @@ def curves(path: Path, plot: Path | None = None) -> None:
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
 
-        names = list(CHARGES)[:2]
+        names = names or plotted_charges(None)
         fig, axes = plt.subplots(1, len(names), figsize=(10, 3.8), sharey=False)
         for ax, name in zip(axes, names, strict=True):
             for env_id, d in expected(rows, CHARGES[name]).items():
@@ -235,6 +249,8 @@ def main() -> None:
     ap.add_argument("--first-seed", type=int, default=1000)
     ap.add_argument("--out", "--csv", dest="csv", type=Path, default=OUT)
     ap.add_argument("--plot", type=Path, default=None, help="curves: draw the expected return per factor here")
+    ap.add_argument("--plot-charges", default=None,
+                    help="curves: the charges drawn, by the start of their names (e.g. v5,v6; default: v4 and v5)")
     ap.add_argument("--weight-carry", type=float, default=1.0, help="policies: the charge's weight on the carry's steps")
     a = ap.parse_args()
     if a.what == "run":
@@ -243,7 +259,11 @@ def main() -> None:
         for env_id in a.ids.split(","):
             policy_returns(env_id, a.seeds, a.weight_carry, a.first_seed)
     else:
-        curves(a.csv, a.plot)
+        try:
+            names = plotted_charges(a.plot_charges)
+        except ValueError as exc:
+            ap.error(str(exc))
+        curves(a.csv, a.plot, names)
 
 
 if __name__ == "__main__":

@@ -92,3 +92,16 @@ def test_the_shipped_measurement_puts_the_carry_only_charges_peak_where_the_ids_
         peak = {i: max(v, key=lambda f: v[f][0]) for i, v in d.items()}
         assert 1.2 <= peak["SoftGraspGrip-v5"] <= 1.5, d["SoftGraspGrip-v5"]
         assert peak["SoftGraspGripRigid-v4"] == peak["SoftGraspGripRigidTorsion-v4"] == 1.1
+
+
+def test_the_plotted_charges_are_named_by_their_start_and_a_bad_name_is_refused(tmp_path):
+    assert squeeze_charge.plotted_charges(None) == list(squeeze_charge.CHARGES)[:2]
+    v5, v6 = squeeze_charge.plotted_charges("v5,v6")
+    assert v5.startswith("v5: 0.3") and v6.startswith("v6, carry only, the margin")
+    with pytest.raises(ValueError, match="names 0 of the charges"):
+        squeeze_charge.plotted_charges("v7")
+    with pytest.raises(ValueError, match="names 3 of the charges"):
+        squeeze_charge.plotted_charges("carry only:")
+    out = tmp_path / "curve.png"
+    squeeze_charge.curves(ROOT / "docs" / "results" / "squeeze_charge_carry.csv", out, [v5, v6])
+    assert out.stat().st_size > 10_000
