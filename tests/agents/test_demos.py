@@ -176,7 +176,7 @@ def _filled(buf, n, start=0):
 def test_a_keeping_buffer_never_overwrites_the_demonstrations_and_gives_them_their_share_of_every_batch():
     from gymnasium import spaces
 
-    from agents.demos import DemoReplayBuffer
+    from softgrasp_env.policies.replay import DemoReplayBuffer
 
     box = spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
     buf = DemoReplayBuffer(50, box, box, device="cpu", demo_share=0.25)
@@ -216,7 +216,7 @@ def test_train_keeps_the_demonstrations_in_every_batch_with_demo_share(tmp_path,
     import pickle
 
     from agents.cards import hyperparameters, policy_label
-    from agents.demos import DictDemoReplayBuffer
+    from softgrasp_env.policies.replay import DictDemoReplayBuffer
 
     common = ["--timesteps", "120", "--learning-starts", "60", "--eval-every", "1000", "--eval-episodes", "1",
               "--checkpoint-every", "120", "--no-progress", "--out", str(tmp_path)]  # fmt: skip
@@ -236,6 +236,13 @@ def test_train_keeps_the_demonstrations_in_every_batch_with_demo_share(tmp_path,
     with open(run / "replay_buffer.pkl", "rb") as f:
         buf = pickle.load(f)
     assert isinstance(buf, DictDemoReplayBuffer) and buf.kept == 100 and buf.pos == 100 + 130
+    # the model names its buffer class by the package's module, so an installed wheel (no agents/)
+    # loads it
+    import zipfile
+
+    with zipfile.ZipFile(run / "model.zip") as archive:
+        data = json.loads(archive.read("data").decode())
+    assert data["replay_buffer_class"]["__module__"] == "softgrasp_env.policies.replay"
     for bad, message in ((["--env", GRIP, "--demo-share", "0.5"], "give --demos"),
                          (["--env", GRIP, "--demos", "1", "--demo-share", "1"], "in (0, 1)"),
                          (["--env", GOAL, "--demos", "1", "--demo-share", "0.5"], "not her-sac")):  # fmt: skip
@@ -254,7 +261,8 @@ def test_behaviour_cloning_moves_the_actor_to_the_demonstrations_the_critic_rate
     from stable_baselines3 import SAC
     from stable_baselines3.common.logger import configure
 
-    from agents.demos import DemoReplayBuffer, DemoSAC
+    from agents.demos import DemoSAC
+    from softgrasp_env.policies.replay import DemoReplayBuffer
 
     class Still(gym.Env):
         observation_space = spaces.Box(-1.0, 1.0, (3,), dtype=np.float32)
