@@ -543,7 +543,9 @@ def test_solver_kernel_breakdown_prints_a_steps_fixed_cost_its_iterations_and_th
 
     bench_breakdown(converged=False, repeats=1)
     out = capsys.readouterr().out
+    # one repeat on a shared machine: the 3 -> 6 iteration slope can come out negative, and the
+    # figures derived from it with it (the test is of what is printed, not of the timing)
     assert re.search(r"default: 60 particles, 60 groups of 8\.0 members", out), out
     assert re.search(r"iterations [\d.]+ / [\d.]+ / [\d.]+ / [\d.]+ us", out), out
-    assert re.search(r"per iteration [\d.]+ us .* fixed -?[\d.]+ us", out), out
-    assert re.search(r"the group sweep alone [\d.]+ us \([\d.]+ us per group\), \d+% of an iteration", out), out
+    assert re.search(r"per iteration -?[\d.]+ us .* fixed -?[\d.]+ us", out), out
+    assert re.search(r"the group sweep alone [\d.]+ us \([\d.]+ us per group\), -?\d+% of an iteration", out), out
