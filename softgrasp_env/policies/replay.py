@@ -35,12 +35,13 @@ class KeptDemonstrations:
     pos: int
     full: bool
 
-    def _init_share(self, demo_share: float, optimize_memory_usage: bool) -> None:
-        if not 0.0 < demo_share < 1.0:
+    def __init__(self, *args: Any, demo_share: float, optimize_memory_usage: bool = False, **kwargs: Any) -> None:
+        if not 0.0 < demo_share < 1.0:  # refused before the SB3 buffer allocates its arrays
             raise ValueError(f"demo_share: the fraction of each batch drawn from the demonstrations, in (0, 1); "
                              f"got {demo_share}")  # fmt: skip
         if optimize_memory_usage:  # its next observation is the following slot: a kept block breaks that
             raise ValueError("demo_share needs optimize_memory_usage=False")
+        super().__init__(*args, optimize_memory_usage=optimize_memory_usage, **kwargs)  # the SB3 buffer's
         self.demo_share = float(demo_share)
         self.kept = 0
 
@@ -56,11 +57,15 @@ class KeptDemonstrations:
         self.kept = self.pos
         return self.kept
 
-    def _wrap(self) -> None:
+    def add(self, *args: Any, **kwargs: Any) -> None:
+        super().add(*args, **kwargs)  # type: ignore[misc]
         # SB3 wrapped to slot 0 after filling the last one: the learner's own transitions go round
         # behind the kept block instead
         if self.full and self.pos == 0 and self.kept:
             self.pos = self.kept
+
+    def sample(self, batch_size: int, env: VecNormalize | None = None) -> Any:
+        return self._get_samples(self._batch_indices(batch_size), env=env)  # type: ignore[attr-defined]
 
     def sample_kept(self, batch_size: int, env: VecNormalize | None = None) -> Any:
         """A batch of the kept demonstrations alone (:class:`DemoSAC`'s behaviour cloning)."""
@@ -86,31 +91,9 @@ class DemoReplayBuffer(KeptDemonstrations, ReplayBuffer):
     of each batch from them. SB3 builds it from ``replay_buffer_class`` and
     ``replay_buffer_kwargs={"demo_share": F}``."""
 
-    def __init__(self, *args: Any, demo_share: float, optimize_memory_usage: bool = False, **kwargs: Any) -> None:
-        super().__init__(*args, optimize_memory_usage=optimize_memory_usage, **kwargs)
-        self._init_share(demo_share, optimize_memory_usage)
-
-    def add(self, *args: Any, **kwargs: Any) -> None:
-        super().add(*args, **kwargs)
-        self._wrap()
-
-    def sample(self, batch_size: int, env: VecNormalize | None = None) -> Any:
-        return self._get_samples(self._batch_indices(batch_size), env=env)
-
 
 class DictDemoReplayBuffer(KeptDemonstrations, DictReplayBuffer):
     """:class:`DemoReplayBuffer` for dict observations (an asymmetric learner's)."""
-
-    def __init__(self, *args: Any, demo_share: float, optimize_memory_usage: bool = False, **kwargs: Any) -> None:
-        super().__init__(*args, optimize_memory_usage=optimize_memory_usage, **kwargs)
-        self._init_share(demo_share, optimize_memory_usage)
-
-    def add(self, *args: Any, **kwargs: Any) -> None:  # type: ignore[override]
-        super().add(*args, **kwargs)
-        self._wrap()
-
-    def sample(self, batch_size: int, env: VecNormalize | None = None) -> Any:  # type: ignore[override]
-        return self._get_samples(self._batch_indices(batch_size), env=env)
 
 
 def demo_buffer(asymmetric: bool, demo_share: float) -> dict[str, Any]:
