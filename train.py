@@ -40,7 +40,7 @@ from pathlib import Path
 import gymnasium as gym
 from stable_baselines3.common import logger as sb3_logger
 from stable_baselines3.common.base_class import BaseAlgorithm
-from stable_baselines3.common.callbacks import BaseCallback, CheckpointCallback
+from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNormalize
@@ -53,13 +53,26 @@ from agents.cli import kwargs_dict as _kwargs_dict
 from agents.cli import parse_kwarg
 from agents.demos import MAX_DEMOS, DemoSAC, add_demonstrations, demo_buffer
 from agents.evaluate import evaluate
-from agents.runs import CHECKPOINT_PREFIX, deterministic_policy, load_model, make_env, run_files
+from agents.runs import CHECKPOINT_PREFIX, Checkpoints, deterministic_policy, load_model, make_env, run_files
 from agents.threads import DEFAULT_TORCH_THREADS, set_threads, threads_error
 from softgrasp_env.policies._sb3 import saved_timesteps
 from softgrasp_env.wrappers import PrivilegedObservation
 
 EVAL_EVERY = 10_000  # timesteps between a fresh run's evaluations
 EVAL_EPISODES = 10
+
+
+def _buffers_kept(text: str) -> int | None:
+    """--checkpoint-buffers: 'all' (None) or a count >= 0."""
+    if text.strip().lower() == "all":
+        return None
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is neither a count of buffers (0, 1, 2, ...) nor 'all'") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{value} buffers: give a count >= 0 or 'all'")
+    return value
 
 
 def _log(message: str) -> None:
@@ -254,6 +267,10 @@ def main(argv: list[str] | None = None) -> int:
         help="save model, replay buffer and VecNormalize stats every N timesteps to checkpoints/ "
         "(default none; with --resume: the run's)",
     )
+    parser.add_argument("--checkpoint-buffers", type=_buffers_kept, default=1, metavar="K",
+                        help="keep the replay buffers of the K checkpoints written last and delete older ones (a "
+                             "buffer is the whole replay memory: about 1.2 GB on a grip id); 0 saves none, 'all' "
+                             "keeps every one (default 1; the models and statistics all stay)")  # fmt: skip
     parser.add_argument("--resume", type=Path, default=None, metavar="PATH",
                         help="continue the run at PATH (its directory, model.zip or a checkpoint zip): model, "
                              "replay buffer and observation statistics, with its settings, writing back into that run "
@@ -331,8 +348,8 @@ def main(argv: list[str] | None = None) -> int:
         meta = {"env": env_id, "env_kwargs": env_kwargs, "algo": algo, "algo_kwargs": algo_kwargs, "seed": seed,
                 "n_envs": n_envs, "timesteps": ns.timesteps, "eval_every": ns.eval_every,
                 "eval_episodes": ns.eval_episodes, "learning_starts": ns.learning_starts,
-                "checkpoint_every": ns.checkpoint_every, "demos": ns.demos, "demo_share": ns.demo_share,
-                "demo_bc": ns.demo_bc,
+                "checkpoint_every": ns.checkpoint_every, "checkpoint_buffers": ns.checkpoint_buffers, "demos": ns.demos,
+                "demo_share": ns.demo_share, "demo_bc": ns.demo_bc,
                 "asymmetric": ns.asymmetric,
                 "out": str(ns.out),
                 "normalized_observations": default_algo(env_id) != "her-sac",  # the goal env runs raw (HER)
@@ -455,8 +472,9 @@ def main(argv: list[str] | None = None) -> int:
             if files.replay_buffer.exists():
                 model.load_replay_buffer(str(files.replay_buffer))
             else:
-                _log(f"note: no replay buffer {files.replay_buffer.name} beside {files.model.name}; "
-                     "continuing with an empty one")  # fmt: skip
+                _log(f"note: no replay buffer {files.replay_buffer.name} beside {files.model.name} (a checkpoint "
+                     "keeps its buffer only while it is among the last --checkpoint-buffers written); continuing "
+                     "with an empty one")  # fmt: skip
         # Fresh episode starts: re-using the run's seed would replay its first episodes.
         seed = meta["seed"] + start if ns.seed is None else ns.seed
         venv.seed(seed)
@@ -464,16 +482,17 @@ def main(argv: list[str] | None = None) -> int:
         meta.setdefault("sessions", []).append({"resumed_from": str(files.model), "at_timesteps": start,
                                                 "timesteps": ns.timesteps, "seed": seed, "eval_every": ns.eval_every,
                                                 "eval_episodes": ns.eval_episodes,
-                                                "checkpoint_every": ns.checkpoint_every})  # fmt: skip
+                                                "checkpoint_every": ns.checkpoint_every,
+                                                "checkpoint_buffers": ns.checkpoint_buffers})  # fmt: skip
     model.set_logger(make_logger(run / "logs", "progress.csv" if start == 0 else f"progress_from_{start}.csv"))
 
     progress = EvalProgress(eval_env, ns.eval_every, ns.eval_episodes, run / "progress.csv", norm,
                             rows=read_progress(run / "progress.csv", up_to=start) if start else None)  # fmt: skip
     callbacks: list[BaseCallback] = [progress]
     if ns.checkpoint_every is not None:
-        callbacks.append(CheckpointCallback(save_freq=max(ns.checkpoint_every // n_envs, 1),
-                                            save_path=str(run / "checkpoints"), name_prefix=CHECKPOINT_PREFIX,
-                                            save_replay_buffer=True, save_vecnormalize=True))  # fmt: skip
+        callbacks.append(Checkpoints(save_freq=max(ns.checkpoint_every // n_envs, 1), save_path=str(run / "checkpoints"),
+                                     name_prefix=CHECKPOINT_PREFIX, save_vecnormalize=True,
+                                     buffers=ns.checkpoint_buffers))  # fmt: skip
     if not ns.no_progress:
         callbacks.append(ProgressBar())
     tic = time.perf_counter()

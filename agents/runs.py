@@ -6,7 +6,8 @@ package's ``load_baseline``).
 A run directory holds ``run.json`` (env id, env kwargs, algo, seed, ...), ``model.zip``,
 ``vecnormalize.pkl`` (not for HER), ``replay_buffer.pkl`` (off-policy algos) and, with
 ``--checkpoint-every``, ``checkpoints/model_<N>_steps.zip`` with ``model_vecnormalize_<N>_steps.pkl``
-and ``model_replay_buffer_<N>_steps.pkl`` beside it (SB3's CheckpointCallback names).
+beside it and ``model_replay_buffer_<N>_steps.pkl`` beside the newest (SB3's CheckpointCallback
+names; ``--checkpoint-buffers`` says how many buffers stay: Checkpoints).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from stable_baselines3.common.base_class import BaseAlgorithm
+from stable_baselines3.common.callbacks import CheckpointCallback
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecNormalize
 
 import softgrasp_env  # noqa: F401  (registers the ids)
@@ -29,6 +31,41 @@ from softgrasp_env.wrappers import PrivilegedObservation
 
 CHECKPOINT_PREFIX = "model"
 _CHECKPOINT = re.compile(rf"^{CHECKPOINT_PREFIX}_(\d+)_steps\.zip$")
+_BUFFER = re.compile(rf"^{CHECKPOINT_PREFIX}_replay_buffer_(\d+)_steps\.pkl$")
+
+
+class Checkpoints(CheckpointCallback):
+    """SB3's CheckpointCallback (model, replay buffer and VecNormalize statistics every
+    ``save_freq`` calls, under SB3's names) that keeps the replay buffers of only the ``buffers``
+    most recently written checkpoints (None: all of them). A buffer is the whole replay memory,
+    about 1.2 GB for a grip id's dict observations at SB3's default size, so a run checkpointed
+    every 25k steps would hold 12 of them by 300k; the models and statistics, small, all stay.
+    "Most recently written" is by modification time, not by step count: a run resumed from an
+    older checkpoint writes smaller step counts than the files of the branch it left, and it is the
+    new branch's buffers that are kept."""
+
+    def __init__(self, *args: Any, buffers: int | None = 1, **kwargs: Any) -> None:
+        if buffers is not None and (isinstance(buffers, bool) or not isinstance(buffers, int) or buffers < 0):
+            raise ValueError(f"buffers must be None (keep all) or an int >= 0, got {buffers!r}")
+        super().__init__(*args, save_replay_buffer=buffers != 0, **kwargs)
+        self.buffers = buffers
+
+    def _on_step(self) -> bool:
+        out = super()._on_step()
+        if self.buffers is not None and self.n_calls % self.save_freq == 0:
+            prune_buffers(Path(self.save_path), self.buffers)
+        return out
+
+
+def prune_buffers(checkpoints: Path, keep: int) -> list[Path]:
+    """Delete every checkpoint replay buffer in ``checkpoints`` but the ``keep`` most recently
+    written (modification time, then step count); returns the deleted paths."""
+    found = [(f.stat().st_mtime, int(m.group(1)), f) for f in checkpoints.iterdir() if (m := _BUFFER.match(f.name))]
+    found.sort(reverse=True)
+    gone = [f for _, _, f in found[keep:]]
+    for f in gone:
+        f.unlink()
+    return gone
 
 
 @dataclass(frozen=True)

@@ -173,7 +173,8 @@ def test_resume_sac_from_a_checkpoint_keeps_its_replay_buffer(tmp_path):
     # learning_starts past the run: the buffer's plumbing is under test, not SAC's (slow) updates.
     sac = ["--env", ENV, "--algo", "sac", "--algo-kwargs", "buffer_size=500", "batch_size=32",
            "--learning-starts", "1000", "--eval-every", "1000", "--eval-episodes", "1", "--no-progress"]  # fmt: skip
-    assert train.main([*sac, "--timesteps", "50", "--checkpoint-every", "25", "--out", str(tmp_path)]) == 0
+    assert train.main([*sac, "--timesteps", "50", "--checkpoint-every", "25", "--checkpoint-buffers", "all",
+                       "--out", str(tmp_path)]) == 0  # fmt: skip
     run = tmp_path / f"{ENV}_sac_0"
     checkpoint = run / "checkpoints" / "model_25_steps.zip"
     files = runs.run_files(checkpoint)
@@ -190,6 +191,42 @@ def test_resume_sac_from_a_checkpoint_keeps_its_replay_buffer(tmp_path):
     # 24 from the checkpoint's buffer (SB3's CheckpointCallback runs after the 25th env step, before
     # that transition is stored) + 30 new; an empty buffer would give 30.
     assert model.replay_buffer.size() == 24 + 30
+
+
+def test_checkpoints_keep_only_the_buffers_written_last(tmp_path, capsys):
+    sac = ["--env", ENV, "--algo", "sac", "--algo-kwargs", "buffer_size=500", "batch_size=32",
+           "--learning-starts", "1000", "--eval-every", "1000", "--eval-episodes", "1", "--no-progress"]  # fmt: skip
+    assert train.main([*sac, "--timesteps", "75", "--checkpoint-every", "25", "--out", str(tmp_path)]) == 0
+    run = tmp_path / f"{ENV}_sac_0"
+    folder = run / "checkpoints"
+
+    def names(kind: str) -> list[str]:
+        return sorted(f.name for f in folder.glob(f"model_{kind}*_steps.*"))
+
+    # by default the newest buffer only; every model and its statistics stay
+    assert names("replay_buffer_") == ["model_replay_buffer_75_steps.pkl"]
+    assert names("vecnormalize_") == [f"model_vecnormalize_{n}_steps.pkl" for n in (25, 50, 75)]
+    assert sorted(f.name for f in folder.glob("model_[0-9]*_steps.zip")) == [f"model_{n}_steps.zip" for n in (25, 50, 75)]
+    assert json.loads((run / "run.json").read_text())["checkpoint_buffers"] == 1
+    # A resume from an older checkpoint whose buffer is gone says so and starts with an empty buffer.
+    capsys.readouterr()
+    assert train.main(["--resume", str(folder / "model_25_steps.zip"), "--timesteps", "30", "--no-progress"]) == 0
+    assert "no replay buffer model_replay_buffer_25_steps.pkl" in capsys.readouterr().out
+    # Its branch wrote step 50 again, after 75: the buffer written last is kept, not the largest step.
+    assert names("replay_buffer_") == ["model_replay_buffer_50_steps.pkl"]
+    # 0 keeps none
+    assert train.main([*sac, "--timesteps", "50", "--checkpoint-every", "25", "--checkpoint-buffers", "0", "--seed", "1",
+                       "--out", str(tmp_path)]) == 0  # fmt: skip
+    assert not list((tmp_path / f"{ENV}_sac_1" / "checkpoints").glob("model_replay_buffer_*"))
+    assert len(list((tmp_path / f"{ENV}_sac_1" / "checkpoints").glob("model_[0-9]*_steps.zip"))) == 2
+
+
+@pytest.mark.parametrize("bad", ["-1", "two", "1.5"])
+def test_bad_checkpoint_buffer_counts_are_argparse_errors(tmp_path, capsys, bad):
+    with pytest.raises(SystemExit):
+        train.main(["--env", ENV, "--timesteps", "10", "--checkpoint-buffers", bad, "--out", str(tmp_path)])
+    assert "--checkpoint-buffers" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())
 
 
 def test_evaluate_and_train_apply_the_same_observation_statistics(tiny_run):
