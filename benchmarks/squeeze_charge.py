@@ -10,10 +10,12 @@
 from the env's privileged state), capped at the finger's 6 N. Per episode it records the sum of
 the reward's other terms (lift, reach), the squeeze the fingers measured (sum over the steps of F,
 of F / F_static and of (F / F_static)^2), the carry's success without the squeeze bound, and the
-task's ``carry_squeeze`` / ``least_squeeze``. The squeeze term does not act on the physics, so
-``curves`` re-prices the same episodes under any charge: the expected return per factor, each
-kind, and where it peaks (the grip ids' charges and the candidates). The ids only name the
-rows: the ids of one kind run the same physics.
+task's ``carry_squeeze`` / ``least_squeeze`` and, on the object-set ids, the episode's object. The
+squeeze term does not act on the physics, so ``curves`` re-prices the same episodes under any
+charge: the expected return per factor, each kind, and where it peaks (the grip ids' charges and
+the candidates), then the carried episodes per factor and, on the object-set ids, per object and
+factor (which shapes need more than the static least). The ids only name the rows: the ids of one
+kind run the same physics.
 
 ``policies``: what a learner compares - the return of the tactile grip script the demonstrations
 come from (agents.demos.grip_script), of the same script letting go when the carry begins, of a
@@ -39,7 +41,7 @@ from softgrasp_env.registration import SQUEEZE_WEIGHT_LEAST
 
 FIELDS = ("id", "factor", "seed", "mass", "mu", "static_least", "force", "steps", "base", "sum_f", "sum_r", "sum_r2",
           "carried", "success", "carry_squeeze", "least_squeeze", "sum_r_carry",
-          "sum_m_carry")  # fmt: skip
+          "sum_m_carry", "object")  # fmt: skip
 SQUEEZE_FACTOR = 2.0
 """The grip ids' bound on the carry's mean squeeze, in least forces (registration.GRIP_TASK)."""
 OUT = Path("docs/results/squeeze_charge.csv")
@@ -67,6 +69,7 @@ def episode(env: gym.Env, factor: float, seed: int) -> dict:
             row["sum_r_carry"] += f / static
             row["sum_m_carry"] += max(0.0, f / static - 1.0)
     least, mean = float(info["least_squeeze"]), float(info["carry_squeeze"])
+    row["object"] = info.get("object", "")  # the object-set ids name the episode's object
     row["carried"] = bool(info["is_success"])  # the env is made without the squeeze bound: the carry's own
     row["success"] = row["carried"] and mean <= SQUEEZE_FACTOR * least
     row["carry_squeeze"] = mean
@@ -98,7 +101,8 @@ def load(path: Path) -> list[dict]:
     with path.open() as fh:
         rows = list(csv.DictReader(fh))
     for r in rows:
-        for k in FIELDS[1:]:
+        r["object"] = r.get("object") or ""  # a file from before the column, or a cylinder id's
+        for k in FIELDS[1:-1]:
             if k not in r:  # a file from before the column: NaN, so a charge that needs it says so
                 r[k] = math.nan
                 continue
@@ -163,6 +167,7 @@ def curves(path: Path, plot: Path | None = None, names: list[str] | None = None)
             if r["id"] == env_id:
                 got.setdefault(r["factor"], []).append(r["carried"])
         print(f"  {env_id:30s} " + "  ".join(f"{f:.2f}: {sum(v)}/{len(v)}" for f, v in sorted(got.items())))
+    by_object(rows)
     if plot is not None:
         import matplotlib
 
@@ -185,6 +190,22 @@ def curves(path: Path, plot: Path | None = None, names: list[str] | None = None)
         fig.tight_layout()
         fig.savefig(plot, dpi=120)
         print(f"wrote {plot}")
+
+
+def by_object(rows: list[dict]) -> None:
+    """Carried through the carry per object and factor, for the ids whose episodes name an object
+    (the object-set ids): which shapes need more than the static least."""
+    for env_id in dict.fromkeys(r["id"] for r in rows if r["object"]):
+        mine = [r for r in rows if r["id"] == env_id]
+        factors = sorted({r["factor"] for r in mine})
+        print(f"\ncarried per object, {env_id}:")
+        print(f"  {'object':10s} " + " ".join(f"{f:>6.2f}" for f in factors))
+        for name in sorted({r["object"] for r in mine}):
+            cells = []
+            for f in factors:
+                v = [r["carried"] for r in mine if r["object"] == name and r["factor"] == f]
+                cells.append(f"{sum(v)}/{len(v)}".rjust(6))
+            print(f"  {name:10s} " + " ".join(cells))
 
 
 POLICY_PRICES = ("the id's charge", "the carry's steps", "the carry's margin")
