@@ -472,8 +472,9 @@ def main(argv: list[str] | None = None) -> int:
             if files.replay_buffer.exists():
                 model.load_replay_buffer(str(files.replay_buffer))
             else:
-                _log(f"note: no replay buffer {files.replay_buffer.name} beside {files.model.name} (a checkpoint "
-                     "keeps its buffer only while it is among the last --checkpoint-buffers written); continuing "
+                why = (" (a checkpoint keeps its buffer only while it is among the last --checkpoint-buffers "
+                       "written)") if files.model.parent.name == "checkpoints" else ""
+                _log(f"note: no replay buffer {files.replay_buffer.name} beside {files.model.name}{why}; continuing "
                      "with an empty one")  # fmt: skip
         # Fresh episode starts: re-using the run's seed would replay its first episodes.
         seed = meta["seed"] + start if ns.seed is None else ns.seed
