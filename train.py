@@ -271,6 +271,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="keep the replay buffers of the K checkpoints written last and delete older ones (a "
                              "buffer is the whole replay memory: about 1.2 GB on a grip id); 0 saves none, 'all' "
                              "keeps every one (default 1; the models and statistics all stay)")  # fmt: skip
+    parser.add_argument("--empty-buffer", action="store_true",
+                        help="with --resume (sac, her-sac): go on with an empty replay buffer where the run's is "
+                             "missing; without it such a resume is refused")  # fmt: skip
     parser.add_argument("--resume", type=Path, default=None, metavar="PATH",
                         help="continue the run at PATH (its directory, model.zip or a checkpoint zip): model, "
                              "replay buffer and observation statistics, with its settings, writing back into that run "
@@ -329,6 +332,14 @@ def main(argv: list[str] | None = None) -> int:
                 parser.error(f"--{name.replace('_', '-')} {value!r} differs from the resumed run's "
                              f"{meta.get(name)!r}: a resumed run keeps its settings")  # fmt: skip
         env_id, algo, n_envs = meta["env"], meta["algo"], meta["n_envs"]
+        if algo != "ppo" and not files.replay_buffer.exists() and not ns.empty_buffer:
+            # SAC resumed on an empty buffer relearns from its own first new steps and forgets: a
+            # refusal, not a note in the log (the training page has the measurement)
+            why = (" (a checkpoint keeps its buffer only while it is among the last --checkpoint-buffers written)"
+                   if files.model.parent.name == "checkpoints" else "")  # fmt: skip
+            parser.error(f"--resume: no replay buffer {str(files.replay_buffer)!r} beside {str(files.model)!r}{why}; "
+                         "add --empty-buffer to go on with an empty one (an off-policy learner restarted that way "
+                         "loses much of what it had learned)")  # fmt: skip
         # How often it evaluates and saves goes on as the run was started unless asked otherwise:
         # a resumed part that fell back to the fresh defaults would save no checkpoint (a cut part
         # is then lost whole) and evaluate on 10 episodes where the run's curve has 50.
@@ -339,6 +350,8 @@ def main(argv: list[str] | None = None) -> int:
         env_kwargs, algo_kwargs = meta.get("env_kwargs", {}), meta.get("algo_kwargs", {})
         run = files.run_dir
     else:
+        if ns.empty_buffer:
+            parser.error("--empty-buffer is for --resume: a new run starts with an empty replay buffer anyway")
         ns.eval_every = EVAL_EVERY if ns.eval_every is None else ns.eval_every
         ns.eval_episodes = EVAL_EPISODES if ns.eval_episodes is None else ns.eval_episodes
         env_id = ns.env or "SoftGrasp-v4"
@@ -471,11 +484,9 @@ def main(argv: list[str] | None = None) -> int:
         if isinstance(model, OffPolicyAlgorithm):
             if files.replay_buffer.exists():
                 model.load_replay_buffer(str(files.replay_buffer))
-            else:
-                why = (" (a checkpoint keeps its buffer only while it is among the last --checkpoint-buffers "
-                       "written)") if files.model.parent.name == "checkpoints" else ""
-                _log(f"note: no replay buffer {files.replay_buffer.name} beside {files.model.name}{why}; continuing "
-                     "with an empty one")  # fmt: skip
+            else:  # refused above unless --empty-buffer
+                _log(f"note: no replay buffer {files.replay_buffer.name} beside {files.model.name}; continuing "
+                     "with an empty one (--empty-buffer)")  # fmt: skip
         # Fresh episode starts: re-using the run's seed would replay its first episodes.
         seed = meta["seed"] + start if ns.seed is None else ns.seed
         venv.seed(seed)
@@ -484,7 +495,8 @@ def main(argv: list[str] | None = None) -> int:
                                                 "timesteps": ns.timesteps, "seed": seed, "eval_every": ns.eval_every,
                                                 "eval_episodes": ns.eval_episodes,
                                                 "checkpoint_every": ns.checkpoint_every,
-                                                "checkpoint_buffers": ns.checkpoint_buffers})  # fmt: skip
+                                                "checkpoint_buffers": ns.checkpoint_buffers,
+                                                "replay_buffer": files.replay_buffer.exists() or algo == "ppo"})  # fmt: skip
     model.set_logger(make_logger(run / "logs", "progress.csv" if start == 0 else f"progress_from_{start}.csv"))
 
     progress = EvalProgress(eval_env, ns.eval_every, ns.eval_episodes, run / "progress.csv", norm,

@@ -208,10 +208,17 @@ def test_checkpoints_keep_only_the_buffers_written_last(tmp_path, capsys):
     assert names("vecnormalize_") == [f"model_vecnormalize_{n}_steps.pkl" for n in (25, 50, 75)]
     assert sorted(f.name for f in folder.glob("model_[0-9]*_steps.zip")) == [f"model_{n}_steps.zip" for n in (25, 50, 75)]
     assert json.loads((run / "run.json").read_text())["checkpoint_buffers"] == 1
-    # A resume from an older checkpoint whose buffer is gone says so and starts with an empty buffer.
+    # A resume from an older checkpoint whose buffer is gone is refused, naming the file and the way
+    # on; with --empty-buffer it goes on with an empty buffer and says so, in the log and in run.json.
     capsys.readouterr()
-    assert train.main(["--resume", str(folder / "model_25_steps.zip"), "--timesteps", "30", "--no-progress"]) == 0
+    with pytest.raises(SystemExit):
+        train.main(["--resume", str(folder / "model_25_steps.zip"), "--timesteps", "30", "--no-progress"])
+    err = capsys.readouterr().err
+    assert "model_replay_buffer_25_steps.pkl" in err and "--empty-buffer" in err and "--checkpoint-buffers" in err
+    assert train.main(["--resume", str(folder / "model_25_steps.zip"), "--timesteps", "30", "--no-progress",
+                       "--empty-buffer"]) == 0  # fmt: skip
     assert "no replay buffer model_replay_buffer_25_steps.pkl" in capsys.readouterr().out
+    assert json.loads((run / "run.json").read_text())["sessions"][-1]["replay_buffer"] is False
     # Its branch wrote step 50 again, after 75: the buffer written last is kept, not the largest step.
     assert names("replay_buffer_") == ["model_replay_buffer_50_steps.pkl"]
     # 0 keeps none
@@ -219,6 +226,13 @@ def test_checkpoints_keep_only_the_buffers_written_last(tmp_path, capsys):
                        "--out", str(tmp_path)]) == 0  # fmt: skip
     assert not list((tmp_path / f"{ENV}_sac_1" / "checkpoints").glob("model_replay_buffer_*"))
     assert len(list((tmp_path / f"{ENV}_sac_1" / "checkpoints").glob("model_[0-9]*_steps.zip"))) == 2
+
+
+def test_empty_buffer_is_for_a_resume_only(tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        train.main(["--env", ENV, "--algo", "sac", "--timesteps", "10", "--empty-buffer", "--out", str(tmp_path)])
+    assert "--empty-buffer is for --resume" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())
 
 
 @pytest.mark.parametrize("bad", ["-1", "two", "1.5"])
