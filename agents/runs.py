@@ -38,7 +38,7 @@ class Checkpoints(CheckpointCallback):
     """SB3's CheckpointCallback (model, replay buffer and VecNormalize statistics every
     ``save_freq`` calls, under SB3's names) that keeps the replay buffers of only the ``buffers``
     most recently written checkpoints (None: all of them). A buffer is the whole replay memory,
-    about 1.2 GB for a grip id's dict observations at SB3's default size, so a run checkpointed
+    about 1.2 GB for a grip id's dict observations at the SAC preset's 300k transitions, so a run checkpointed
     every 25k steps would hold 12 of them by 300k; the models and statistics, small, all stay.
     "Most recently written" is by modification time, not by step count: a run resumed from an
     older checkpoint writes smaller step counts than the files of the branch it left, and it is the

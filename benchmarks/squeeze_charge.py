@@ -101,8 +101,8 @@ def load(path: Path) -> list[dict]:
     with path.open() as fh:
         rows = list(csv.DictReader(fh))
     for r in rows:
-        r["object"] = r.get("object") or ""  # a file from before the column, or a cylinder id's
-        for k in FIELDS[1:-1]:
+        r["object"] = r.get("object") or ""  # text; empty in a file from before the column or on a cylinder id
+        for k in (k for k in FIELDS[1:] if k != "object"):
             if k not in r:  # a file from before the column: NaN, so a charge that needs it says so
                 r[k] = math.nan
                 continue

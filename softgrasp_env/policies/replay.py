@@ -68,7 +68,7 @@ class KeptDemonstrations:
         return self._get_samples(self._batch_indices(batch_size), env=env)  # type: ignore[attr-defined]
 
     def sample_kept(self, batch_size: int, env: VecNormalize | None = None) -> Any:
-        """A batch of the kept demonstrations alone (:class:`DemoSAC`'s behaviour cloning)."""
+        """A batch of the kept demonstrations alone (for behaviour cloning toward them)."""
         if not self.kept:
             raise RuntimeError("the buffer keeps no demonstrations (keep_demonstrations was not called)")
         return self._get_samples(np.random.randint(0, self.kept, size=batch_size), env=env)  # type: ignore[attr-defined]
