@@ -496,7 +496,8 @@ def main(argv: list[str] | None = None) -> int:
                                                 "eval_episodes": ns.eval_episodes,
                                                 "checkpoint_every": ns.checkpoint_every,
                                                 "checkpoint_buffers": ns.checkpoint_buffers,
-                                                "replay_buffer": files.replay_buffer.exists() or algo == "ppo"})  # fmt: skip
+                                                # whether it went on with its buffer (None: PPO keeps none)
+                                                "replay_buffer": None if algo == "ppo" else files.replay_buffer.exists()})  # fmt: skip
     model.set_logger(make_logger(run / "logs", "progress.csv" if start == 0 else f"progress_from_{start}.csv"))
 
     progress = EvalProgress(eval_env, ns.eval_every, ns.eval_episodes, run / "progress.csv", norm,

@@ -151,6 +151,7 @@ def test_resume_continues_model_stats_and_timestep_count(tiny_run, tmp_path):
     meta = json.loads((run / "run.json").read_text())
     assert meta["num_timesteps"] == 192 and meta["env_kwargs"] == {"cylinder_mass": 0.2}
     assert meta["sessions"][0]["at_timesteps"] == 64
+    assert meta["sessions"][0]["replay_buffer"] is None  # PPO keeps no replay buffer to go on with
     with open(run / "progress.csv", newline="") as f:
         rows = list(csv.DictReader(f))
     assert [int(r["timesteps"]) for r in rows] == [64, 128, 192]
@@ -187,6 +188,7 @@ def test_resume_sac_from_a_checkpoint_keeps_its_replay_buffer(tmp_path):
     assert (run / "checkpoints" / "model_50_steps.zip").exists()
     session = json.loads((run / "run.json").read_text())["sessions"][-1]
     assert (session["eval_every"], session["eval_episodes"], session["checkpoint_every"]) == (1000, 1, 25)
+    assert session["replay_buffer"] is True
     model.load_replay_buffer(str(run / "replay_buffer.pkl"))
     # 24 from the checkpoint's buffer (SB3's CheckpointCallback runs after the 25th env step, before
     # that transition is stored) + 30 new; an empty buffer would give 30.
