@@ -44,45 +44,19 @@ from dataclasses import dataclass
 import numba as nb
 import numpy as np
 
+from .collision import support_radius
 from .compliant import deliver_to_core
+from .contacts import _shape_query, _shape_query_at
 from .jit import KERNEL
 from .model import TissueModel
+from .rigid import generalized_inv_mass, rigid_apply
 from .rotation import extract_rotation_unit_t, qmat
 from .shape_matching import _turn_centre, group_pack
 
-
-def material_matrix(model: TissueModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """K of the module docstring as coordinate triplets (rows, cols, values) [N/m], duplicates
-    summed: dE/dx = K x minus the rotations' part, x one coordinate of every particle. Raises ValueError unless every group has the continuum energy."""
-    cont = model.group_continuum
-    if cont is None or not bool((cont[:, 6] > 0.0).all()):
-        raise ValueError("the global material solve needs the continuum group energy on every group "
-                         "(TissueConfig.group_energy='continuum')")  # fmt: skip
-    pack = group_pack(model)
-    off = model.group_offsets.astype(np.int64)
-    mem = model.group_members.astype(np.int64)
-    rows, cols, vals = [], [], []
-    for i in range(off.shape[0] - 1):
-        e = slice(off[i], off[i + 1])
-        j = mem[e]
-        b = pack[e, 8:11]
-        o = pack[e, 4:7]
-        w = pack[e, 0]
-        m = model.particle_mass[j]
-        k, beta = cont[i, 6], cont[i, 7]
-        block = k * (b @ b.T)
-        if beta > 0.0:
-            p = w[None, :] + o @ b.T  # (P)_jk = w_k + b_k . o_j
-            block = block + beta * (np.diag(m) - m[:, None] * p)  # M (I - P), symmetric
-        rows.append(np.repeat(j, j.size))
-        cols.append(np.tile(j, j.size))
-        vals.append(block.ravel())
-    n = model.particle_count
-    key = np.concatenate(rows) * n + np.concatenate(cols) if rows else np.zeros(0, dtype=np.int64)
-    uniq, inv = np.unique(key, return_inverse=True)
-    summed = np.zeros(uniq.size)
-    np.add.at(summed, inv, np.concatenate(vals) if vals else np.zeros(0))
-    return uniq // n, uniq % n, summed
+POLAR_ITERATIONS = 20
+"""Most rotation-extraction sweeps of a group's local step (stopping once the correction is below
+1e-10 rad). The quasi-Newton step trusts the gradient, so R must be the polar factor itself: one
+warm-started sweep a pass, as the group sweep takes, left a 16 % error in a pad's static sag."""
 
 
 @nb.njit(cache=True)
@@ -165,34 +139,57 @@ def _envelope_factor(first, ptr, val):
 
 @nb.njit(**KERNEL)
 def envelope_solve(first, ptr, val, b):
-    """Solve L L^T x = b in place for the columns of ``b`` (n, 3), L from _envelope_factor."""
+    """Solve L L^T x = b in place (``b`` a vector), L from _envelope_factor."""
     n = first.shape[0]
     for i in range(n):  # L y = b, by rows
         pi = ptr[i] - first[i]
-        s0, s1, s2 = b[i, 0], b[i, 1], b[i, 2]
+        s = b[i]
         for c in range(first[i], i):
-            lv = val[pi + c]
-            s0 -= lv * b[c, 0]
-            s1 -= lv * b[c, 1]
-            s2 -= lv * b[c, 2]
-        d = val[pi + i]
-        b[i, 0] = s0 / d
-        b[i, 1] = s1 / d
-        b[i, 2] = s2 / d
+            s -= val[pi + c] * b[c]
+        b[i] = s / val[pi + i]
     for i in range(n - 1, -1, -1):  # L^T x = y, by the columns of L^T (the rows of L)
         pi = ptr[i] - first[i]
-        d = val[pi + i]
-        x0 = b[i, 0] / d
-        x1 = b[i, 1] / d
-        x2 = b[i, 2] / d
-        b[i, 0] = x0
-        b[i, 1] = x1
-        b[i, 2] = x2
+        x = b[i] / val[pi + i]
+        b[i] = x
         for c in range(first[i], i):
-            lv = val[pi + c]
-            b[c, 0] -= lv * x0
-            b[c, 1] -= lv * x1
-            b[c, 2] -= lv * x2
+            b[c] -= val[pi + c] * x
+
+
+def rest_hessian(model: TissueModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """K0, the Hessian of E at rest with the rotations' derivative included, as coordinate
+    triplets over the 3N coordinates (3 j + a: particle j's axis a) [N/m], duplicates summed. Near
+    rest ||F - R||^2 = ||sym(F - I)||^2, so a pair (j, k) of a group's members has the block
+    (k_g / 2) [(b_j . b_k) I + b_k b_j^T] (the small-strain stiffness at Poisson's ratio 0), plus
+    the hourglass term's beta_g (M_g (I - P_g))_jk I. Constant over a run in the body's rest frame."""
+    cont = model.group_continuum
+    if cont is None or not bool((cont[:, 6] > 0.0).all()):
+        raise ValueError("the global material solve needs the continuum group energy on every group "
+                         "(TissueConfig.group_energy='continuum')")  # fmt: skip
+    pack = group_pack(model)
+    off = model.group_offsets.astype(np.int64)
+    mem = model.group_members.astype(np.int64)
+    eye = np.eye(3)
+    rows, cols, vals = [], [], []
+    for i in range(off.shape[0] - 1):
+        e = slice(off[i], off[i + 1])
+        j = mem[e]
+        b = pack[e, 8:11]
+        half = 0.5 * cont[i, 6]
+        block = half * (np.einsum("jk,ac->jakc", b @ b.T, eye) + np.einsum("ka,jc->jakc", b, b))
+        if cont[i, 7] > 0.0:
+            m = model.particle_mass[j]
+            p = pack[e, 0][None, :] + pack[e, 4:7] @ b.T  # (P)_jk = w_k + b_k . o_j
+            block = block + np.einsum("jk,ac->jakc", cont[i, 7] * (np.diag(m) - m[:, None] * p), eye)
+        dof = (3 * j[:, None] + np.arange(3)).ravel()
+        rows.append(np.repeat(dof, dof.size))
+        cols.append(np.tile(dof, dof.size))
+        vals.append(block.reshape(dof.size, dof.size).ravel())
+    n = 3 * model.particle_count
+    key = np.concatenate(rows) * n + np.concatenate(cols) if rows else np.zeros(0, dtype=np.int64)
+    uniq, inv = np.unique(key, return_inverse=True)
+    summed = np.zeros(uniq.size)
+    np.add.at(summed, inv, np.concatenate(vals) if vals else np.zeros(0))
+    return uniq // n, uniq % n, summed
 
 
 @dataclass(eq=False)
@@ -203,32 +200,34 @@ class GlobalSystem:
     dt: float
     """The step length [s] the factor is for."""
     order: np.ndarray
-    """(F,) int64: the free particle at each row of the factor."""
+    """(F,) int64: the free particle at each block of three rows of the factor."""
     first: np.ndarray
-    """(F,) int64: the first column of each row's envelope."""
+    """(3F,) int64: the first column of each row's envelope."""
     ptr: np.ndarray
-    """(F + 1,) int64: row i of the factor at factor[ptr[i]:ptr[i + 1]]."""
+    """(3F + 1,) int64: row i of the factor at factor[ptr[i]:ptr[i + 1]]."""
     factor: np.ndarray
-    """The envelope Cholesky factor of (M + dt^2 K)_ff."""
+    """The envelope Cholesky factor of (M + dt^2 K0)_ff, in the bodies' rest frames."""
     held: np.ndarray
     """(H,) int64: the particles held by their cores."""
-    held_ptr: np.ndarray
-    """(H + 1,) int64: held particle h's row of K over the free particles, at
-    held_col / held_val[held_ptr[h]:held_ptr[h + 1]]."""
-    held_col: np.ndarray
-    """int64: the factor row of each entry's free particle."""
-    held_val: np.ndarray
-    """K's entries [kg/s^2]."""
     displacement: np.ndarray
     """(N, 3) scratch: U, the displacement the material gave each particle this step [m]."""
     gradient: np.ndarray
     """(N, 3) scratch: dE/dx [N]."""
     rhs: np.ndarray
-    """(F, 3) scratch: the solve's right-hand sides, then its solution."""
+    """(3F,) scratch: the solve's right-hand side, then its solution (rest frames)."""
+    frames: np.ndarray
+    """(B, 9) scratch: each body's core rotation (row-major; identity without a core)."""
+    compliance: np.ndarray
+    """(N, 6) each free particle's block of (M + dt^2 K0)^-1 in its body's rest frame (xx, xy, xz,
+    yy, yz, zz) [1/kg]: how far the whole pad lets it move under a unit impulse; zeros for the
+    held."""
+    friction_w: np.ndarray
+    """(N,) scratch: each particle's compliance across its contact's normal, which friction moves
+    it by (project_friction_weights) [1/kg]."""
 
     def arrays(self) -> tuple:
-        return (self.order, self.first, self.ptr, self.factor, self.held, self.held_ptr, self.held_col, self.held_val,
-                self.displacement, self.gradient, self.rhs)  # fmt: skip
+        return (self.order, self.first, self.ptr, self.factor, self.held, self.displacement, self.gradient, self.rhs,
+                self.frames, self.compliance, self.friction_w)  # fmt: skip
 
     @property
     def envelope(self) -> int:
@@ -237,59 +236,76 @@ class GlobalSystem:
 
 
 def build_global_system(model: TissueModel, dt: float) -> GlobalSystem:
-    """Assemble K, order the free particles (reverse Cuthill-McKee) and factor (M + dt^2 K)_ff for
-    a step of ``dt`` [s]. Held particles: attached, of a body with a core (anchors.mark_fixed).
-    Raises ValueError unless every group has the continuum energy, or if the matrix is not
-    positive definite (it always is: M > 0 and K >= 0, so this would be a bug)."""
+    """Assemble K0, order the free particles (reverse Cuthill-McKee on the particles, a particle's
+    three coordinates together) and factor (M + dt^2 K0)_ff for a step of ``dt`` [s]. Held
+    particles: attached, of a body with a core (anchors.mark_fixed). Raises ValueError unless
+    every group has the continuum energy, or if the matrix is not positive definite."""
     if not dt > 0.0:
         raise ValueError(f"dt must be positive, got {dt!r}")
-    r, c, v = material_matrix(model)
+    r, c, v = rest_hessian(model)
     n = model.particle_count
     held_mask = model.particle_attached & (model.body_core_shape[model.particle_body] >= 0)
     free = np.flatnonzero(~held_mask)
     held = np.flatnonzero(held_mask)
-    slot = np.full(n, -1, dtype=np.int64)
-    # order the free particles
-    ff = ~held_mask[r] & ~held_mask[c]
-    off_diag = ff & (r != c)
+    pr_all, pc_all = r // 3, c // 3
+    ff = ~held_mask[pr_all] & ~held_mask[pc_all]
+    # order the free particles on their pattern
     local = np.full(n, -1, dtype=np.int64)
     local[free] = np.arange(free.size)
-    pr, pc = local[r[off_diag]], local[c[off_diag]]
-    srt = np.lexsort((pc, pr))
-    pr, pc = pr[srt], pc[srt]
+    pairs = np.unique(local[pr_all[ff]] * max(free.size, 1) + local[pc_all[ff]])
+    pr, pc = pairs // max(free.size, 1), pairs % max(free.size, 1)
+    keep = pr != pc
+    pr, pc = pr[keep], pc[keep]
     ptr = np.zeros(free.size + 1, dtype=np.int64)
     np.add.at(ptr, pr + 1, 1)
     ptr = np.cumsum(ptr)
     degree = np.diff(ptr)
     perm = _rcm(ptr, pc.astype(np.int64), degree.astype(np.int64), free.size) if free.size else np.zeros(0, np.int64)
     order = free[perm]
+    slot = np.full(n, -1, dtype=np.int64)
     slot[order] = np.arange(order.size)
-    # the envelope of (M + dt^2 K)_ff in that order, lower triangle by rows
-    fr, fc, fv = slot[r[ff]], slot[c[ff]], dt * dt * v[ff]
+    # the envelope of (M + dt^2 K0)_ff over the free coordinates, lower triangle by rows
+    fr = 3 * slot[pr_all[ff]] + r[ff] % 3
+    fc = 3 * slot[pc_all[ff]] + c[ff] % 3
+    fv = dt * dt * v[ff]
     low = fc <= fr
     fr, fc, fv = fr[low], fc[low], fv[low]
-    first = np.arange(order.size, dtype=np.int64)
+    nd = 3 * order.size
+    first = np.arange(nd, dtype=np.int64)
     np.minimum.at(first, fr, fc)
-    eptr = np.zeros(order.size + 1, dtype=np.int64)
-    eptr[1:] = np.cumsum(np.arange(order.size) - first + 1)
+    eptr = np.zeros(nd + 1, dtype=np.int64)
+    eptr[1:] = np.cumsum(np.arange(nd) - first + 1)
     factor = np.zeros(int(eptr[-1]))
     np.add.at(factor, eptr[fr] + (fc - first[fr]), fv)
-    factor[eptr[:-1] + (np.arange(order.size) - first)] += model.particle_mass[order]
+    factor[eptr[:-1] + (np.arange(nd) - first)] += np.repeat(model.particle_mass[order], 3)
     bad = _envelope_factor(first, eptr, factor)
     if bad >= 0:
-        raise ValueError(f"the material's matrix is not positive definite at particle {int(order[bad])}")
-    # the held particles' rows of K over the free ones
-    hf = held_mask[r] & ~held_mask[c]
-    hr, hc, hv = r[hf], slot[c[hf]], v[hf]
-    hrow = np.searchsorted(held, hr)
-    srt = np.lexsort((hc, hrow))
-    hrow, hc, hv = hrow[srt], hc[srt], hv[srt]
-    hptr = np.zeros(held.size + 1, dtype=np.int64)
-    np.add.at(hptr, hrow + 1, 1)
+        raise ValueError(f"the material's matrix is not positive definite at particle {int(order[bad // 3])}")
+    compliance = np.zeros((n, 6))
+    _diagonal_blocks(first, eptr, factor, order.astype(np.int64), compliance)
     return GlobalSystem(dt=float(dt), order=order.astype(np.int64), first=first, ptr=eptr, factor=factor,
-                        held=held.astype(np.int64), held_ptr=np.cumsum(hptr), held_col=hc.astype(np.int64),
-                        held_val=hv, displacement=np.zeros((n, 3)), gradient=np.zeros((n, 3)),
-                        rhs=np.zeros((order.size, 3)))  # fmt: skip
+                        held=held.astype(np.int64), displacement=np.zeros((n, 3)), gradient=np.zeros((n, 3)),
+                        rhs=np.zeros(nd), frames=np.zeros((model.body_count, 9)), compliance=compliance,
+                        friction_w=np.zeros(n))  # fmt: skip
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _diagonal_blocks(first, ptr, val, order, out):
+    """The 3x3 diagonal blocks of the factored matrix's inverse, by unit solves (3 per particle)."""
+    nd = first.shape[0]
+    e = np.zeros(nd)
+    for r in range(order.shape[0]):
+        j = order[r]
+        for a in range(3):
+            e[:] = 0.0
+            e[3 * r + a] = 1.0
+            envelope_solve(first, ptr, val, e)
+            if a == 0:
+                out[j, 0], out[j, 1], out[j, 2] = e[3 * r], e[3 * r + 1], e[3 * r + 2]
+            elif a == 1:
+                out[j, 3], out[j, 4] = e[3 * r + 1], e[3 * r + 2]
+            else:
+                out[j, 5] = e[3 * r + 2]
 
 
 @nb.njit(**KERNEL)
@@ -361,48 +377,189 @@ def material_gradient(rot_iters, g_off, g_mem, g_pack, g_cont, xp, group_q, mass
 
 
 @nb.njit(**KERNEL)
-def global_pass(gsys, rot_iters, dt, g_turn, g_off, g_mem, g_pack, g_cont, attached, rest_q, rest_moment, xp, qp,
-                group_q, moment, mass, p_body, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass,
-                rig_inv_inertia, rig_axis, imp_lin, imp_ang, coupling_imp):  # fmt: skip
-    """One pass of the material over every group (module docstring): the local step (each group's
-    R), the global solve for the free particles, the held particles' forces onto their cores, and
-    each free group centre's turn toward quat(R) q_bar (as the sweep turns them: sweep_body)."""
-    order, first, ptr, factor, held, held_ptr, held_col, held_val, u, grad, rhs = gsys
-    material_gradient(rot_iters, g_off, g_mem, g_pack, g_cont, xp, group_q, mass, grad)
+def _frames(frames, body_core_shape, shape_rigid, rig_q):
+    """Each body's core rotation (its rest frame in the world), identity without a core."""
+    for b in range(frames.shape[0]):
+        cs = body_core_shape[b]
+        r00 = r11 = r22 = 1.0
+        r01 = r02 = r10 = r12 = r20 = r21 = 0.0
+        if cs >= 0 and shape_rigid[cs] >= 0:
+            k = shape_rigid[cs]
+            r00, r01, r02, r10, r11, r12, r20, r21, r22 = qmat((rig_q[k, 0], rig_q[k, 1], rig_q[k, 2], rig_q[k, 3]))
+        frames[b, 0], frames[b, 1], frames[b, 2] = r00, r01, r02
+        frames[b, 3], frames[b, 4], frames[b, 5] = r10, r11, r12
+        frames[b, 6], frames[b, 7], frames[b, 8] = r20, r21, r22
+
+
+@nb.njit(**KERNEL)
+def deliver_held(gsys, dt, mass, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
+                 rig_axis, imp_lin, imp_ang, coupling_imp):  # fmt: skip
+    """Each held particle's residual m U + dt^2 dE/dx (the gradient in gsys, current) onto its
+    core as an impulse, its U taking it up."""
+    held, u, grad = gsys[4], gsys[5], gsys[6]
     h = dt * dt
-    for r in range(order.shape[0]):
-        j = order[r]
-        m = mass[j]
-        rhs[r, 0] = -(m * u[j, 0] + h * grad[j, 0])
-        rhs[r, 1] = -(m * u[j, 1] + h * grad[j, 1])
-        rhs[r, 2] = -(m * u[j, 2] + h * grad[j, 2])
-    envelope_solve(first, ptr, factor, rhs)
-    for r in range(order.shape[0]):
-        j = order[r]
-        for a in range(3):
-            xp[j, a] += rhs[r, a]
-            u[j, a] += rhs[r, a]
-    # a held particle's residual after the free ones moved: m U + dt^2 (grad + K dx); its core takes it
     for hh in range(held.shape[0]):
         j = held[hh]
         m = mass[j]
-        kx = ky = kz = 0.0
-        for e in range(held_ptr[hh], held_ptr[hh + 1]):
-            c = held_col[e]
-            kv = held_val[e]
-            kx += kv * rhs[c, 0]
-            ky += kv * rhs[c, 1]
-            kz += kv * rhs[c, 2]
-        rx = m * u[j, 0] + h * (grad[j, 0] + kx)
-        ry = m * u[j, 1] + h * (grad[j, 1] + ky)
-        rz = m * u[j, 2] + h * (grad[j, 2] + kz)
+        rx = m * u[j, 0] + h * grad[j, 0]
+        ry = m * u[j, 1] + h * grad[j, 1]
+        rz = m * u[j, 2] + h * grad[j, 2]
         core = shape_rigid[body_core_shape[p_body[j]]]
         deliver_to_core(j, -rx, -ry, -rz, core, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin,
                         imp_ang, coupling_imp, dt)  # fmt: skip
         u[j, 0] -= rx / m
         u[j, 1] -= ry / m
         u[j, 2] -= rz / m
+
+
+@nb.njit(**KERNEL)
+def global_pass(gsys, rot_iters, dt, g_turn, g_off, g_mem, g_pack, g_cont, attached, rest_q, rest_moment, xp, qp,
+                group_q, moment, mass, p_body, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass,
+                rig_inv_inertia, rig_axis, imp_lin, imp_ang, coupling_imp):  # fmt: skip
+    """One pass of the material over every group (module docstring): the local step (each group's
+    R) and the gradient, the held particles' residuals onto their cores, the quasi-Newton step of
+    the free particles through the rest Hessian in each body's frame, and each free group
+    centre's turn toward quat(R) q_bar (as the sweep turns them: sweep_body)."""
+    order, first, ptr, factor, held, u, grad, rhs, frames, _, _ = gsys
+    material_gradient(max(rot_iters, POLAR_ITERATIONS), g_off, g_mem, g_pack, g_cont, xp, group_q, mass, grad)
+    deliver_held(gsys, dt, mass, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
+                 rig_axis, imp_lin, imp_ang, coupling_imp)  # fmt: skip
+    _frames(frames, body_core_shape, shape_rigid, rig_q)
+    h = dt * dt
+    for r in range(order.shape[0]):
+        j = order[r]
+        m = mass[j]
+        ex = -(m * u[j, 0] + h * grad[j, 0])
+        ey = -(m * u[j, 1] + h * grad[j, 1])
+        ez = -(m * u[j, 2] + h * grad[j, 2])
+        f = frames[p_body[j]]
+        rhs[3 * r] = f[0] * ex + f[3] * ey + f[6] * ez  # R^T e: into the body's rest frame
+        rhs[3 * r + 1] = f[1] * ex + f[4] * ey + f[7] * ez
+        rhs[3 * r + 2] = f[2] * ex + f[5] * ey + f[8] * ez
+    envelope_solve(first, ptr, factor, rhs)
+    for r in range(order.shape[0]):
+        j = order[r]
+        f = frames[p_body[j]]
+        a, b, c = rhs[3 * r], rhs[3 * r + 1], rhs[3 * r + 2]
+        dx = f[0] * a + f[1] * b + f[2] * c
+        dy = f[3] * a + f[4] * b + f[5] * c
+        dz = f[6] * a + f[7] * b + f[8] * c
+        xp[j, 0] += dx
+        xp[j, 1] += dy
+        xp[j, 2] += dz
+        u[j, 0] += dx
+        u[j, 1] += dy
+        u[j, 2] += dz
     for i in range(g_off.shape[0] - 1):
         if not attached[i]:
             qr = (group_q[i, 0], group_q[i, 1], group_q[i, 2], group_q[i, 3])
             _turn_centre(i, qr, g_turn[i], rest_q, qp, rest_moment, moment)
+
+
+@nb.njit(**KERNEL)
+def global_finish(gsys, rot_iters, dt, g_off, g_mem, g_pack, g_cont, xp, group_q, mass, p_body, body_core_shape,
+                  shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang, coupling_imp):  # fmt: skip
+    """After the step's last pass: the held particles' residuals at the final positions onto their
+    cores, so that what the cores take is the material's force where the step ends."""
+    material_gradient(max(rot_iters, POLAR_ITERATIONS), g_off, g_mem, g_pack, g_cont, xp, group_q, mass, gsys[6])
+    deliver_held(gsys, dt, mass, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
+                 rig_axis, imp_lin, imp_ang, coupling_imp)  # fmt: skip
+
+
+@nb.njit(**KERNEL)
+def project_contacts(gsys, count, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass,
+                     p_body, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
+                     rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose, more_kinds):  # fmt: skip
+    """contacts.project_shape_contacts with each free particle's compliance in its whole pad,
+    w = n . W_jj n (W the factored matrix's inverse, GlobalSystem.compliance), instead of its own
+    1 / m: the multiplier a contact needs once the material has answered, so that the passes do
+    not have to find it at s / (1 + s) each. The multiplier may fall back (never below zero): an
+    estimate from one particle's compliance overshoots where neighbouring contacts push together.
+    The particle moves by w dl n, and its material displacement U by (w - 1 / m) dl n, so that the
+    material's next pass reads the contact's impulse dl n, not the move, as the load."""
+    u, frames, comp = gsys[5], gsys[8], gsys[9]
+    for c in range(count):
+        i = np.uint64(c_particle[c])
+        s = np.uint64(c_shape[c])
+        p = (xp[i, 0], xp[i, 1], xp[i, 2])
+        r = shape_rigid[s]
+        if r >= 0 and rig_move[r]:
+            dist, n = _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
+                                   more_kinds)  # fmt: skip
+        else:
+            dist, n = _shape_query_at(s, p, shape_kind, shape_params, shape_pose, more_kinds)
+        if c_inner[c]:
+            rn = 0.0
+        else:
+            rn = support_radius((qp[i, 0], qp[i, 1], qp[i, 2], qp[i, 3]), (radii[i, 0], radii[i, 1], radii[i, 2]), n)
+        pen = rn - dist
+        if pen <= 0.0 and c_lambda[c] <= 0.0:
+            continue
+        c_normal[c, 0] = n[0]
+        c_normal[c, 1] = n[1]
+        c_normal[c, 2] = n[2]
+        c_rn[c] = rn
+        wp = inv_mass[i]
+        if comp[i, 0] > 0.0:
+            f = frames[p_body[i]]
+            a0 = f[0] * n[0] + f[3] * n[1] + f[6] * n[2]  # n in the body's rest frame
+            a1 = f[1] * n[0] + f[4] * n[1] + f[7] * n[2]
+            a2 = f[2] * n[0] + f[5] * n[1] + f[8] * n[2]
+            wp = (comp[i, 0] * a0 * a0 + comp[i, 3] * a1 * a1 + comp[i, 5] * a2 * a2
+                  + 2.0 * (comp[i, 1] * a0 * a1 + comp[i, 2] * a0 * a2 + comp[i, 4] * a1 * a2))  # fmt: skip
+        wb = 0.0
+        rx = ry = rz = 0.0
+        if r >= 0:
+            rx = p[0] - dist * n[0] - rig_x[r, 0]
+            ry = p[1] - dist * n[1] - rig_x[r, 1]
+            rz = p[2] - dist * n[2] - rig_x[r, 2]
+            if rig_move[r]:
+                wb = generalized_inv_mass(r, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rx, ry, rz, n[0], n[1], n[2])
+        dl = pen / (wp + wb)
+        if c_lambda[c] + dl < 0.0:
+            dl = -c_lambda[c]
+        c_lambda[c] += dl
+        xp[i, 0] += wp * dl * n[0]
+        xp[i, 1] += wp * dl * n[1]
+        xp[i, 2] += wp * dl * n[2]
+        if comp[i, 0] > 0.0:
+            k = (wp - inv_mass[i]) * dl
+            u[i, 0] += k * n[0]
+            u[i, 1] += k * n[1]
+            u[i, 2] += k * n[2]
+        if r >= 0:
+            rigid_apply(r, rx, ry, rz, -dl * n[0], -dl * n[1], -dl * n[2], rig_move[r], dt, rig_x, rig_q,
+                        rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang)  # fmt: skip
+
+
+@nb.njit(**KERNEL)
+def friction_weights(gsys, sign, count, c_particle, c_patch, c_lambda, c_normal, c_friction, inv_mass, p_body):
+    """Before friction (``sign`` -1): each touching free particle's compliance across its contact's
+    normal, w = (tr W_jj - n . W_jj n) / 2, into gsys's friction_w (1 / m elsewhere), which
+    friction then moves it by instead of 1 / m (as project_contacts does along the normal); and U
+    less (w - 1 / m) times each contact's friction so far. After friction (``sign`` +1): U plus
+    (w - 1 / m) times its friction now. Together U changes by (w - 1 / m) times friction's change,
+    so the material's next pass reads the friction's impulse, not its move, as the load."""
+    u, frames, comp, fw = gsys[5], gsys[8], gsys[9], gsys[10]
+    if sign < 0.0:
+        for i in range(fw.shape[0]):
+            fw[i] = inv_mass[i]
+        for c in range(count):
+            i = c_particle[c]
+            if c_patch[c] < 0 or c_lambda[c] <= 0.0 or comp[i, 0] <= 0.0:
+                continue
+            f = frames[p_body[i]]
+            n0, n1, n2 = c_normal[c, 0], c_normal[c, 1], c_normal[c, 2]
+            a0 = f[0] * n0 + f[3] * n1 + f[6] * n2
+            a1 = f[1] * n0 + f[4] * n1 + f[7] * n2
+            a2 = f[2] * n0 + f[5] * n1 + f[8] * n2
+            wn = (comp[i, 0] * a0 * a0 + comp[i, 3] * a1 * a1 + comp[i, 5] * a2 * a2
+                  + 2.0 * (comp[i, 1] * a0 * a1 + comp[i, 2] * a0 * a2 + comp[i, 4] * a1 * a2))  # fmt: skip
+            fw[i] = 0.5 * (comp[i, 0] + comp[i, 3] + comp[i, 5] - wn)
+    for c in range(count):
+        i = c_particle[c]
+        k = sign * (fw[i] - inv_mass[i])
+        if k != 0.0:
+            u[i, 0] += k * c_friction[c, 0]
+            u[i, 1] += k * c_friction[c, 1]
+            u[i, 2] += k * c_friction[c, 2]

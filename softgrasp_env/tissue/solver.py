@@ -64,7 +64,14 @@ from .contacts import (
     project_shape_contacts,
 )
 from .friction import friction_pairs, friction_patches, friction_velocity_pass, load_anchors, store_anchors
-from .global_step import GlobalSystem, build_global_system, global_pass
+from .global_step import (
+    GlobalSystem,
+    build_global_system,
+    friction_weights,
+    global_finish,
+    global_pass,
+    project_contacts,
+)
 from .integrate import predict_body, predict_particles, update_velocities, update_velocities_of
 from .jit import KERNEL
 from .model import CONTINUUM_COLUMNS, TissueModel
@@ -370,7 +377,7 @@ def _step(
     mark_fixed(attached, p_body, body_core_shape, fixed)
     g_u[...] = 0.0
     if gsys is not None:
-        gsys[8][...] = 0.0  # the material's displacement this step (global_step.global_pass)
+        gsys[5][...] = 0.0  # the material's displacement this step (global_step.global_pass)
     # --- Gauss-Seidel iterations
     for it in range(iterations):
         if gsys is not None:
@@ -400,20 +407,36 @@ def _step(
                    fixed, rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass,
                    body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
                    imp_lin, imp_ang, coupling_imp, continuum, g_cont)  # fmt: skip
-        project_shape_contacts(nc, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass,
-                               shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
-                               rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose,
-                               more_kinds)  # fmt: skip
+        if gsys is not None:
+            project_contacts(gsys, nc, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass,
+                             p_body, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
+                             rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose,
+                             more_kinds)  # fmt: skip
+        else:
+            project_shape_contacts(nc, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii,
+                                   inv_mass, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x,
+                                   rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt,
+                                   shape_pose, more_kinds)  # fmt: skip
         project_pairs(npairs, pair_i, pair_j, pair_lambda, pair_normal, xp, qp, radii, inv_mass)
         # Friction inside the loop, after the normal corrections: static friction is then a
         # constraint of the same Gauss-Seidel solve as the shape matching. Applied once after the
         # loop it could only stop the touching particles, and a block on a ramp crept downhill
         # at a steady ~0.1 m/s below the friction angle.
-        friction_patches(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_normal, c_rn,
-                         c_anchor, c_point, xp, inv_mass, body_friction, ns, shape_rigid, shape_local_x, shape_local_q,
-                         rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose,
-                         patch, patch_slide, patch_change, it == iterations - 1, body_contact_cone, c_slip,
-                         patch_body)  # fmt: skip
+        if gsys is not None:
+            # friction moves a particle by its compliance in the pad (global_step.friction_weights)
+            friction_weights(gsys, -1.0, nc, c_particle, c_patch, c_lambda, c_normal, c_friction, inv_mass, p_body)
+            friction_patches(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_normal, c_rn,
+                             c_anchor, c_point, xp, gsys[10], body_friction, ns, shape_rigid, shape_local_x,
+                             shape_local_q, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin,
+                             imp_ang, dt, shape_pose, patch, patch_slide, patch_change, it == iterations - 1,
+                             body_contact_cone, c_slip, patch_body)  # fmt: skip
+            friction_weights(gsys, 1.0, nc, c_particle, c_patch, c_lambda, c_normal, c_friction, inv_mass, p_body)
+        else:
+            friction_patches(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_normal, c_rn,
+                             c_anchor, c_point, xp, inv_mass, body_friction, ns, shape_rigid, shape_local_x,
+                             shape_local_q, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin,
+                             imp_ang, dt, shape_pose, patch, patch_slide, patch_change, it == iterations - 1,
+                             body_contact_cone, c_slip, patch_body)  # fmt: skip
         friction_pairs(npairs, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, x, xp, inv_mass, p_body,
                        body_friction)  # fmt: skip
         # the strain limit, after friction: what a snagged particle's friction gives way to
@@ -427,6 +450,10 @@ def _step(
             if coupling == COUPLING_CONSISTENT:
                 project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q,
                                 rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
+    if gsys is not None:
+        global_finish(gsys, rot_iters, dt, g_off, g_mem, g_pack, g_cont, xp, group_q, mass, p_body, body_core_shape,
+                      shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang,
+                      coupling_imp)  # fmt: skip
     # --- coupling to the cores (thesis 5.1.3): error -> impulse, snap back; then velocities from
     #     positions (PBD Alg. 1 lines 18-21); angular velocity from q* q^-1 on the short arc
     #     (Mueller & Chentanez 2011 sec. 3)
