@@ -66,10 +66,10 @@ from .contacts import (
 from .friction import friction_pairs, friction_patches, friction_velocity_pass, load_anchors, store_anchors
 from .global_step import (
     GlobalSystem,
-    build_global_system,
     friction_weights,
     global_finish,
     global_pass,
+    global_system,
     project_contacts,
 )
 from .integrate import predict_body, predict_particles, update_velocities, update_velocities_of
@@ -613,7 +613,7 @@ class TissueSolver:
             raise ValueError("SimConfig.material_solve='global' needs coupling='thesis' (a core sliding inside the "
                              f"solve is not in the global system); got coupling={self.sim.coupling!r}")  # fmt: skip
         if self._global is None or self._global.dt != self.sim.dt:
-            self._global = build_global_system(self.model, self.sim.dt)
+            self._global = global_system(self.model, self.sim.dt)
         return self._global.arrays()
 
     def step(self, state: TissueState, col: Colliders) -> StepOutput:
