@@ -28,6 +28,8 @@ GroupEnergy = Literal["shape_matching", "continuum"]
 GROUP_ENERGIES: tuple[str, ...] = ("shape_matching", "continuum")
 FrictionLaw = Literal["patch", "contact"]
 FRICTION_LAWS: tuple[str, ...] = ("patch", "contact")
+MaterialSolve = Literal["groups", "global"]
+MATERIAL_SOLVES: tuple[str, ...] = ("groups", "global")
 
 
 @dataclass(frozen=True)
@@ -234,6 +236,19 @@ class SimConfig:
     'reaction' mode of earlier versions (every member takes up the projection's torque as spin) was
     removed, its energy grew 10-fold in 1,000 steps with spinning particles; angular momentum of
     free bodies is now kept exactly in goal mode (tissue/momentum.py)."""
+    material_solve: MaterialSolve = "groups"
+    """How each iteration solves the tissue's material (the implicit step's elastic part):
+    'groups', a Newton step per group, Gauss-Seidel over the overlapping groups (tissue/compliant.py),
+    which closes the gap to the step's solution by a fixed fraction a pass; 'global', every group's
+    rotation from its deformation and then one prefactored sparse solve over all particles at once
+    (the global step of projective dynamics, Bouaziz et al. 2014: tissue/global_step.py), exact for
+    the material in one pass at any resolution. 'global' needs the continuum group energy
+    (TissueConfig.group_energy) and the thesis coupling, and its solve runs on one thread. Its
+    factor is made once per process for each pad and step length: 0.03 s for a default pad of 24
+    particles, 0.2 s at 450, 70 s at 3,000 (256,000 per m^2) on an AMD EPYC core. The world then
+    takes the coupling rule's steps only (compliant.world_substeps). Faster than 'groups' at the
+    default density (x1.5 on SoftGrasp-v4's scripted grasp), not at the converged preset; the
+    package's documentation, Results: speed, "The global material solve", has the figures."""
     contact_margin: float = 0.002
     """Extra distance [m] within which contact candidates are collected per step."""
     threads: int | None = None
@@ -259,6 +274,8 @@ class SimConfig:
             check_range("damping", self.damping, 0.0, 1e4, owner=o)
         if self.coupling not in COUPLING_MODES:
             raise ValueError(f"SimConfig.coupling must be one of {COUPLING_MODES}, got {self.coupling!r}")
+        if self.material_solve not in MATERIAL_SOLVES:
+            raise ValueError(f"SimConfig.material_solve must be one of {MATERIAL_SOLVES}, got {self.material_solve!r}")
         if self.orientation == "reaction":
             raise ValueError(
                 "SimConfig.orientation='reaction' was removed (its energy grew with spinning particles); "

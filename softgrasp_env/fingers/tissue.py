@@ -173,21 +173,22 @@ class TissueFingers(FingerKind):
 
 def world_substeps(scene_config) -> int:
     """World steps per physics step of ``scene_config`` with tissue fingers (TissueFingers.world_substeps):
-    compliant.world_substeps on the pads mount() builds, on cores of ``finger_mass``."""
+    compliant.world_substeps on the pads mount() builds, on cores of ``finger_mass``, for its
+    material solve (SimConfig.material_solve)."""
     return _world_substeps(scene_config.tissue, tuple(scene_config.finger_half_extents), scene_config.fingers.faces,
-                           scene_config.finger_mass, scene_config.sim.dt)  # fmt: skip
+                           scene_config.finger_mass, scene_config.sim.dt, scene_config.sim.material_solve)  # fmt: skip
 
 
 @functools.lru_cache(maxsize=64)
 def _world_substeps(tissue: TissueConfig, half_extents: tuple[float, float, float], faces: str, core_mass: float,
-                    dt: float) -> int:  # fmt: skip
+                    dt: float, material_solve: str = "groups") -> int:  # fmt: skip
     """The pads built as mount() builds them (the same builder, the same core boxes), once per
     setting, before the scene: it must know its pybullet time step before the first motor command."""
     core = CoreShape("box", half_extents=half_extents)
     n = 1
     for k in (0, 1):
         model = build_combined_body(core, tissue, faces=CONTACT_FACES[k] if faces == "contact" else None)
-        n = max(n, compliant_world_substeps(model, np.array([core_mass]), dt))
+        n = max(n, compliant_world_substeps(model, np.array([core_mass]), dt, material_solve))
     return n
 
 

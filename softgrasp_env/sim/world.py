@@ -208,7 +208,7 @@ class World:
             # The compliant material needs steps short enough for itself and for its pull on the
             # cores (compliant.world_substeps): a World asked for fewer would ring or go unstable.
             core_mass = np.array([_mass(inv_m[self.shapes[t.core_shape].rigid]) for t in tissue])
-            need = world_substeps(model, core_mass, sim.dt)
+            need = world_substeps(model, core_mass, sim.dt, sim.material_solve)
             if substeps < need:
                 raise ValueError(
                     f"World(substeps={substeps}) at dt={sim.dt:g} s: this tissue needs at least {need} world steps per "

@@ -107,9 +107,13 @@ def coupling_substeps(model: TissueModel, core_mass: np.ndarray, dt: float) -> i
     return n
 
 
-def world_substeps(model: TissueModel, core_mass: np.ndarray, dt: float) -> int:
+def world_substeps(model: TissueModel, core_mass: np.ndarray, dt: float, material_solve: str = "groups") -> int:
     """World steps (tissue and rigid bodies together) per step of dt: the larger of substeps_for
-    and coupling_substeps."""
+    and coupling_substeps; coupling_substeps alone under the global material solve
+    (SimConfig.material_solve "global"), whose passes do not lose accuracy as s grows
+    (global_step.py)."""
+    if material_solve == "global":
+        return coupling_substeps(model, core_mass, dt)
     return max(substeps_for(model, dt), coupling_substeps(model, core_mass, dt))
 
 

@@ -64,6 +64,14 @@ from .contacts import (
     project_shape_contacts,
 )
 from .friction import friction_pairs, friction_patches, friction_velocity_pass, load_anchors, store_anchors
+from .global_step import (
+    GlobalSystem,
+    friction_weights,
+    global_finish,
+    global_pass,
+    global_system,
+    project_contacts,
+)
 from .integrate import predict_body, predict_particles, update_velocities, update_velocities_of
 from .jit import KERNEL
 from .model import CONTINUUM_COLUMNS, TissueModel
@@ -283,6 +291,7 @@ def _step(
     f_pack, i_pack, b_pack, layout,
     # parameters
     dt, iterations, rot_iters, gx, gy, gz, damping, coupling, margin, continuum, counts, threads, more_kinds,
+    gsys,
 ):  # fmt: skip
     """One tissue step. Returns 0, or 1 if a contact buffer was too small (``counts`` then holds
     the sizes needed and the state is untouched, so the caller can grow the buffers and retry).
@@ -296,7 +305,11 @@ def _step(
 
     ``more_kinds`` is None when every shape is a plane, sphere, box, cylinder or capsule, True
     when there is a cone, elliptic cylinder or hull (collision.shape_distance_of): the same test
-    on None, so a world of the first five kinds runs the code it always ran."""
+    on None, so a world of the first five kinds runs the code it always ran.
+
+    ``gsys`` is None for the material's Gauss-Seidel sweep over the groups (compliant.py), or the
+    arrays of a global_step.GlobalSystem for its global solve (SimConfig.material_solve "global"),
+    which runs on one thread; pruned on None as above."""
     # The model's and the scratch arrays arrive packed in three flat buffers: numba unboxes every
     # array argument on each call (~0.1 us apiece), and ~45 separate arrays cost ~5 us a step.
     rest_x, rest_q = _view(f_pack, layout, _REST_X), _view(f_pack, layout, _REST_Q)
@@ -363,9 +376,21 @@ def _step(
     # (anchors.mark_fixed), and each group's displacement field starts at zero.
     mark_fixed(attached, p_body, body_core_shape, fixed)
     g_u[...] = 0.0
+    if gsys is not None:
+        gsys[5][...] = 0.0  # the material's displacement this step (global_step.global_pass)
     # --- Gauss-Seidel iterations
     for it in range(iterations):
-        if threads is not None:
+        if gsys is not None:
+            # the material over all groups at once (global_step.py); the thesis coupling's snap first,
+            # as below (the solver admits the global solve under that coupling only)
+            snap_attached(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x, rig_q,
+                          imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+            global_pass(gsys, rot_iters, dt, g_turn, g_off, g_mem, g_pack, g_cont, attached, rest_q, rest_moment, xp,
+                        qp, group_q, moment, mass, p_body, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass,
+                        rig_inv_inertia, rig_axis, imp_lin, imp_ang, coupling_imp)  # fmt: skip
+            if it == iterations - 1:
+                balance_torques(g_off, g_mem, g_frame, attached, fixed, inertia, x, xp, qp, q_pred, spin_kick)
+        elif threads is not None:
             _bodies_pass(coupling == COUPLING_THESIS, it == iterations - 1, g_turn, rot_iters, body_off, group_kappa,
                          dt, g_off, g_mem, g_pack, g_frame, attached, fixed, rest_x, rest_q, rest_moment, inertia, x, xp,
                          qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass, p_body, body_core_shape, shape_rigid,
@@ -382,20 +407,36 @@ def _step(
                    fixed, rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, g_u, g_raw, mass,
                    body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move,
                    imp_lin, imp_ang, coupling_imp, continuum, g_cont)  # fmt: skip
-        project_shape_contacts(nc, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass,
-                               shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
-                               rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose,
-                               more_kinds)  # fmt: skip
+        if gsys is not None:
+            project_contacts(gsys, nc, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii, inv_mass,
+                             p_body, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
+                             rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose,
+                             more_kinds)  # fmt: skip
+        else:
+            project_shape_contacts(nc, c_particle, c_shape, c_inner, c_lambda, c_normal, c_rn, xp, qp, radii,
+                                   inv_mass, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x,
+                                   rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt,
+                                   shape_pose, more_kinds)  # fmt: skip
         project_pairs(npairs, pair_i, pair_j, pair_lambda, pair_normal, xp, qp, radii, inv_mass)
         # Friction inside the loop, after the normal corrections: static friction is then a
         # constraint of the same Gauss-Seidel solve as the shape matching. Applied once after the
         # loop it could only stop the touching particles, and a block on a ramp crept downhill
         # at a steady ~0.1 m/s below the friction angle.
-        friction_patches(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_normal, c_rn,
-                         c_anchor, c_point, xp, inv_mass, body_friction, ns, shape_rigid, shape_local_x, shape_local_q,
-                         rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt, shape_pose,
-                         patch, patch_slide, patch_change, it == iterations - 1, body_contact_cone, c_slip,
-                         patch_body)  # fmt: skip
+        if gsys is not None:
+            # friction moves a particle by its compliance in the pad (global_step.friction_weights)
+            friction_weights(gsys, -1.0, nc, c_particle, c_patch, c_lambda, c_normal, c_friction, inv_mass, p_body)
+            friction_patches(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_normal, c_rn,
+                             c_anchor, c_point, xp, gsys[10], body_friction, ns, shape_rigid, shape_local_x,
+                             shape_local_q, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin,
+                             imp_ang, dt, shape_pose, patch, patch_slide, patch_change, it == iterations - 1,
+                             body_contact_cone, c_slip, patch_body)  # fmt: skip
+            friction_weights(gsys, 1.0, nc, c_particle, c_patch, c_lambda, c_normal, c_friction, inv_mass, p_body)
+        else:
+            friction_patches(nc, c_particle, c_shape, c_patch, c_lambda, c_friction, c_friction_goal, c_normal, c_rn,
+                             c_anchor, c_point, xp, inv_mass, body_friction, ns, shape_rigid, shape_local_x,
+                             shape_local_q, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin,
+                             imp_ang, dt, shape_pose, patch, patch_slide, patch_change, it == iterations - 1,
+                             body_contact_cone, c_slip, patch_body)  # fmt: skip
         friction_pairs(npairs, pair_i, pair_j, pair_lambda, pair_lambda_t, pair_normal, x, xp, inv_mass, p_body,
                        body_friction)  # fmt: skip
         # the strain limit, after friction: what a snagged particle's friction gives way to
@@ -409,6 +450,10 @@ def _step(
             if coupling == COUPLING_CONSISTENT:
                 project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q,
                                 rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
+    if gsys is not None:
+        global_finish(gsys, rot_iters, dt, g_off, g_mem, g_pack, g_cont, xp, group_q, mass, p_body, body_core_shape,
+                      shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang,
+                      coupling_imp)  # fmt: skip
     # --- coupling to the cores (thesis 5.1.3): error -> impulse, snap back; then velocities from
     #     positions (PBD Alg. 1 lines 18-21); angular velocity from q* q^-1 on the short arc
     #     (Mueller & Chentanez 2011 sec. 3)
@@ -478,6 +523,8 @@ class TissueSolver:
         self._more_kinds: bool | None = None
         self._kinds_for: np.ndarray | None = None
         self._warned_serial = False
+        self._global: GlobalSystem | None = None
+        self._global_arrays()  # the global solve's factor now: a bad setting fails at construction
 
     def _pack(self, resized: tuple[str, ...]) -> None:
         """(Re)build the packed scratch buffers for ``self._sizes``. Arrays sized by an entry of
@@ -553,9 +600,21 @@ class TissueSolver:
             *self._packed,
             sim.dt, sim.iterations, sim.rotation_iterations, 0.0, 0.0, -sim.gravity, self.damping, coupling,
             sim.contact_margin, self.model.continuum, self._counts, True if self._threaded else None,
-            self._more_kinds,
+            self._more_kinds, self._global_arrays(),
         )  # fmt: skip
         self._args_for = sim
+
+    def _global_arrays(self) -> tuple | None:
+        """The global material solve's arrays for the kernel (None for the sweep over the groups),
+        its factor made for ``sim.dt`` once and again whenever the step length changes."""
+        if self.sim.material_solve != "global":
+            return None
+        if self.sim.coupling != "thesis":
+            raise ValueError("SimConfig.material_solve='global' needs coupling='thesis' (a core sliding inside the "
+                             f"solve is not in the global system); got coupling={self.sim.coupling!r}")  # fmt: skip
+        if self._global is None or self._global.dt != self.sim.dt:
+            self._global = global_system(self.model, self.sim.dt)
+        return self._global.arrays()
 
     def step(self, state: TissueState, col: Colliders) -> StepOutput:
         """Advance ``state`` by one step of ``sim.dt`` in place; returns predicted rigid poses and
