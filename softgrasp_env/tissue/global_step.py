@@ -1,40 +1,48 @@
-"""The tissue's material solved over all its groups at once: one prefactored linear solve per pass
-(the global step of projective dynamics, Bouaziz et al. 2014), in place of the Gauss-Seidel sweep
-over the groups (compliant.continuum_groups).
+"""The tissue's material solved over all its groups at once (SimConfig.material_solve "global"):
+one prefactored linear solve per pass, in place of the Gauss-Seidel sweep over the groups
+(compliant.continuum_groups).
 
 Why: the sweep solves each group's part of the implicit step exactly, but the groups overlap, and
 Gauss-Seidel over them closes the gap to the step's solution by a fixed fraction a pass (about
 0.55 on the pads, free or pressed), which does not improve as the tissue is refined: finer pads
-need more passes and shorter world steps. Solved together, the material's part is exact in one
-pass whatever the resolution and whatever kappa dt^2.
+need more passes and shorter world steps.
 
 The continuum group energy (compliant.continuum_groups, compliant.continuum_energy) is
 
     E = sum_g (k_g / 2) ||F_g - R_g||_F^2 + (beta_g / 2) sum_{j in g} m_j |x_j - c_g - F_g o_j|^2,
 
-F_g = sum_j x_j b_j^T. With every R_g held (the local step: the polar factor of F_g, warm-started
-from the group's last rotation, Mueller et al. 2016) E is quadratic in the positions, and its
-Hessian is K (x) I_3 with one scalar N x N matrix
+F_g = sum_j x_j b_j^T, R_g the polar factor of F_g. Each pass takes a quasi-Newton step of the
+implicit (backward Euler) step's equations for the free particles,
 
-    K = sum_g [k_g B_g B_g^T + beta_g M_g (I - P_g)],
-
-B_g the rows b_j^T, M_g the members' masses and P_g the mass-weighted affine fit,
-(P_g)_jk = m_k / M_g + b_k . o_j. It is the same for x, y and z and constant over a run. The
-implicit step's Newton system over the free particles is then
-
-    (M + dt^2 K)_ff dx_f = -r_f,   r_j = m_j U_j + dt^2 dE/dx_j,
+    (M + dt^2 K0)_ff dx_f = -r_f,   r_j = m_j U_j + dt^2 dE/dx_j,
 
 U_j the displacement the material has given particle j this step (contacts, friction and the
-strain limit move particles outside it, as in the sweep, whose per-group displacements sum to
-it). One sparse Cholesky factor of (M + dt^2 K)_ff, made once per step length, solves it for x, y
-and z (an envelope factor in reverse Cuthill-McKee order: the pads are thin slabs, so the
-envelope stays narrow).
+strain limit move particles outside it, as in the sweep, whose per-group displacements sum to it)
+and dE/dx the true gradient, every R_g the polar factor of its F_g (the local step, warm-started
+from the group's last rotation, Mueller et al. 2016). K0 is E's Hessian at rest, the rotations'
+derivative included: near rest ||F - R||^2 = ||sym(F - I)||^2, so a pair (j, k) of a group's
+members has the block (k_g / 2) [(b_j . b_k) I + b_k b_j^T] (the small-strain stiffness at
+Poisson's ratio 0), plus the hourglass term's beta_g (M_g (I - P_g))_jk I, P_g the mass-weighted
+affine fit, (P_g)_jk = m_k / M_g + b_k . o_j. Projective dynamics' global step (Bouaziz et al.
+2014) holds every R_g instead, and its matrix K (x) I_3 is twice as stiff as the material against
+the shears that turn the groups: it converged at about 0.45 a pass, no faster than the sweep
+(the package's documentation, Results: speed, "A solve across the groups"); K0 gains 40-250x a pass at every resolution and step length. K0 is
+constant in each body's rest frame, so one factor, made once per step length (an envelope
+Cholesky factor in reverse Cuthill-McKee order), serves the run: residuals turn into the body's
+frame with its core, and the step turns back.
 
 A particle held by its core (compliant: ``fixed``, the thesis coupling's attached particles) does
-not move in the solve. What is left of its residual after the free particles moved,
-r_j + dt^2 (K dx)_j, goes to its core as an impulse (compliant.deliver_to_core), and its U takes
-it up: sum_j m_j U_j = 0 after every pass, so momentum is kept exactly, as by the sweep
-(sum_j dE/dx_j = 0: F ignores translation and the fit's misses sum to zero).
+not move in the solve: its residual goes to its core as an impulse (compliant.deliver_to_core) at
+every pass, and its U takes it up. After the last pass every particle's residual goes to its core
+(global_finish), so momentum and angular momentum are exact every step (sum_j dE/dx_j = 0: F
+ignores translation, the fit's misses sum to zero, and E does not change under a rotation).
+
+Contacts and friction move a particle by its compliance in the whole pad, n . W_jj n with
+W = (M + dt^2 K0)^-1 (project_contacts, friction_weights), and record their impulse in U, so that
+the material's next pass reads the impulse as its load: moved by 1 / m, as the sweep moves them,
+the material took back part of each correction and a pressed pad needed as many passes as under
+the sweep. The solve's accuracy does not fall as kappa dt^2 grows, so the world runs in the
+coupling rule's steps only (compliant.world_substeps).
 """
 
 from __future__ import annotations
@@ -45,9 +53,8 @@ from dataclasses import dataclass, replace
 import numba as nb
 import numpy as np
 
-from .collision import support_radius
 from .compliant import deliver_to_core
-from .contacts import _shape_query, _shape_query_at
+from .contacts import contact_reach
 from .jit import KERNEL
 from .model import TissueModel
 from .rigid import generalized_inv_mass, rigid_apply
@@ -226,7 +233,7 @@ class GlobalSystem:
     held."""
     friction_w: np.ndarray
     """(N,) scratch: each particle's compliance across its contact's normal, which friction moves
-    it by (project_friction_weights) [1/kg]."""
+    it by (friction_weights) [1/kg]."""
 
     def arrays(self) -> tuple:
         return (self.order, self.first, self.ptr, self.factor, self.held, self.displacement, self.gradient, self.rhs,
@@ -298,6 +305,7 @@ _FACTOR_CACHE_SIZE = 8
 
 
 def _model_key(model: TissueModel, dt: float) -> tuple:
+    """(dt, a digest of every model array the factor reads)."""
     digest = hashlib.sha1()
     for a in (model.particle_rest_x, model.particle_mass, model.particle_attached, model.particle_body,
               model.body_core_shape, model.group_offsets, model.group_members, model.group_rest_offset,
@@ -541,19 +549,9 @@ def project_contacts(gsys, count, c_particle, c_shape, c_inner, c_lambda, c_norm
     material's next pass reads the contact's impulse dl n, not the move, as the load."""
     u, frames, comp = gsys[5], gsys[8], gsys[9]
     for c in range(count):
-        i = np.uint64(c_particle[c])
-        s = np.uint64(c_shape[c])
-        p = (xp[i, 0], xp[i, 1], xp[i, 2])
-        r = shape_rigid[s]
-        if r >= 0 and rig_move[r]:
-            dist, n = _shape_query(s, p, shape_kind, shape_params, shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q,
-                                   more_kinds)  # fmt: skip
-        else:
-            dist, n = _shape_query_at(s, p, shape_kind, shape_params, shape_pose, more_kinds)
-        if c_inner[c]:
-            rn = 0.0
-        else:
-            rn = support_radius((qp[i, 0], qp[i, 1], qp[i, 2], qp[i, 3]), (radii[i, 0], radii[i, 1], radii[i, 2]), n)
+        i, r, p, dist, n, rn = contact_reach(c, c_particle, c_shape, c_inner, xp, qp, radii, shape_kind, shape_params,
+                                             shape_rigid, shape_local_x, shape_local_q, rig_x, rig_q, rig_move,
+                                             shape_pose, more_kinds)  # fmt: skip
         pen = rn - dist
         if pen <= 0.0 and c_lambda[c] <= 0.0:
             continue
