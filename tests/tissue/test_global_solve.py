@@ -162,3 +162,31 @@ def test_the_env_under_the_global_solve_grasps_and_repeats_itself():
             env.close()
     assert runs[0][1]["is_success"], runs[0][1]
     assert np.array_equal(runs[0][0], runs[1][0])
+
+
+@pytest.mark.slow
+def test_the_global_solve_holds_a_cylinder_near_its_bound_for_a_minute():
+    """The soak of test_continuum's candidate tissue under the global solve: 0.45 kg (86 % of the
+    hold bound) on SoftGraspEasy-v3's scripted aligned grasp, held for 65 s. Measured: held at every
+    step after the lift, 65.00 mm at 5 s and at 65 s (the group sweep: 65.26 and 64.71 mm)."""
+    import softgrasp_env  # noqa: F401
+    from benchmarks.grasp_checks import ALIGNED
+    from softgrasp_env.policies import ScriptedGraspPolicy
+
+    tissue = TissueConfig(group_energy="continuum", hourglass_stiffness=1.0, friction_law="contact")
+    env = gym.make("SoftGraspEasy-v3", max_episode_steps=1300, tissue=tissue, sim=SimConfig(material_solve="global"))
+    try:
+        policy = ScriptedGraspPolicy.for_env(env)
+        obs, _ = env.reset(seed=0, options={**ALIGNED, "cylinder_mass": 0.45})
+        lifts, held, diverged = [], [], False
+        for _ in range(1300):
+            obs, _, term, trunc, info = env.step(policy(obs))
+            lifts.append(info["lift_height"])
+            held.append(info["held"])
+            diverged |= bool(info["diverged"])
+            if term or trunc:
+                break
+    finally:
+        env.close()
+    assert len(lifts) == 1300 and not diverged and all(held[100:])
+    assert min(lifts[100:]) > lifts[100] - 1e-3, (lifts[100], min(lifts[100:]))
