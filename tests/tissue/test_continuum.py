@@ -463,9 +463,10 @@ def test_layers_as_thick_as_the_spacing_keep_the_compression_on_the_reference():
         assert all(abs(e) < 0.05 for e in errors.values()), (density, layers, errors)
 
 
-def _candidate_grasp(coupling: str, mass: float, steps: int) -> dict:
+def _candidate_grasp(coupling: str, mass: float, steps: int, material_solve: str = "groups") -> dict:
     """The scripted aligned grasp (SoftGraspEasy-v3) on the continuum energy with hourglass control
-    1 and Coulomb per contact, run for ``steps`` env steps (20 Hz), under ``coupling``."""
+    1 and Coulomb per contact, run for ``steps`` env steps (20 Hz), under ``coupling`` and
+    ``material_solve`` (SimConfig)."""
     import gymnasium as gym
 
     import softgrasp_env  # noqa: F401
@@ -474,7 +475,7 @@ def _candidate_grasp(coupling: str, mass: float, steps: int) -> dict:
     from softgrasp_env.policies import ScriptedGraspPolicy
 
     tissue = TissueConfig(group_energy="continuum", hourglass_stiffness=1.0, friction_law="contact")
-    env = gym.make("SoftGraspEasy-v3", max_episode_steps=steps, tissue=tissue, sim=SimConfig(coupling=coupling))
+    env = gym.make("SoftGraspEasy-v3", max_episode_steps=steps, tissue=tissue, sim=SimConfig(coupling=coupling, material_solve=material_solve))
     try:
         policy = ScriptedGraspPolicy.for_env(env)
         obs, _ = env.reset(seed=0, options={**ALIGNED, "cylinder_mass": mass})

@@ -109,11 +109,13 @@ def test_a_pad_sagging_on_its_core_reaches_the_static_equilibrium_in_one_pass():
     assert sags["global"] == pytest.approx(sags["groups"], rel=1e-3), sags
 
 
-@pytest.mark.parametrize("density", [16_000.0])
-def test_the_pressed_pad_matches_the_sweeps_converged_pad_at_the_coupling_rules_steps(density):
+@pytest.mark.parametrize(("density", "tol_normal", "tol_shear"), [(16_000.0, 7.5e-3, 7.5e-3), (64_000.0, 5e-3, 3.5e-2)])
+def test_the_pressed_pad_matches_the_sweeps_converged_pad_at_the_coupling_rules_steps(density, tol_normal, tol_shear):
     """Pressed 2.8 mm on the cylinder: the held load at 2 world steps x 3 passes (what the env runs
-    under the global solve) against the sweep's at 2 x 24 (converged): 3.0331 against 3.0405 N
-    (-0.24 %), and the tangential compliance at that squeeze, 1.3809 against 1.3842 mm/N (-0.24 %)."""
+    under the global solve) against the sweep's at 2 x 24 (converged), and the tangential
+    compliance at that squeeze. Measured at 16,000 per m^2: 3.0323 against 3.0421 N (-0.3 %),
+    1.3809 against 1.3842 mm/N (-0.24 %); at 64,000 (two layers): 2.9234 against 2.9267 N
+    (-0.11 %), 1.4193 against 1.4358 mm/N (-1.15 %: the tangential corrections converge slower)."""
     from benchmarks.spatial_convergence import RAMP_SPEED, SHEAR
 
     got = {}
@@ -125,8 +127,8 @@ def test_the_pressed_pad_matches_the_sweeps_converged_pad_at_the_coupling_rules_
         first = rig.hold()
         rig.move_to(2.8e-3, axial=-1.5 * SHEAR, speed=RAMP_SPEED / 2)
         got[solve] = (normal, SHEAR / float(rig.hold()[2] - first[2]))
-    assert got["global"][0] == pytest.approx(got["groups"][0], rel=7.5e-3), got
-    assert got["global"][1] == pytest.approx(got["groups"][1], rel=7.5e-3), got
+    assert got["global"][0] == pytest.approx(got["groups"][0], rel=tol_normal), got
+    assert got["global"][1] == pytest.approx(got["groups"][1], rel=tol_shear), got
 
 
 def test_bad_settings_are_refused_by_name():
@@ -169,24 +171,8 @@ def test_the_global_solve_holds_a_cylinder_near_its_bound_for_a_minute():
     """The soak of test_continuum's candidate tissue under the global solve: 0.45 kg (86 % of the
     hold bound) on SoftGraspEasy-v3's scripted aligned grasp, held for 65 s. Measured: held at every
     step after the lift, 65.00 mm at 5 s and at 65 s (the group sweep: 65.26 and 64.71 mm)."""
-    import softgrasp_env  # noqa: F401
-    from benchmarks.grasp_checks import ALIGNED
-    from softgrasp_env.policies import ScriptedGraspPolicy
+    from tests.tissue.test_continuum import _candidate_grasp
 
-    tissue = TissueConfig(group_energy="continuum", hourglass_stiffness=1.0, friction_law="contact")
-    env = gym.make("SoftGraspEasy-v3", max_episode_steps=1300, tissue=tissue, sim=SimConfig(material_solve="global"))
-    try:
-        policy = ScriptedGraspPolicy.for_env(env)
-        obs, _ = env.reset(seed=0, options={**ALIGNED, "cylinder_mass": 0.45})
-        lifts, held, diverged = [], [], False
-        for _ in range(1300):
-            obs, _, term, trunc, info = env.step(policy(obs))
-            lifts.append(info["lift_height"])
-            held.append(info["held"])
-            diverged |= bool(info["diverged"])
-            if term or trunc:
-                break
-    finally:
-        env.close()
-    assert len(lifts) == 1300 and not diverged and all(held[100:])
-    assert min(lifts[100:]) > lifts[100] - 1e-3, (lifts[100], min(lifts[100:]))
+    r = _candidate_grasp("thesis", 0.45, 1300, material_solve="global")
+    assert r["lifts"].size == 1300 and not r["diverged"] and r["held"][100:].all()
+    assert r["lifts"][100:].min() > r["lifts"][100] - 1e-3, (r["lifts"][100], r["lifts"][100:].min())
