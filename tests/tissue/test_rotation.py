@@ -7,7 +7,13 @@ from itertools import pairwise
 import numpy as np
 import pytest
 
-from softgrasp_env.tissue.rotation import extract_rotation, matrix_to_quat, polar_rotation_svd, quat_to_matrix
+from softgrasp_env.tissue.rotation import (
+    extract_rotation,
+    matrix_to_quat,
+    polar_rotation,
+    polar_rotation_svd,
+    quat_to_matrix,
+)
 
 IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
 SEEDS = range(40)
@@ -269,3 +275,53 @@ def test_quat_to_matrix_known_values():
     # q and -q are the same rotation
     q = random_quat(np.random.default_rng(3))
     assert np.abs(quat_to_matrix(q) - quat_to_matrix(-q)).max() < 1e-15
+
+
+# --- Newton's polar rotation (the global material solve's local step) -----------------------------
+
+
+def _angle(r: np.ndarray, r_true: np.ndarray) -> float:
+    """The angle between two rotations [rad], from the skew part of r r_true^T (arccos of the
+    trace loses half the digits near zero)."""
+    d = r @ r_true.T
+    return float(np.arcsin(min(1.0, np.linalg.norm([d[2, 1] - d[1, 2], d[0, 2] - d[2, 0], d[1, 0] - d[0, 1]]) / 2)))
+
+
+def _stretched(rng: np.random.Generator, stretch: float) -> tuple[np.ndarray, np.ndarray]:
+    """A = R S with S symmetric, eigenvalues within 1 -/+ stretch (positive): A's polar factor is R."""
+    while True:
+        s = np.eye(3) + stretch * rng.uniform(-1.0, 1.0, (3, 3))
+        s = (s + s.T) / 2.0
+        if np.linalg.eigvalsh(s).min() > 0.05:
+            r = random_rotation(rng)
+            return r @ s, r
+
+
+@pytest.mark.parametrize("stretch", [0.0, 0.3, 0.6])
+def test_newtons_polar_rotation_converges_quadratically_from_a_warm_start(stretch):
+    """From 0.01 rad away, one Newton iteration leaves 2.5-2.9e-7 rad (measured, the worst of 30)
+    and two reach the polar factor to round-off (< 7e-16 measured) at stretches up to 60 %;
+    Mueller et al.'s iteration after the same two steps is still 4e-4 to 2e-3 rad away."""
+    rng = np.random.default_rng(7)
+    for _ in range(30):
+        a, r_true = _stretched(rng, stretch)
+        q0 = matrix_to_quat(axis_angle(rng.normal(size=3), 0.01) @ r_true)
+        one = _angle(quat_to_matrix(polar_rotation(a, q0, 1, 1e-10)), r_true)
+        two = _angle(quat_to_matrix(polar_rotation(a, q0, 2, 1e-10)), r_true)
+        assert one < 1e-6
+        assert two < 1e-14
+        assert _angle(extract(a, q0, iterations=2, tol=1e-10), r_true) > 1e-4
+
+
+def test_newtons_polar_rotation_takes_mueller_steps_far_from_the_answer():
+    """Warm starts up to 3 rad away (where M is not positive definite or the Newton step would be
+    longer than 1/2 rad) still reach the polar factor within 20 iterations, to the tolerance asked
+    (1e-10 rad: the step it stops at is not taken; up to 9.6e-11 measured)."""
+    rng = np.random.default_rng(8)
+    for angle in (0.6, 1.5, 3.0):
+        for _ in range(20):
+            a, r_true = _stretched(rng, 0.3)
+            q0 = matrix_to_quat(axis_angle(rng.normal(size=3), angle) @ r_true)
+            r = quat_to_matrix(polar_rotation(a, q0, 20, 1e-10))
+            assert_proper_rotation(r)
+            assert _angle(r, r_true) < 1e-10
