@@ -2,7 +2,7 @@
 (the soft v4 ids' material), MuJoCo's flex pads (benchmarks/mujoco_peer.py; the ``[peers]`` extra)
 and pybullet's FEM pads (``fingers="fem"``), at matching node counts.
 
-    PYTHONPATH=. python benchmarks/peers.py [--levels 30,100,570] [--methods ours,mujoco_full,...]
+    PYTHONPATH=. python benchmarks/peers.py [--levels 30,100,570] [--methods ours,ours_global,mujoco_full,...]
         [--budget 300] [--out benchmarks/out]
 
 Levels are nodes a pad: 30 / 100 / 570 / 3,800, our tissue at 4,000 / 16,000 / 64,000 / 256,000
@@ -36,12 +36,14 @@ import csv
 import math
 import platform
 import time
+from dataclasses import replace
 from pathlib import Path
 
 from benchmarks.mujoco_peer import LEVELS, REFERENCE_MM, PeerConfig, cpu_name
 from benchmarks.mujoco_peer import run_grasp as mujoco_grasp
 from benchmarks.mujoco_peer import run_rig as mujoco_rig
 from softgrasp_env.accuracy import GraspPlan, run_grasp
+from softgrasp_env.config import SimConfig
 from softgrasp_env.fingers import FemConfig
 from softgrasp_env.presets import v4_tissue
 from softgrasp_env.scene import GraspScene, SceneConfig
@@ -50,16 +52,18 @@ OUT = Path(__file__).resolve().parent / "out"
 DENSITY = {"30": 4_000.0, "100": 16_000.0, "570": 64_000.0, "3800": 256_000.0}
 """Our particle density [1/m^2] whose pads have the level's particles a pad (measured: 30 / 100 /
 570 / 3,800)."""
-METHODS = ("ours", "mujoco_full", "mujoco_trilinear", "fem")
+METHODS = ("ours", "ours_global", "mujoco_full", "mujoco_trilinear", "fem")
+"""``ours``: the v4 tissue as the ids run it; ``ours_global``: the same with its material solved
+across the groups (SimConfig.material_solve "global")."""
 LOADS = (1.0, 3.0, 6.0)
 
 
-def ours_rig(level: str) -> dict:
+def ours_rig(level: str, sim: SimConfig | None = None) -> dict:
     from benchmarks.spatial_convergence import measure_tissue
 
     t = v4_tissue(particle_density=DENSITY[level])
     r = measure_tissue(DENSITY[level], LOADS, tangential=False, material=t.group_energy, layers=t.layers,
-                       law=t.friction_law, hourglass=t.hourglass_stiffness)  # fmt: skip
+                       law=t.friction_law, hourglass=t.hourglass_stiffness, sim=sim)  # fmt: skip
     return {f"compression_{f:g}N_mm": r[f"compression_{f:g}N"] * 1e3 for f in LOADS}
 
 
@@ -74,8 +78,9 @@ def _scene_grasp(cfg: SceneConfig, plan: GraspPlan) -> dict:
             "steps_per_s": rec.steps_per_second, "sim_s_per_wall_s": rec.steps_per_second * cfg.sim.dt}  # fmt: skip
 
 
-def ours_grasp(level: str, plan: GraspPlan) -> dict:
-    r = _scene_grasp(SceneConfig(tissue=v4_tissue(particle_density=DENSITY[level])), plan)
+def ours_grasp(level: str, plan: GraspPlan, sim: SimConfig | None = None) -> dict:
+    cfg = SceneConfig(tissue=v4_tissue(particle_density=DENSITY[level]))
+    r = _scene_grasp(cfg if sim is None else replace(cfg, sim=sim), plan)
     r["nodes_per_pad"] = r.pop("particles") // 2
     return r
 
@@ -136,8 +141,9 @@ def main(argv: list[str] | None = None) -> int:
             if method == "fem" and level != levels[0]:
                 continue  # its own meshes: run once
             tic = time.perf_counter()
-            if method == "ours":
-                row = {**ours_rig(level), **ours_grasp(level, plan)}
+            if method.startswith("ours"):
+                sim = replace(SceneConfig().sim, material_solve="global") if method == "ours_global" else None
+                row = {**ours_rig(level, sim), **ours_grasp(level, plan, sim)}
             elif method.startswith("mujoco"):
                 row = mujoco_row(level, method.split("_")[1], plan, ns.budget)
             else:
@@ -153,13 +159,11 @@ def main(argv: list[str] | None = None) -> int:
     print()
     print("simulated seconds per wall second, ours over each peer at the same level:")
     for level in levels:
-        ours = next((r for r in rows if r["level"] == level and r["method"] == "ours"), None)
-        if ours is None:
-            continue
-        for r in rows:
-            if r["level"] == level and r["method"] != "ours":
-                print(f"  {level:>5} nodes a pad: ours / {r['method']} = {ours['sim_s_per_wall_s'] / r['sim_s_per_wall_s']:.2f}"
-                      f" (the peer held: {r.get('held')})")  # fmt: skip
+        for ours in (r for r in rows if r["level"] == level and r["method"].startswith("ours")):
+            for r in rows:
+                if r["level"] == level and not r["method"].startswith("ours"):
+                    print(f"  {level:>5} nodes a pad: {ours['method']} / {r['method']} = "
+                          f"{ours['sim_s_per_wall_s'] / r['sim_s_per_wall_s']:.2f} (the peer held: {r.get('held')})")  # fmt: skip
     ns.out.mkdir(parents=True, exist_ok=True)
     keys: list[str] = []
     for r in rows:

@@ -2,6 +2,7 @@
 
     PYTHONPATH=. python benchmarks/physics_floor.py [--seconds 3] [--repeats 3] [--ids SoftGrasp-v4,...]
         [--min-rows 2]      # the soft ids' pads with two particle rows across every face (tissue_min_rows)
+        [--material-solve global]   # the soft ids' material solved across its groups (gym.make's material_solve)
 
 - **Floor**: pybullet alone stepping the scene's rigid bodies - the ground, the free cylinder, the
   palm on its arm constraint and the two prismatic finger cores squeezing the cylinder - nothing
@@ -156,8 +157,12 @@ def main(argv: list[str] | None = None) -> int:
                         help="leave out SoftGrasp-v4 at preset='converged' (its target: env steps/s on one thread)")
     parser.add_argument("--min-rows", type=int, default=None,
                         help="the soft ids' fewest particle rows across a finger face (gym.make's tissue_min_rows)")
+    parser.add_argument("--material-solve", choices=("groups", "global"), default=None,
+                        help="how the soft ids' material is solved (gym.make's material_solve; default: the id's)")
     ns = parser.parse_args(argv)
     soft = {} if ns.min_rows is None else {"tissue_min_rows": ns.min_rows}
+    if ns.material_solve is not None:
+        soft["material_solve"] = ns.material_solve
 
     def kw(env_id: str) -> dict:
         return {} if "Rigid" in env_id else soft

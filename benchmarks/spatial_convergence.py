@@ -102,7 +102,7 @@ class PadRig:
         self.pad = self.tissue.extrude + self.tissue.normal_radius
         model = build_combined_body(CoreShape("box", half_extents=(hx, hy, hz)), self.tissue, faces=("+x",))
         self.model = with_core_shapes(model, np.array([0]))
-        self.substeps = world_substeps(self.model, np.array([scene.finger_mass]), self.sim.dt)
+        self.substeps = world_substeps(self.model, np.array([scene.finger_mass]), self.sim.dt, self.sim.material_solve)
         self.h = self.sim.dt / self.substeps
         self.solver = TissueSolver(self.model, replace(self.sim, dt=self.h) if self.substeps > 1 else self.sim)
         ident = np.array([[0.0, 0.0, 0.0, 1.0]])
@@ -245,14 +245,15 @@ class PadRig:
 
 
 def measure_tissue(density: float, loads=LOADS, *, tangential: bool = True, material: str = "shape_matching",
-                   layers: int = 1, law: str = "patch", hourglass: float = 0.0) -> dict:  # fmt: skip
+                   layers: int = 1, law: str = "patch", hourglass: float = 0.0, sim: SimConfig | None = None) -> dict:  # fmt: skip
     """Everything the rig measures at one density, with each group's energy ``material``
     (TissueConfig.group_energy), ``layers`` element layers through the thickness, the friction
-    law ``law`` (TissueConfig.friction_law; only the tangential hold has friction) and the
-    continuum energy's ``hourglass`` control (TissueConfig.hourglass_stiffness)."""
+    law ``law`` (TissueConfig.friction_law; only the tangential hold has friction), the
+    continuum energy's ``hourglass`` control (TissueConfig.hourglass_stiffness) and the solver's
+    settings ``sim`` (None: SimConfig's defaults; PadRig)."""
     tic = time.perf_counter()
     tissue = TissueConfig(group_energy=material, layers=layers, friction_law=law, hourglass_stiffness=hourglass)
-    rig = PadRig(density, friction=0.0, tissue=tissue)
+    rig = PadRig(density, friction=0.0, tissue=tissue, sim=sim)
     radius, share = rig.group_radius()
     out = {"density": density, "layers": layers, "particles": rig.particle_count, "substeps": rig.substeps,
            "l": radius, "normal_share": share, "core_stiffness": float(core_stiffness(rig.model)[0])}  # fmt: skip
@@ -265,7 +266,7 @@ def measure_tissue(density: float, loads=LOADS, *, tangential: bool = True, mate
         guess = c * (1.6 if load < 3 else 1.4)
     out["inner_clearance"] = rig.inner_clearance
     if tangential:
-        rig = PadRig(density, tissue=tissue)  # default friction: the contact sticks
+        rig = PadRig(density, tissue=tissue, sim=sim)  # default friction: the contact sticks
         c, f = rig.press_to(3.0, guess=out.get("compression_3N", 2e-3))
         # incremental: from SHEAR / 2 to 3 SHEAR / 2 down the axis (the first tenths of a mm carry an
         # offset of a few hundredths of a N while the contact's anchors take hold)

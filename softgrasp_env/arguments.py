@@ -160,6 +160,11 @@ KEYWORDS: tuple[Keyword, ...] = (
     _kw("threads", "physics", "int", None,
         "Threads of the tissue solver, 1 to 64: each finger's pad swept on its own thread, the same result to the "
         "bit; None: the sim's, else the SOFTGRASP_THREADS environment variable, else 1"),
+    _kw("material_solve", "physics", "str", None,
+        "How the tissue's material is solved each pass (SimConfig.material_solve): 'groups', a Gauss-Seidel sweep "
+        "over the element groups, or 'global', one prefactored solve across all of them, whose passes do not grow "
+        "with the resolution and whose world steps are the coupling's alone (fingers='tissue', the continuum "
+        "energy); None: the sim's, 'groups'"),
     # cylinder
     _kw("cylinder_radius", "cylinder", "float", 0.03,
         "Cylinder radius [m]"),
@@ -324,7 +329,7 @@ class PhysicsConfig:
            shear_modulus: float | None = None, group_energy: str | None = None,
            hourglass_stiffness: float | None = None, layers: int | str | None = None,
            tissue_min_rows: int | None = None, tissue: TissueConfig | None = None, sim: SimConfig | None = None,
-           threads: int | None = None) -> PhysicsConfig:  # fmt: skip
+           threads: int | None = None, material_solve: str | None = None) -> PhysicsConfig:  # fmt: skip
         """The configs the keywords mean: the kind's config with its own keywords folded in, the
         preset's tissue and solver (or the whole ones given) with the tissue keywords over them.
         ``layers="auto"`` (given, or the preset's when neither ``layers`` nor ``tissue`` is given)
@@ -365,6 +370,10 @@ class PhysicsConfig:
         check_type("sim", sim, SimConfig)
         if threads is not None:
             sim = replace(sim, threads=threads)  # validated by SimConfig
+        if material_solve is not None:
+            if not isinstance(fingers, TissueFingerConfig):
+                raise ValueError(f"material_solve is a setting of fingers='tissue', but fingers={fingers.kind!r}")
+            sim = replace(sim, material_solve=material_solve)  # validated by SimConfig
         return cls(fingers, tissue, sim)
 
 
@@ -689,7 +698,8 @@ class EnvArguments:
                                                          "particle_density", "friction_static", "friction_kinetic",
                                                          "tissue_contact_cone", "friction_law", "shear_modulus",
                                                          "group_energy", "hourglass_stiffness", "layers",
-                                                         "tissue_min_rows", "tissue", "sim", "threads")})  # fmt: skip
+                                                         "tissue_min_rows", "tissue", "sim", "threads",
+                                                         "material_solve")})  # fmt: skip
         lift = LiftConfig(v["start"], v["reward_type"], v["success_height"], v["reach_weight"], v["max_tilt"],
                           _tuple(v["approach_range"]))  # fmt: skip
         defaults = STARTS[lift.start].defaults  # None: the start's

@@ -158,6 +158,12 @@ def test_physics_floor_prints_the_floor_the_ratios_and_a_breakdown_that_adds_up(
     row = next(line.split() for line in out.split("where an env step goes")[0].splitlines()
                if line.startswith("SoftGrasp-v4"))  # fmt: skip
     assert int(row[3]) == 36, out
+    # the material solved across its groups: the coupling's 2 world steps per physics step
+    out = _run_plain("physics_floor.py", "--seconds", "0.3", "--repeats", "1", "--no-converged", "--ids",
+                     "SoftGrasp-v4", "--material-solve", "global")  # fmt: skip
+    row = next(line.split() for line in out.split("where an env step goes")[0].splitlines()
+               if line.startswith("SoftGrasp-v4"))  # fmt: skip
+    assert int(row[3]) == 24, out
 
 
 def test_torch_threads_trains_at_each_count_alone_and_side_by_side():
