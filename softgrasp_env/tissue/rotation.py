@@ -252,19 +252,6 @@ def polar_rotation_unit_t(a, qq, max_iterations, tolerance):
 
 
 @nb.njit(cache=True)
-def polar_rotation(a: np.ndarray, q: np.ndarray, max_iterations: int, tolerance: float) -> np.ndarray:
-    """Array front end of :func:`polar_rotation_unit_t`: ``a`` (3, 3), unit ``q`` (4,) -> quaternion (4,)."""
-    t = (a[0, 0], a[0, 1], a[0, 2], a[1, 0], a[1, 1], a[1, 2], a[2, 0], a[2, 1], a[2, 2])
-    r = polar_rotation_unit_t(t, (q[0], q[1], q[2], q[3]), max_iterations, tolerance)
-    out = np.empty(4)
-    out[0] = r[0]
-    out[1] = r[1]
-    out[2] = r[2]
-    out[3] = r[3]
-    return out
-
-
-@nb.njit(cache=True)
 def extract_rotation(a: np.ndarray, q: np.ndarray, max_iterations: int, tolerance: float) -> np.ndarray:
     """Array front end of :func:`extract_rotation_t`: ``a`` (3, 3), ``q`` (4,) -> quaternion (4,)."""
     t = (a[0, 0], a[0, 1], a[0, 2], a[1, 0], a[1, 1], a[1, 2], a[2, 0], a[2, 1], a[2, 2])

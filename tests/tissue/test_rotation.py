@@ -10,8 +10,8 @@ import pytest
 from softgrasp_env.tissue.rotation import (
     extract_rotation,
     matrix_to_quat,
-    polar_rotation,
     polar_rotation_svd,
+    polar_rotation_unit_t,
     quat_to_matrix,
 )
 
@@ -285,6 +285,11 @@ def _angle(r: np.ndarray, r_true: np.ndarray) -> float:
     trace loses half the digits near zero)."""
     d = r @ r_true.T
     return float(np.arcsin(min(1.0, np.linalg.norm([d[2, 1] - d[1, 2], d[0, 2] - d[2, 0], d[1, 0] - d[0, 1]]) / 2)))
+
+
+def polar_rotation(a: np.ndarray, q: np.ndarray, iterations: int, tol: float) -> np.ndarray:
+    """polar_rotation_unit_t on arrays (the kernels pass tuples)."""
+    return np.array(polar_rotation_unit_t(tuple(a.ravel()), tuple(q), iterations, tol))
 
 
 def _stretched(rng: np.random.Generator, stretch: float) -> tuple[np.ndarray, np.ndarray]:
