@@ -21,15 +21,16 @@ strain limit move particles outside it, as in the sweep, whose per-group displac
 and dE/dx the true gradient, every R_g the polar factor of its F_g (the local step: Newton's
 method on tr(R^T F), warm-started from the group's last rotation, rotation.polar_rotation_unit_t).
 K0 is E's Hessian at rest, the rotations' derivative included: near rest
-||F - R||^2 = ||sym(F - I)||^2, so a pair (j, k) of a group's members has the block (k_g / 2) [(b_j . b_k) I + b_k b_j^T] (the small-strain stiffness at
-Poisson's ratio 0), plus the hourglass term's beta_g (M_g (I - P_g))_jk I, P_g the mass-weighted
-affine fit, (P_g)_jk = m_k / M_g + b_k . o_j. Projective dynamics' global step (Bouaziz et al.
-2014) holds every R_g instead, and its matrix K (x) I_3 is twice as stiff as the material against
-the shears that turn the groups: it converged at about 0.45 a pass, no faster than the sweep
-(the package's documentation, Results: speed, "A solve across the groups"); K0 gains 40-250x a pass at every resolution and step length. K0 is
-constant in each body's rest frame, so one factor, made once per step length (an envelope
-Cholesky factor in reverse Cuthill-McKee order), serves the run: residuals turn into the body's
-frame with its core, and the step turns back.
+||F - R||^2 = ||sym(F - I)||^2, so a pair (j, k) of a group's members has the block
+(k_g / 2) [(b_j . b_k) I + b_k b_j^T] (the small-strain stiffness at Poisson's ratio 0), plus the
+hourglass term's beta_g (M_g (I - P_g))_jk I, P_g the mass-weighted affine fit,
+(P_g)_jk = m_k / M_g + b_k . o_j. Projective dynamics' global step (Bouaziz et al. 2014) holds
+every R_g instead, and its matrix K (x) I_3 is twice as stiff as the material against the shears
+that turn the groups: it converged at about 0.45 a pass, no faster than the sweep (the package's
+documentation, Results: speed, "A solve across the groups"); K0 gains 40-250x a pass at every
+resolution and step length. K0 is constant in each body's rest frame, so one factor, made once
+per step length (an envelope Cholesky factor in reverse Cuthill-McKee order), serves the run:
+residuals turn into the body's frame with its core, and the step turns back.
 
 A particle held by its core (compliant: ``fixed``, the thesis coupling's attached particles) does
 not move in the solve: its residual goes to its core as an impulse (compliant.deliver_to_core) at
