@@ -2,6 +2,7 @@
 thread of its own), env steps per second side by side, per particle density.
 
     PYTHONPATH=. python benchmarks/threads.py [--densities 16000,64000,256000] [--steps 20] [--repeats 3]
+        [--material-solve global]   # the material solved across its groups, each pad's block on a thread
 
 SoftGraspEasy-v4 with random actions (seed 0), layers as the v4 ids have them ('auto'); the two
 counts alternate, best of ``--repeats`` each, so that a neighbour's load falls on both alike. The
@@ -22,10 +23,10 @@ import numpy as np
 import softgrasp_env  # noqa: F401  (registers the ids)
 
 
-def run(density: float, threads: int, steps: int) -> tuple[float, np.ndarray, int]:
+def run(density: float, threads: int, steps: int, solve: str = "groups") -> tuple[float, np.ndarray, int]:
     """(env steps/s over ``steps`` random steps after a warm-up step, final particle positions,
-    particle count)."""
-    env = gym.make("SoftGraspEasy-v4", particle_density=density, threads=threads)
+    particle count); ``solve``: gym.make's material_solve."""
+    env = gym.make("SoftGraspEasy-v4", particle_density=density, threads=threads, material_solve=solve)
     try:
         env.reset(seed=0)
         rng = np.random.default_rng(0)
@@ -47,16 +48,18 @@ def main() -> None:
     parser.add_argument("--densities", default="16000,64000,256000")
     parser.add_argument("--steps", type=int, default=20)
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--material-solve", default="groups", choices=("groups", "global"))
     args = parser.parse_args()
     if numba.config.NUMBA_NUM_THREADS < 2:
         raise SystemExit("numba has one thread here (NUMBA_NUM_THREADS): nothing to compare")
-    print(f"{'density':>9} {'particles':>9} {'1 thread':>9} {'2 threads':>9} {'ratio':>6}  (env steps/s, best of {args.repeats})")
+    print(f"{'density':>9} {'particles':>9} {'1 thread':>9} {'2 threads':>9} {'ratio':>6}  (env steps/s, best of "
+          f"{args.repeats}; material_solve={args.material_solve!r})")
     for d in (float(x) for x in args.densities.split(",")):
         best = {1: 0.0, 2: 0.0}
         final = {}
         for _ in range(args.repeats):
             for threads in (1, 2):
-                rate, x, n = run(d, threads, args.steps)
+                rate, x, n = run(d, threads, args.steps, args.material_solve)
                 best[threads] = max(best[threads], rate)
                 final[threads] = x
         if final[1].tobytes() != final[2].tobytes():

@@ -244,8 +244,9 @@ class SimConfig:
     solve over all particles at once with each pad's rest Hessian, a quasi-Newton step of the
     implicit step (tissue/global_step.py), whose passes do not grow with the resolution: 2 world
     steps x 3 passes are within 1.1 % of the converged pad at 16,000 and 64,000 per m^2. 'global'
-    needs the continuum group energy (TissueConfig.group_energy) and the thesis coupling, and its
-    solve runs on one thread. Its factor is made once per process for each pad and step length:
+    needs the continuum group energy (TissueConfig.group_energy) and the thesis coupling; with
+    ``threads`` each pad's part of the solve (its block of the factor) runs on a thread of its own.
+    Its factor is made once per process for each pad and step length:
     0.04 s for a default pad of 24 free particles, 0.2 s at 450, 10 s at 3,000 (256,000 per m^2) on
     an AMD EPYC core. The world then takes the coupling rule's steps only (compliant.world_substeps).
     On SoftGrasp-v4's scripted grasp it is x2.4 faster than 'groups' at the default density and x3
@@ -255,9 +256,9 @@ class SimConfig:
     contact_margin: float = 0.002
     """Extra distance [m] within which contact candidates are collected per step."""
     threads: int | None = None
-    """Threads of the tissue solver [-], 1 to 64: with more than one, the fingers' pads are swept on
-    threads of their own (each finger's groups touch only its own particles and core, so the result
-    is the same to the bit as on one thread). The work is split by pad, so a gripper's two pads use
+    """Threads of the tissue solver [-], 1 to 64: with more than one, the fingers' pads are swept
+    (under ``material_solve`` 'global': solved) on threads of their own (each finger's groups touch
+    only its own particles and core, so the result is the same to the bit as on one thread). The work is split by pad, so a gripper's two pads use
     at most two threads: more buy nothing. Where a pad has no core of its own (pads sharing one, a
     free block) the solver runs on one thread and warns once (RuntimeWarning). The contacts and
     friction stay on one thread (the pads share the cylinder). None: the environment variable

@@ -159,8 +159,15 @@ def envelope_solve(first, ptr, val, b):
     with unsigned integers: a signed index makes numba wrap negative ones around, a branch per load
     that kept LLVM from vectorising either loop (x7-14 at 450-1,200 particles). The same machine
     code gives the same result on every run."""
-    n = first.shape[0]
-    for i in range(n):  # L y = b, by rows
+    envelope_solve_rows(first, ptr, val, b, 0, first.shape[0])
+
+
+@nb.njit(cache=True, error_model="numpy", fastmath={"contract", "reassoc"}, _nrt=False)
+def envelope_solve_rows(first, ptr, val, b, lo, n):
+    """envelope_solve of the diagonal block of rows lo .. n - 1, which no row outside it reaches
+    (first[i] >= lo for every row of the block: one body's rows, GlobalSystem.body_rows): its
+    arithmetic, row by row, is the whole solve's."""
+    for i in range(lo, n):  # L y = b, by rows
         a = np.uint64(ptr[i])
         c0 = np.uint64(first[i])
         m = np.uint64(i) - c0
@@ -168,7 +175,7 @@ def envelope_solve(first, ptr, val, b):
         for k in range(m):
             s += val[a + k] * b[c0 + k]
         b[i] = (b[i] - s) / val[a + m]
-    for i in range(n - 1, -1, -1):  # L^T x = y, by the columns of L^T (the rows of L)
+    for i in range(n - 1, lo - 1, -1):  # L^T x = y, by the columns of L^T (the rows of L)
         a = np.uint64(ptr[i])
         c0 = np.uint64(first[i])
         m = np.uint64(i) - c0
@@ -247,10 +254,16 @@ class GlobalSystem:
     friction_w: np.ndarray
     """(N,) scratch: each particle's compliance across its contact's normal, which friction moves
     it by (friction_weights) [1/kg]."""
+    body_rows: np.ndarray
+    """(B + 1,) int64: body b's free particles are order[body_rows[b]:body_rows[b + 1]], and its
+    rows of the factor 3 body_rows[b] .. 3 body_rows[b + 1] - 1, a diagonal block no other row
+    reaches."""
+    body_held: np.ndarray
+    """(B + 1,) int64: body b's held particles are held[body_held[b]:body_held[b + 1]]."""
 
     def arrays(self) -> tuple:
         return (self.order, self.first, self.ptr, self.factor, self.held, self.displacement, self.gradient, self.rhs,
-                self.frames, self.compliance, self.friction_w)  # fmt: skip
+                self.frames, self.compliance, self.friction_w, self.body_rows, self.body_held)  # fmt: skip
 
     @property
     def envelope(self) -> int:
@@ -284,7 +297,14 @@ def build_global_system(model: TissueModel, dt: float) -> GlobalSystem:
     ptr = np.cumsum(ptr)
     degree = np.diff(ptr)
     perm = _rcm(ptr, pc.astype(np.int64), degree.astype(np.int64), free.size) if free.size else np.zeros(0, np.int64)
+    # each body's rows together, the bodies in their order (RCM orders each connected component as a
+    # whole, and a body's groups stay inside it): a body's block of the factor is then reached by
+    # no other row, and the bodies' passes can run one after the other or side by side
     order = free[perm]
+    order = order[np.argsort(model.particle_body[order], kind="stable")]
+    body_off = model.body_particle_offsets.astype(np.int64)
+    body_rows = np.searchsorted(model.particle_body[order], np.arange(model.body_count + 1)).astype(np.int64)
+    body_held = np.searchsorted(held, body_off).astype(np.int64)
     slot = np.full(n, -1, dtype=np.int64)
     slot[order] = np.arange(order.size)
     # the envelope of (M + dt^2 K0)_ff over the free coordinates, lower triangle by rows
@@ -301,6 +321,9 @@ def build_global_system(model: TissueModel, dt: float) -> GlobalSystem:
     factor = np.zeros(int(eptr[-1]))
     np.add.at(factor, eptr[fr] + (fc - first[fr]), fv)
     factor[eptr[:-1] + (np.arange(nd) - first)] += np.repeat(model.particle_mass[order], 3)
+    row_body = np.repeat(model.particle_body[order], 3)
+    if row_body.size and (row_body[first] != row_body).any():
+        raise ValueError("the global material solve needs every group inside one body (a group spans two)")
     bad = _envelope_factor(first, eptr, factor)
     if bad >= 0:
         raise ValueError(f"the material's matrix is not positive definite at particle {int(order[bad // 3])}")
@@ -309,7 +332,7 @@ def build_global_system(model: TissueModel, dt: float) -> GlobalSystem:
     return GlobalSystem(dt=float(dt), order=order.astype(np.int64), first=first, ptr=eptr, factor=factor,
                         held=held.astype(np.int64), displacement=np.zeros((n, 3)), gradient=np.zeros((n, 3)),
                         rhs=np.zeros(nd), frames=np.zeros((model.body_count, 9)), compliance=compliance,
-                        friction_w=np.zeros(n))  # fmt: skip
+                        friction_w=np.zeros(n), body_rows=body_rows, body_held=body_held)  # fmt: skip
 
 
 _FACTORS: dict[tuple, GlobalSystem] = {}
@@ -413,8 +436,15 @@ def material_gradient(rot_iters, g_off, g_mem, g_pack, g_cont, xp, group_q, mass
     """grad = dE/dx at ``xp`` [N] with each group's R the polar factor of its F (warm-started from
     group_q, which takes it): the local step. The arithmetic of a group's F, R and residual is
     continuum_groups'."""
-    grad[...] = 0.0
-    for g in range(g_off.shape[0] - 1):
+    material_gradient_of(0, g_off.shape[0] - 1, rot_iters, g_off, g_mem, g_pack, g_cont, xp, group_q, mass, grad)
+
+
+@nb.njit(**KERNEL)
+def material_gradient_of(lo, hi, rot_iters, g_off, g_mem, g_pack, g_cont, xp, group_q, mass, grad):
+    """material_gradient of one body, particles and groups lo .. hi - 1 (a group is centred on a
+    particle, and a body's groups have its particles only as members): grad's rows lo .. hi - 1."""
+    grad[lo:hi] = 0.0
+    for g in range(lo, hi):
         i = np.uint64(g)
         start = np.uint64(g_off[i])
         end = np.uint64(g_off[i + 1])
@@ -477,28 +507,27 @@ def material_gradient(rot_iters, g_off, g_mem, g_pack, g_cont, xp, group_q, mass
 
 
 @nb.njit(**KERNEL)
-def _frames(frames, body_core_shape, shape_rigid, rig_q):
-    """Each body's core rotation (its rest frame in the world), identity without a core."""
-    for b in range(frames.shape[0]):
-        cs = body_core_shape[b]
-        r00 = r11 = r22 = 1.0
-        r01 = r02 = r10 = r12 = r20 = r21 = 0.0
-        if cs >= 0 and shape_rigid[cs] >= 0:
-            k = shape_rigid[cs]
-            r00, r01, r02, r10, r11, r12, r20, r21, r22 = qmat((rig_q[k, 0], rig_q[k, 1], rig_q[k, 2], rig_q[k, 3]))
-        frames[b, 0], frames[b, 1], frames[b, 2] = r00, r01, r02
-        frames[b, 3], frames[b, 4], frames[b, 5] = r10, r11, r12
-        frames[b, 6], frames[b, 7], frames[b, 8] = r20, r21, r22
+def _frame_of(b, frames, body_core_shape, shape_rigid, rig_q):
+    """Body b's core rotation (its rest frame in the world) into frames[b], identity without a core."""
+    cs = body_core_shape[b]
+    r00 = r11 = r22 = 1.0
+    r01 = r02 = r10 = r12 = r20 = r21 = 0.0
+    if cs >= 0 and shape_rigid[cs] >= 0:
+        k = shape_rigid[cs]
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = qmat((rig_q[k, 0], rig_q[k, 1], rig_q[k, 2], rig_q[k, 3]))
+    frames[b, 0], frames[b, 1], frames[b, 2] = r00, r01, r02
+    frames[b, 3], frames[b, 4], frames[b, 5] = r10, r11, r12
+    frames[b, 6], frames[b, 7], frames[b, 8] = r20, r21, r22
 
 
 @nb.njit(**KERNEL)
-def deliver_held(gsys, dt, mass, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
-                 rig_axis, imp_lin, imp_ang, coupling_imp):  # fmt: skip
-    """Each held particle's residual m U + dt^2 dE/dx (the gradient in gsys, current) onto its
-    core as an impulse, its U taking it up."""
-    held, u, grad = gsys[4], gsys[5], gsys[6]
+def deliver_held(gsys, b, dt, mass, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q, rig_inv_mass,
+                 rig_inv_inertia, rig_axis, imp_lin, imp_ang, coupling_imp):  # fmt: skip
+    """Each held particle of body b: its residual m U + dt^2 dE/dx (the gradient in gsys, current)
+    onto its core as an impulse, its U taking it up."""
+    held, u, grad, body_held = gsys[4], gsys[5], gsys[6], gsys[12]
     h = dt * dt
-    for hh in range(held.shape[0]):
+    for hh in range(body_held[b], body_held[b + 1]):
         j = held[hh]
         m = mass[j]
         rx = m * u[j, 0] + h * grad[j, 0]
@@ -513,75 +542,106 @@ def deliver_held(gsys, dt, mass, p_body, body_core_shape, shape_rigid, xp, rig_x
 
 
 @nb.njit(**KERNEL)
-def global_pass(gsys, rot_iters, dt, g_turn, g_off, g_mem, g_pack, g_cont, attached, rest_q, rest_moment, xp, qp,
-                group_q, moment, mass, p_body, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass,
+def global_pass(gsys, rot_iters, dt, g_turn, body_off, g_off, g_mem, g_pack, g_cont, attached, rest_q, rest_moment, xp,
+                qp, group_q, moment, mass, p_body, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass,
                 rig_inv_inertia, rig_axis, imp_lin, imp_ang, coupling_imp):  # fmt: skip
-    """One pass of the material over every group (module docstring): the local step (each group's
-    R) and the gradient, the held particles' residuals onto their cores, the quasi-Newton step of
-    the free particles through the rest Hessian in each body's frame, and each free group
-    centre's turn toward quat(R) q_bar (as the sweep turns them: sweep_body)."""
-    order, first, ptr, factor, held, u, grad, rhs, frames, _, _ = gsys
-    material_gradient(max(rot_iters, POLAR_ITERATIONS), g_off, g_mem, g_pack, g_cont, xp, group_q, mass, grad)
-    deliver_held(gsys, dt, mass, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
-                 rig_axis, imp_lin, imp_ang, coupling_imp)  # fmt: skip
-    _frames(frames, body_core_shape, shape_rigid, rig_q)
+    """One pass of the material over every group (module docstring), body after body
+    (global_body_pass)."""
+    for b in range(body_off.shape[0] - 1):
+        global_body_pass(b, gsys, rot_iters, dt, g_turn, body_off, g_off, g_mem, g_pack, g_cont, attached, rest_q,
+                         rest_moment, xp, qp, group_q, moment, mass, p_body, body_core_shape, shape_rigid, rig_x, rig_q,
+                         rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang, coupling_imp)  # fmt: skip
+
+
+@nb.njit(**KERNEL)
+def global_body_pass(b, gsys, rot_iters, dt, g_turn, body_off, g_off, g_mem, g_pack, g_cont, attached, rest_q,
+                     rest_moment, xp, qp, group_q, moment, mass, p_body, body_core_shape, shape_rigid, rig_x, rig_q,
+                     rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang, coupling_imp):  # fmt: skip
+    """One pass of the material over body b's groups: the local step (each group's R) and the
+    gradient, the held particles' residuals onto the core, the quasi-Newton step of the free
+    particles through the rest Hessian in the body's frame (its own block of the factor), and each
+    free group centre's turn toward quat(R) q_bar (as the sweep turns them: sweep_body). It reads
+    and writes body b's particles, groups, rows and core only, so the bodies' passes give the same
+    result in any order or side by side (the solver's threads: where no two bodies share a core)."""
+    order, first, ptr, factor, _, u, grad, rhs, frames, _, _, body_rows, _ = gsys
+    lo, hi = body_off[b], body_off[b + 1]
+    material_gradient_of(lo, hi, max(rot_iters, POLAR_ITERATIONS), g_off, g_mem, g_pack, g_cont, xp, group_q, mass,
+                         grad)  # fmt: skip
+    deliver_held(gsys, b, dt, mass, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q, rig_inv_mass,
+                 rig_inv_inertia, rig_axis, imp_lin, imp_ang, coupling_imp)  # fmt: skip
+    _frame_of(b, frames, body_core_shape, shape_rigid, rig_q)
+    f = frames[b]
     h = dt * dt
-    for r in range(order.shape[0]):
+    r0, r1 = body_rows[b], body_rows[b + 1]
+    for r in range(r0, r1):
         j = order[r]
         m = mass[j]
         ex = -(m * u[j, 0] + h * grad[j, 0])
         ey = -(m * u[j, 1] + h * grad[j, 1])
         ez = -(m * u[j, 2] + h * grad[j, 2])
-        f = frames[p_body[j]]
         rhs[3 * r] = f[0] * ex + f[3] * ey + f[6] * ez  # R^T e: into the body's rest frame
         rhs[3 * r + 1] = f[1] * ex + f[4] * ey + f[7] * ez
         rhs[3 * r + 2] = f[2] * ex + f[5] * ey + f[8] * ez
-    envelope_solve(first, ptr, factor, rhs)
-    for r in range(order.shape[0]):
+    envelope_solve_rows(first, ptr, factor, rhs, 3 * r0, 3 * r1)
+    for r in range(r0, r1):
         j = order[r]
-        f = frames[p_body[j]]
-        a, b, c = rhs[3 * r], rhs[3 * r + 1], rhs[3 * r + 2]
-        dx = f[0] * a + f[1] * b + f[2] * c
-        dy = f[3] * a + f[4] * b + f[5] * c
-        dz = f[6] * a + f[7] * b + f[8] * c
+        a, bb, c = rhs[3 * r], rhs[3 * r + 1], rhs[3 * r + 2]
+        dx = f[0] * a + f[1] * bb + f[2] * c
+        dy = f[3] * a + f[4] * bb + f[5] * c
+        dz = f[6] * a + f[7] * bb + f[8] * c
         xp[j, 0] += dx
         xp[j, 1] += dy
         xp[j, 2] += dz
         u[j, 0] += dx
         u[j, 1] += dy
         u[j, 2] += dz
-    for i in range(g_off.shape[0] - 1):
+    for i in range(lo, hi):
         if not attached[i]:
             qr = (group_q[i, 0], group_q[i, 1], group_q[i, 2], group_q[i, 3])
             _turn_centre(i, qr, g_turn[i], rest_q, qp, rest_moment, moment)
 
 
 @nb.njit(**KERNEL)
-def global_finish(gsys, rot_iters, dt, g_off, g_mem, g_pack, g_cont, xp, group_q, mass, p_body, body_core_shape,
-                  shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang, coupling_imp):  # fmt: skip
-    """After the step's last pass: every particle's residual m U + dt^2 dE/dx at the final positions
-    onto its body's core, at its spot. For a held particle that is the material's force where the
-    step ends; for a free one it is what the passes left unsolved (zero once converged). Handing
-    both over keeps momentum and angular momentum exact every step: the residuals sum to
-    sum_j m_j U_j (the material's forces sum to zero and have no torque), which is what the
-    material moved the tissue by. Left on the free particles it was a push on the core from
-    nothing (1.4 % of a sagging pad's weight sideways at one pass a step)."""
-    material_gradient(max(rot_iters, POLAR_ITERATIONS), g_off, g_mem, g_pack, g_cont, xp, group_q, mass, gsys[6])
-    deliver_held(gsys, dt, mass, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
-                 rig_axis, imp_lin, imp_ang, coupling_imp)  # fmt: skip
-    order, u, grad = gsys[0], gsys[5], gsys[6]
+def global_finish(gsys, rot_iters, dt, body_off, g_off, g_mem, g_pack, g_cont, xp, group_q, mass, p_body,
+                  body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang,
+                  coupling_imp):  # fmt: skip
+    """After the step's last pass, body after body (global_body_finish)."""
+    for b in range(body_off.shape[0] - 1):
+        global_body_finish(b, gsys, rot_iters, dt, body_off, g_off, g_mem, g_pack, g_cont, xp, group_q, mass, p_body,
+                           body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
+                           imp_lin, imp_ang, coupling_imp)  # fmt: skip
+
+
+@nb.njit(**KERNEL)
+def global_body_finish(b, gsys, rot_iters, dt, body_off, g_off, g_mem, g_pack, g_cont, xp, group_q, mass, p_body,
+                       body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin,
+                       imp_ang, coupling_imp):  # fmt: skip
+    """After the step's last pass: every particle of body b hands its residual m U + dt^2 dE/dx at
+    the final positions to the body's core, at its spot. For a held particle that is the material's
+    force where the step ends; for a free one it is what the passes left unsolved (zero once
+    converged). Handing both over keeps momentum and angular momentum exact every step: the
+    residuals sum to sum_j m_j U_j (the material's forces sum to zero and have no torque), which is
+    what the material moved the tissue by. Left on the free particles it was a push on the core
+    from nothing (1.4 % of a sagging pad's weight sideways at one pass a step)."""
+    lo, hi = body_off[b], body_off[b + 1]
+    material_gradient_of(lo, hi, max(rot_iters, POLAR_ITERATIONS), g_off, g_mem, g_pack, g_cont, xp, group_q, mass,
+                         gsys[6])  # fmt: skip
+    deliver_held(gsys, b, dt, mass, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q, rig_inv_mass,
+                 rig_inv_inertia, rig_axis, imp_lin, imp_ang, coupling_imp)  # fmt: skip
+    order, u, grad, body_rows = gsys[0], gsys[5], gsys[6], gsys[11]
+    cs = body_core_shape[b]
+    if cs < 0 or shape_rigid[cs] < 0:
+        return
+    core = shape_rigid[cs]
     h = dt * dt
-    for r in range(order.shape[0]):
+    for r in range(body_rows[b], body_rows[b + 1]):
         j = order[r]
-        cs = body_core_shape[p_body[j]]
-        if cs < 0 or shape_rigid[cs] < 0:
-            continue
         m = mass[j]
         rx = m * u[j, 0] + h * grad[j, 0]
         ry = m * u[j, 1] + h * grad[j, 1]
         rz = m * u[j, 2] + h * grad[j, 2]
-        deliver_to_core(j, -rx, -ry, -rz, shape_rigid[cs], xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
-                        imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+        deliver_to_core(j, -rx, -ry, -rz, core, xp, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin,
+                        imp_ang, coupling_imp, dt)  # fmt: skip
 
 
 @nb.njit(**KERNEL)

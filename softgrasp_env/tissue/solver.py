@@ -67,6 +67,8 @@ from .friction import friction_pairs, friction_patches, friction_velocity_pass, 
 from .global_step import (
     GlobalSystem,
     friction_weights,
+    global_body_finish,
+    global_body_pass,
     global_finish,
     global_pass,
     global_system,
@@ -257,6 +259,40 @@ def _bodies_pass(snap, last, g_turn, rot_iters, body_off, group_kappa, dt, g_off
 
 
 @nb.njit(cache=True, parallel=True, error_model="numpy", fastmath={"contract"})
+def _global_bodies_pass(last, gsys, rot_iters, dt, g_turn, body_off, g_off, g_mem, g_pack, g_cont, g_frame, attached,
+                        fixed, rest_x, rest_q, rest_moment, inertia, x, xp, qp, q_pred, spin_kick, group_q, moment, mass,
+                        p_body, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis,
+                        imp_lin, imp_ang, coupling_imp):  # fmt: skip
+    """The global material solve's pass (global_step.global_body_pass), the bodies on threads: the
+    thesis coupling's snap of the attached particles, the body's pass, and after the last pass
+    (``last``) the groups' torque balance. Each body's pass reads and writes its own particles,
+    groups, block of the factor and core, so where no two bodies share a core this is the serial
+    order's result to the bit (snap_attached, global_pass, balance_torques), on any number of
+    threads."""
+    for b in nb.prange(body_off.shape[0] - 1):
+        lo, hi = body_off[b], body_off[b + 1]
+        snap_attached_of(lo, hi, rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x,
+                         rig_q, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+        global_body_pass(b, gsys, rot_iters, dt, g_turn, body_off, g_off, g_mem, g_pack, g_cont, attached, rest_q,
+                         rest_moment, xp, qp, group_q, moment, mass, p_body, body_core_shape, shape_rigid, rig_x, rig_q,
+                         rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang, coupling_imp)  # fmt: skip
+        if last:
+            balance_torques_of(lo, hi, g_off, g_mem, g_frame, attached, fixed, inertia, x, xp, qp, q_pred, spin_kick)
+
+
+@nb.njit(cache=True, parallel=True, error_model="numpy", fastmath={"contract"})
+def _global_bodies_finish(gsys, rot_iters, dt, body_off, g_off, g_mem, g_pack, g_cont, xp, group_q, mass, p_body,
+                          body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin,
+                          imp_ang, coupling_imp):  # fmt: skip
+    """global_step.global_finish, the bodies on threads (each its own particles and core: the serial
+    result to the bit)."""
+    for b in nb.prange(body_off.shape[0] - 1):
+        global_body_finish(b, gsys, rot_iters, dt, body_off, g_off, g_mem, g_pack, g_cont, xp, group_q, mass, p_body,
+                           body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin,
+                           imp_ang, coupling_imp)  # fmt: skip
+
+
+@nb.njit(cache=True, parallel=True, error_model="numpy", fastmath={"contract"})
 def _bodies_start(x, v, q, omega, group_q, mass, inertia, body_off, rest_moment, gx, gy, gz, damping, dt, xp, qp, q_pred,
                   vd, wd, moment, g_off, g_mem, g_frame):  # fmt: skip
     """predict_particles and group_frames, the bodies on threads (each reads and writes its own
@@ -309,7 +345,8 @@ def _step(
 
     ``gsys`` is None for the material's Gauss-Seidel sweep over the groups (compliant.py), or the
     arrays of a global_step.GlobalSystem for its global solve (SimConfig.material_solve "global"),
-    which runs on one thread; pruned on None as above."""
+    whose pads' blocks run on threads with ``threads`` (_global_bodies_pass); pruned on None as
+    above."""
     # The model's and the scratch arrays arrive packed in three flat buffers: numba unboxes every
     # array argument on each call (~0.1 us apiece), and ~45 separate arrays cost ~5 us a step.
     rest_x, rest_q = _view(f_pack, layout, _REST_X), _view(f_pack, layout, _REST_Q)
@@ -381,15 +418,23 @@ def _step(
     # --- Gauss-Seidel iterations
     for it in range(iterations):
         if gsys is not None:
-            # the material over all groups at once (global_step.py); the thesis coupling's snap first,
-            # as below (the solver admits the global solve under that coupling only)
-            snap_attached(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x, rig_q,
-                          imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
-            global_pass(gsys, rot_iters, dt, g_turn, g_off, g_mem, g_pack, g_cont, attached, rest_q, rest_moment, xp,
-                        qp, group_q, moment, mass, p_body, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass,
-                        rig_inv_inertia, rig_axis, imp_lin, imp_ang, coupling_imp)  # fmt: skip
-            if it == iterations - 1:
-                balance_torques(g_off, g_mem, g_frame, attached, fixed, inertia, x, xp, qp, q_pred, spin_kick)
+            # the material over all groups at once (global_step.py), each body's block on its own; the
+            # thesis coupling's snap first, as below (the solver admits the global solve under that
+            # coupling only)
+            if threads is not None:
+                _global_bodies_pass(it == iterations - 1, gsys, rot_iters, dt, g_turn, body_off, g_off, g_mem, g_pack,
+                                    g_cont, g_frame, attached, fixed, rest_x, rest_q, rest_moment, inertia, x, xp, qp,
+                                    q_pred, spin_kick, group_q, moment, mass, p_body, body_core_shape, shape_rigid,
+                                    rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang,
+                                    coupling_imp)  # fmt: skip
+            else:
+                snap_attached(rest_x, rest_q, mass, attached, p_body, body_core_shape, shape_rigid, xp, qp, rig_x,
+                              rig_q, imp_lin, imp_ang, coupling_imp, dt)  # fmt: skip
+                global_pass(gsys, rot_iters, dt, g_turn, body_off, g_off, g_mem, g_pack, g_cont, attached, rest_q,
+                            rest_moment, xp, qp, group_q, moment, mass, p_body, body_core_shape, shape_rigid, rig_x,
+                            rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang, coupling_imp)  # fmt: skip
+                if it == iterations - 1:
+                    balance_torques(g_off, g_mem, g_frame, attached, fixed, inertia, x, xp, qp, q_pred, spin_kick)
         elif threads is not None:
             _bodies_pass(coupling == COUPLING_THESIS, it == iterations - 1, g_turn, rot_iters, body_off, group_kappa,
                          dt, g_off, g_mem, g_pack, g_frame, attached, fixed, rest_x, rest_q, rest_moment, inertia, x, xp,
@@ -451,9 +496,14 @@ def _step(
                 project_anchors(rest_x, inv_mass, attached, p_body, body_core_shape, shape_rigid, xp, rig_x, rig_q,
                                 rig_inv_mass, rig_inv_inertia, rig_axis, rig_move, imp_lin, imp_ang, dt)  # fmt: skip
     if gsys is not None:
-        global_finish(gsys, rot_iters, dt, g_off, g_mem, g_pack, g_cont, xp, group_q, mass, p_body, body_core_shape,
-                      shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin, imp_ang,
-                      coupling_imp)  # fmt: skip
+        if threads is not None:
+            _global_bodies_finish(gsys, rot_iters, dt, body_off, g_off, g_mem, g_pack, g_cont, xp, group_q, mass,
+                                  p_body, body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia,
+                                  rig_axis, imp_lin, imp_ang, coupling_imp)  # fmt: skip
+        else:
+            global_finish(gsys, rot_iters, dt, body_off, g_off, g_mem, g_pack, g_cont, xp, group_q, mass, p_body,
+                          body_core_shape, shape_rigid, rig_x, rig_q, rig_inv_mass, rig_inv_inertia, rig_axis, imp_lin,
+                          imp_ang, coupling_imp)  # fmt: skip
     # --- coupling to the cores (thesis 5.1.3): error -> impulse, snap back; then velocities from
     #     positions (PBD Alg. 1 lines 18-21); angular velocity from q* q^-1 on the short arc
     #     (Mueller & Chentanez 2011 sec. 3)

@@ -14,7 +14,8 @@ from softgrasp_env.config import SimConfig, TissueConfig
 from softgrasp_env.presets import v4_tissue
 from softgrasp_env.tissue.builder import CoreShape, build_combined_body
 from softgrasp_env.tissue.compliant import continuum_energy
-from softgrasp_env.tissue.global_step import build_global_system, envelope_solve, rest_hessian
+from softgrasp_env.tissue.global_step import build_global_system, envelope_solve, envelope_solve_rows, rest_hessian
+from softgrasp_env.tissue.model import concatenate, with_core_shapes
 from softgrasp_env.tissue.shape_matching import group_pack
 from softgrasp_env.tissue.solver import TissueSolver
 
@@ -74,6 +75,31 @@ def test_the_envelope_factor_solves_its_matrix():
         expect = [block[0, 0], block[0, 1], block[0, 2], block[1, 1], block[1, 2], block[2, 2]]
         assert np.allclose(system.compliance[j], expect, rtol=1e-10, atol=0.0), j
     assert system.order.size == n  # this pad has no core shape yet: nothing is held
+
+
+def test_each_body_is_a_block_of_the_factor_solved_on_its_own():
+    """Two pads (each with a core, so their attached particles are held): each body's free
+    particles are one run of rows, no row reaches outside its body's block, and solving the blocks
+    one at a time, in either order, is the whole solve to the bit (what the threads rely on)."""
+    one = with_core_shapes(pad(16_000.0), np.array([0]))
+    two = concatenate([one, with_core_shapes(pad(16_000.0), np.array([1]))])
+    system = build_global_system(two, 1.0 / 480.0)
+    rows, held = system.body_rows, system.body_held
+    assert rows[0] == 0 and rows[-1] == system.order.size and np.all(np.diff(rows) > 0)
+    for b in range(two.body_count):
+        block = system.order[rows[b]:rows[b + 1]]
+        assert np.all(two.particle_body[block] == b)
+        assert np.all(two.particle_body[system.held[held[b]:held[b + 1]]] == b)
+        assert np.all(system.first[3 * rows[b]:3 * rows[b + 1]] >= 3 * rows[b])
+    assert held[-1] == system.held.size > 0
+    b = np.random.default_rng(2).normal(size=system.first.size)
+    whole = b.copy()
+    envelope_solve(system.first, system.ptr, system.factor, whole)
+    for blocks in ((0, 1), (1, 0)):
+        x = b.copy()
+        for k in blocks:
+            envelope_solve_rows(system.first, system.ptr, system.factor, x, 3 * rows[k], 3 * rows[k + 1])
+        assert x.tobytes() == whole.tobytes()
 
 
 def _rig(density: float, solve: str, substeps: int, iterations: int, *, friction: float | None = 0.0):

@@ -31,8 +31,9 @@ import numpy as np
 import softgrasp_env
 from softgrasp_env.config import SimConfig
 
-def run(threads, coupling, steps, **kwargs):
-    env = gym.make("SoftGraspEasy-v4", sim=SimConfig(threads=threads, coupling=coupling), **kwargs)
+def run(threads, coupling, steps, solve="groups", **kwargs):
+    sim = SimConfig(threads=threads, coupling=coupling, material_solve=solve)
+    env = gym.make("SoftGraspEasy-v4", sim=sim, **kwargs)
     obs, _ = env.reset(seed=5)
     rng = np.random.default_rng(5)
     rows = [obs]
@@ -59,9 +60,9 @@ if what == "pool":
     os.environ["NUMBA_NUM_THREADS"] = "1"
     numba.njit(lambda a: a + 1)(1)
 elif what == "same":
-    density, steps = float(sys.argv[3]), int(sys.argv[4])
-    one = run(1, sys.argv[2], steps, particle_density=density)
-    two = run(2, sys.argv[2], steps, particle_density=density)
+    density, steps, solve = float(sys.argv[3]), int(sys.argv[4]), sys.argv[5]
+    one = run(1, sys.argv[2], steps, solve, particle_density=density)
+    two = run(2, sys.argv[2], steps, solve, particle_density=density)
     assert all(a.tobytes() == b.tobytes() for a, b in zip(one, two)), "1 and 2 threads differ"
 elif what == "warn":
     from softgrasp_env.accuracy import _Pad
@@ -97,14 +98,15 @@ def _child(*args, env=None):
 
 
 @needs_two
-@pytest.mark.parametrize("coupling", ["thesis", "consistent"])
+@pytest.mark.parametrize(("coupling", "solve"), [("thesis", "groups"), ("consistent", "groups"), ("thesis", "global")])
 @pytest.mark.parametrize(("density", "steps"), [(4_000, 130), (16_000, 25)])
-def test_two_threads_give_one_threads_result_to_the_bit(coupling, density, steps):
+def test_two_threads_give_one_threads_result_to_the_bit(coupling, solve, density, steps):
     """SoftGraspEasy-v4 with random actions at the default density for 130 steps (past the
     100-step episode, so across a reset) and at 16,000 per m^2 (the fine preset's) for 25: the
     observations, rewards and every particle's position and velocity, on 1 and 2 threads. Under
-    the consistent coupling each core slides inside its own pad's sweep."""
-    _child("same", coupling, str(density), str(steps))
+    the consistent coupling each core slides inside its own pad's sweep; under the global material
+    solve each pad's block of the factor is solved on its own thread."""
+    _child("same", coupling, str(density), str(steps), solve)
 
 
 def test_one_thread_never_loads_parallel_code():
