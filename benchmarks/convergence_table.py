@@ -5,7 +5,7 @@ slide, the torsional lever against the squeeze, and the rim push, each with its 
 
     PYTHONPATH=. python benchmarks/convergence_table.py [--material continuum] [--law contact]
         [--hourglass 1] [--layers 1 | auto | 1,1,2,4] [--densities 4000,16000,64000,256000]
-        [--rows rig,slip,env,lever,rim]
+        [--rows rig,slip,env,lever,rim] [--material-solve global]
 
 Every row is measured at the default dt (1/240 s) and iterations (3) with one material
 (``--material``: TissueConfig.group_energy; ``--law``: TissueConfig.friction_law; ``--hourglass``:
@@ -66,7 +66,7 @@ from pathlib import Path
 
 import numpy as np
 
-from softgrasp_env.config import FRICTION_LAWS, GROUP_ENERGIES, TissueConfig
+from softgrasp_env.config import FRICTION_LAWS, GROUP_ENERGIES, MATERIAL_SOLVES, SimConfig, TissueConfig
 
 OUT = Path(__file__).resolve().parent / "out"
 DENSITIES = (4_000.0, 16_000.0, 64_000.0, 256_000.0)
@@ -82,18 +82,20 @@ LEVER_FORCES = (1.0, 6.0)
 
 def measure(density: float, rows, *, material: str, law: str, layers: int, seeds: int, hourglass: float = 0.0,
             hold_bracket: tuple[float, float] = (0.05, 1.5), friction_bracket: tuple[float, float] = (0.05, 1.0),
-            report=print) -> dict:  # fmt: skip
+            solve: str = "groups", report=print) -> dict:  # fmt: skip
     """Every row in ``rows`` at one density; keys as in the CSV. The brackets are where the env
     row's bisections start (kg; friction scale), widened inside 0.05-1.5 kg / 0.05-1 if they do not
-    straddle."""
+    straddle. ``solve``: SimConfig.material_solve, in every row (the world steps its rule asks)."""
     tissue = TissueConfig(group_energy=material, friction_law=law, layers=layers, particle_density=density,
                           hourglass_stiffness=hourglass)  # fmt: skip
+    sim = SimConfig(material_solve=solve)
+    kind = {"fingers": "tissue", "material_solve": solve}
     out: dict[str, float] = {"density": density, "layers": layers}
     tic = time.perf_counter()
     if "rig" in rows:
         from benchmarks.spatial_convergence import measure_tissue
 
-        r = measure_tissue(density, material=material, layers=layers, law=law, hourglass=hourglass)
+        r = measure_tissue(density, material=material, layers=layers, law=law, hourglass=hourglass, sim=sim)
         out.update({key: r[key] for key in ("compression_1N", "compression_3N", "compression_6N", "width_3N",
                                             "compliance", "particles", "substeps")})  # fmt: skip
         out["compliance_compressed"] = r["compliance"]
@@ -101,20 +103,21 @@ def measure(density: float, rows, *, material: str, law: str, layers: int, seeds
         from benchmarks.spatial_convergence import tangential_at
 
         refs = band_references()
-        errors = [tangential_at(density, load, material=material, layers=layers, law=law, hourglass=hourglass)
-                  / refs[load] - 1.0 for load in BAND_LOADS]  # fmt: skip
+        errors = [tangential_at(density, load, material=material, layers=layers, law=law, hourglass=hourglass,
+                                sim=sim) / refs[load] - 1.0 for load in BAND_LOADS]  # fmt: skip
         out["band_mean"] = float(np.mean(errors))
         out["band_spread"] = float(np.max(errors) - np.min(errors))
     if "slip" in rows:
         from benchmarks.partial_slip import ramp
 
-        r = ramp(density, material=material, law=law, layers=layers, hourglass=hourglass, report=lambda *a: None)
+        r = ramp(density, material=material, law=law, layers=layers, hourglass=hourglass, report=lambda *a: None,
+                 sim=sim)  # fmt: skip
         out["first_slide"] = math.nan if r["first_slide"] is None else r["first_slide"]
         out["gross_slide"] = math.nan if r["gross"] is None else r["gross"]
     if "env" in rows or "hold" in rows:
         from benchmarks.grasp_checks import hold_bound
 
-        h = hold_bound({"fingers": "tissue"}, "v3", tissue=tissue, bracket=hold_bracket, report=report)
+        h = hold_bound(kind, "v3", tissue=tissue, bracket=hold_bracket, report=report)
         out["hold_bound"] = math.nan if h is None else h["mass"]
         out["hold_ratio"] = math.nan if h is None else h["mass"] / h["coulomb"]
         out["hold_ratio_press"] = math.nan if h is None else h["mass"] / h["coulomb_press"]
@@ -122,7 +125,7 @@ def measure(density: float, rows, *, material: str, law: str, layers: int, seeds
     if "env" in rows or "friction" in rows:
         from benchmarks.grasp_checks import lowest_friction
 
-        f = lowest_friction({"fingers": "tissue"}, "v3", tissue=tissue, bracket=friction_bracket, report=report)
+        f = lowest_friction(kind, "v3", tissue=tissue, bracket=friction_bracket, report=report)
         out["lowest_friction"] = math.nan if f is None else f["scale"]
         out["friction_ratio"] = math.nan if f is None else f["scale"] / f["coulomb"]
         out["friction_ratio_cylinder"] = math.nan if f is None else f["scale"] / f["coulomb_cylinder"]
@@ -131,7 +134,7 @@ def measure(density: float, rows, *, material: str, law: str, layers: int, seeds
         from benchmarks.contact_patch import measure as patch
 
         for force in LEVER_FORCES:
-            figs = patch(GRASPS["aligned (default)"], tissue=tissue, finger_force=force)
+            figs = patch(GRASPS["aligned (default)"], tissue=tissue, finger_force=force, material_solve=solve)
             levers = [f["lever"].mean() for f in figs if f]
             out[f"lever_{force:g}N"] = float(np.mean(levers)) if levers else math.nan
     if "rim" in rows:
@@ -139,7 +142,7 @@ def measure(density: float, rows, *, material: str, law: str, layers: int, seeds
 
         from benchmarks.rim_creep import KINDS, episode
 
-        env = gym.make(KINDS["tissue"], tissue=tissue)
+        env = gym.make(KINDS["tissue"], tissue=tissue, material_solve=solve)
         try:
             pushes = [episode(env, 0.04, 0.11, 0.0, s, {"cylinder_mass": 0.2, "friction_scale": 0.5})[3]
                       for s in range(1000, 1000 + seeds)]  # fmt: skip
@@ -246,6 +249,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--hold-bracket", default="0.05,1.5", help="kg: where the hold bound's bisection starts")
     parser.add_argument("--friction-bracket", default="0.05,1", help="where the lowest friction's bisection starts")
     parser.add_argument("--seeds", type=int, default=3, help="episodes of the rim row (seeds 1000, ...)")
+    parser.add_argument("--material-solve", choices=MATERIAL_SOLVES, default="groups",
+                        help="SimConfig.material_solve in every row")  # fmt: skip
     parser.add_argument("--out", type=Path, default=OUT)
     ns = parser.parse_args(argv)
     rows = ns.rows.split(",")
@@ -283,10 +288,11 @@ def main(argv: list[str] | None = None) -> int:
     for n in set(layers):  # a clear error for a bad mix before any work
         TissueConfig(group_energy=ns.material, friction_law=ns.law, layers=n, hourglass_stiffness=ns.hourglass)
     print(f"material {ns.material}, hourglass {ns.hourglass:g}, friction law {ns.law}, layers {ns.layers} "
-          f"({', '.join(map(str, layers))}); dt 1/240 s, 3 iterations; 1 process, 1 thread", flush=True)  # fmt: skip
+          f"({', '.join(map(str, layers))}), material solve {ns.material_solve}; dt 1/240 s, 3 iterations; 1 process, "
+          "1 thread", flush=True)  # fmt: skip
     refs = references(rows)
     results = [measure(d, rows, material=ns.material, law=ns.law, layers=n, seeds=ns.seeds, hourglass=ns.hourglass,
-                       hold_bracket=brackets["hold"], friction_bracket=brackets["friction"])
+                       hold_bracket=brackets["hold"], friction_bracket=brackets["friction"], solve=ns.material_solve)
                for d, n in zip(densities, layers, strict=True)]  # fmt: skip
     print()
     table = []
@@ -312,7 +318,8 @@ def main(argv: list[str] | None = None) -> int:
                                     for r in results))  # fmt: skip
     ns.out.mkdir(parents=True, exist_ok=True)
     suffix = (f"_{ns.material}_{ns.law}" + ("" if ns.hourglass == 0 else f"_h{ns.hourglass:g}")
-              + ("" if ns.layers == "1" else f"_L{ns.layers.replace(',', '-')}"))  # fmt: skip
+              + ("" if ns.layers == "1" else f"_L{ns.layers.replace(',', '-')}")
+              + ("" if ns.material_solve == "groups" else f"_{ns.material_solve}"))  # fmt: skip
     if set(rows) <= set(SPLIT_ROWS):  # one half of the env row: its own file, so the halves can run side by side
         suffix += "_" + "-".join(rows)
     path = ns.out / f"convergence_table{suffix}.csv"

@@ -51,7 +51,8 @@ accelerates and catches the cylinder again has not held it (the rigid twin did s
 
 def _make(kind: dict, version: str, *, dt: float = 1.0 / 240.0, **kwargs) -> gym.Env:
     kw = dict(kind)
-    sim = SimConfig(dt=dt, coupling=kw.pop("coupling", "thesis"), iterations=kw.pop("iterations", SimConfig.iterations))
+    sim = SimConfig(dt=dt, coupling=kw.pop("coupling", "thesis"), iterations=kw.pop("iterations", SimConfig.iterations),
+                    material_solve=kw.pop("material_solve", SimConfig.material_solve))  # fmt: skip
     env_id = f"SoftGraspEasyRigid-{version}" if kw.get("fingers") == "rigid" else f"SoftGraspEasy-{version}"
     return gym.make(env_id, sim=sim, **kw, **kwargs)
 

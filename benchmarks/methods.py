@@ -9,7 +9,8 @@ Methods (all in the same scene, the same scripted grasp, seed-free: the scene is
   16 x the default, 64,000 per m^2 in two layers: the v4 tissue is the same material at every
   density), group size and the faces covered (``tissue_faces="all"``: every face, not only where
   contact can happen), plus the presets (softgrasp_env/presets.py). The tissue is the soft v4
-  ids' (``--tissue v3``: the v3 ids').
+  ids' (``--tissue v3``: the v3 ids'); with the v4 tissue also its material solved across the
+  groups (``material_solve="global"``) over the same iterations and densities.
 
 For each: whole-world physics steps/s (the stepping alone), and errors measured the same way for
 every method (softgrasp_env/accuracy.py): deepest penetration over every step, in-hand motion of
@@ -184,6 +185,17 @@ def settings(quick: bool, tiny: bool = False, tissue: str = "v4", fem_fine: bool
                              replace(c0, tissue=_at_density(base.tissue, f * base.tissue.particle_density))))
             rows.append((fam, "group size 6", replace(c0, tissue=replace(base.tissue, group_size=6))))
             rows.append((fam, "all faces", replace(c0, fingers=TissueFingerConfig(faces="all"))))
+    if tissue == "v4":
+        # the same tissue with its material solved across the groups (SimConfig.material_solve
+        # "global"): the coupling rule's world steps only, over the same densities
+        fam = "tissue, global solve"
+        sim_g = replace(base.sim, material_solve="global")
+        cg = replace(base, sim=sim_g)
+        rows.append((fam, "default", cg))
+        for n in (iters if not quick else ()):
+            rows.append((fam, f"{n} iterations", replace(cg, sim=replace(sim_g, iterations=n))))
+        for f in dens:
+            rows.append((fam, f"density x{f:g}", replace(cg, tissue=_at_density(base.tissue, f * base.tissue.particle_density))))
     return rows
 
 

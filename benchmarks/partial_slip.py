@@ -42,7 +42,7 @@ import math
 import numpy as np
 
 from benchmarks.spatial_convergence import PadRig
-from softgrasp_env.config import TissueConfig
+from softgrasp_env.config import SimConfig, TissueConfig
 
 SPEED = 2e-3
 """How fast the cylinder is driven down its axis [m/s]: slow enough that the pad's damping force
@@ -92,13 +92,14 @@ def stick_zone(lam: np.ndarray, y: np.ndarray, stuck: np.ndarray) -> tuple[float
 
 
 def ramp(density: float, *, material: str = "shape_matching", law: str = "contact", layers: int = 1,
-         hourglass: float = 0.0, friction: float | None = None, speed: float = SPEED, report=print) -> dict:  # fmt: skip
+         hourglass: float = 0.0, friction: float | None = None, speed: float = SPEED, report=print,
+         sim: SimConfig | None = None) -> dict:  # fmt: skip
     """Press to PRESS, then drive the cylinder down its axis until every contact slides. Returns
     the rows (Q / mu P, stick share, c / a) and the summary figures. ``layers``: TissueConfig.layers;
     ``hourglass``: TissueConfig.hourglass_stiffness; ``friction``: mu (TissueConfig's default if None);
-    ``speed``: the cylinder's axial speed [m/s]."""
+    ``speed``: the cylinder's axial speed [m/s]; ``sim``: the solver's settings (PadRig)."""
     tissue = TissueConfig(group_energy=material, friction_law=law, layers=layers, hourglass_stiffness=hourglass)
-    rig = PadRig(density, tissue=tissue, friction=friction)
+    rig = PadRig(density, tissue=tissue, friction=friction, sim=sim)
     mu = rig.tissue.friction_static
     c, _ = rig.press_to(PRESS, guess=2e-3)
     rows, u0 = [], rig.axial

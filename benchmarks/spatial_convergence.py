@@ -283,11 +283,12 @@ def measure_tissue(density: float, loads=LOADS, *, tangential: bool = True, mate
 
 
 def tangential_at(density: float, load: float, *, material: str = "shape_matching", layers: int = 1,
-                  law: str = "patch", hourglass: float = 0.0) -> float:  # fmt: skip
+                  law: str = "patch", hourglass: float = 0.0, sim: SimConfig | None = None) -> float:  # fmt: skip
     """One pad's tangential compliance [m/N] pressed to ``load`` [N], as measure_tissue's at 3 N,
-    the axial moves scaled with the load (SHEAR load / 3 N) so that the contact sticks."""
+    the axial moves scaled with the load (SHEAR load / 3 N) so that the contact sticks; ``sim``
+    the solver's settings (PadRig)."""
     tissue = TissueConfig(group_energy=material, layers=layers, friction_law=law, hourglass_stiffness=hourglass)
-    rig = PadRig(density, tissue=tissue)
+    rig = PadRig(density, tissue=tissue, sim=sim)
     c, _ = rig.press_to(load, guess=2.7e-3 * (load / 3.0) ** 0.7)
     shear = SHEAR * load / 3.0
     rig.move_to(c, axial=-0.5 * shear, speed=RAMP_SPEED / 2)

@@ -450,21 +450,25 @@ def test_a_tissue_grip_high_on_the_cylinder_holds_what_coulomb_allows():
     assert soft["success"] == 3 and soft["max_creep"] < 0.005, soft
 
 
-def test_convergence_table_prints_the_slip_rows_with_their_orders(tmp_path):
+@pytest.mark.parametrize("solve", ["groups", "global"])
+def test_convergence_table_prints_the_slip_rows_with_their_orders(tmp_path, solve):
     """The one-table benchmark's slip rows on the continuum pad under Coulomb per contact at two
-    densities (measured: the first contact slides at Q / mu P 0.57 and 0.03, the whole strip at 1.04
-    and 1.01; Coulomb's 1 and Cattaneo-Mindlin's 0), and its CSV."""
+    densities, under each material solve (measured: the first contact slides at Q / mu P 0.57 and
+    0.03, the whole strip at 1.04 and 1.01; global: 0.55 / 0.029 and 1.029 / 1.020; Coulomb's 1 and
+    Cattaneo-Mindlin's 0), and its CSV."""
     import csv
     import re
 
     out = _run_plain("convergence_table.py", "--material", "continuum", "--law", "contact", "--rows", "slip",
-                     "--densities", "4000,16000", "--out", str(tmp_path))  # fmt: skip
+                     "--densities", "4000,16000", "--material-solve", solve, "--out", str(tmp_path))  # fmt: skip
+    assert f"material solve {solve}" in out, out
     gross = re.search(r"whole strip slides at Q / mu P\s+([\d.]+)\s+([\d.]+)\s+ref 1;", out)
     first = re.search(r"first contact slides at Q / mu P\s+([\d.]+)\s+([\d.]+)\s+ref 0;", out)
     assert gross and first, out
     assert all(0.98 < float(g) < 1.06 for g in gross.groups()), out
     assert float(first.group(2)) < 0.2 < float(first.group(1)), out  # the edges let go first once resolved
-    rows = list(csv.DictReader(open(tmp_path / "convergence_table_continuum_contact.csv")))
+    name = "convergence_table_continuum_contact" + ("" if solve == "groups" else "_global")
+    rows = list(csv.DictReader(open(tmp_path / f"{name}.csv")))
     assert {r["quantity"] for r in rows} == {"first_slide", "gross_slide"} and len(rows) == 4
 
 
