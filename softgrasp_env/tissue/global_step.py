@@ -300,9 +300,12 @@ def build_global_system(model: TissueModel, dt: float) -> GlobalSystem:
     # each body's rows together, the bodies in their order (RCM orders each connected component as a
     # whole, and a body's groups stay inside it): a body's block of the factor is then reached by
     # no other row, and the bodies' passes can run one after the other or side by side
+    body_off = model.body_particle_offsets.astype(np.int64)
+    if body_off.size < 2 or body_off[0] != 0 or body_off[-1] != n:
+        raise ValueError("the global material solve needs every particle in a body (TissueModel.body_particle_offsets "
+                         f"from 0 to {n}, got {body_off.tolist()})")  # fmt: skip
     order = free[perm]
     order = order[np.argsort(model.particle_body[order], kind="stable")]
-    body_off = model.body_particle_offsets.astype(np.int64)
     body_rows = np.searchsorted(model.particle_body[order], np.arange(model.body_count + 1)).astype(np.int64)
     body_held = np.searchsorted(held, body_off).astype(np.int64)
     slot = np.full(n, -1, dtype=np.int64)

@@ -100,6 +100,10 @@ def test_each_body_is_a_block_of_the_factor_solved_on_its_own():
         for k in blocks:
             envelope_solve_rows(system.first, system.ptr, system.factor, x, 3 * rows[k], 3 * rows[k + 1])
         assert x.tobytes() == whole.tobytes()
+    # particles outside every body would be outside every block: refused by name
+    with pytest.raises(ValueError, match="every particle in a body"):
+        build_global_system(replace(one, body_particle_offsets=np.array([0, one.particle_count - 1], np.int32)),
+                            1.0 / 480.0)  # fmt: skip
 
 
 def _rig(density: float, solve: str, substeps: int, iterations: int, *, friction: float | None = 0.0):
