@@ -80,6 +80,23 @@ def test_the_v4_tissue_is_the_continuum_with_coulomb_per_contact():
     assert (v3.group_energy, v3.hourglass_stiffness, v3.friction_law, v3.layers) == ("shape_matching", 0.0, "patch", 1)
 
 
+def test_the_v3_ids_are_the_v4_ids_with_the_thesis_tissue_keywords():
+    """The v3 tissue (the thesis' shape matching, a friction law per patch, one layer) is the v4 id
+    with those four keywords: the same configs and the same steps to the bit (random actions across
+    the grasp's first 40 env steps). So a v3 result stays reachable through the v4 ids' keywords."""
+    thesis = {"group_energy": "shape_matching", "friction_law": "patch", "hourglass_stiffness": 0.0, "layers": 1}
+    v3, v4 = gym.make("SoftGraspEasy-v3"), gym.make("SoftGraspEasy-v4", **thesis)
+    assert v3.unwrapped.args.physics == v4.unwrapped.args.physics
+    rng = np.random.default_rng(3)
+    first, _ = v3.reset(seed=3)
+    again, _ = v4.reset(seed=3)
+    assert first.tobytes() == again.tobytes()
+    for _ in range(40):
+        action = rng.uniform(-1.0, 1.0, size=4).astype(np.float32)
+        a, b = v3.step(action), v4.step(action)
+        assert a[0].tobytes() == b[0].tobytes() and a[1:4] == b[1:4]
+
+
 @pytest.mark.parametrize("env_id", sorted(RETIRED))
 def test_a_retired_id_names_the_release_that_has_it(env_id):
     """A retired id (the v1/v2 ids, SoftGraspGoal-v1 and -v3, the grip task's first versions): gym.make
