@@ -21,6 +21,7 @@ import numba
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
+from softgrasp_env.config import MATERIAL_SOLVES
 
 
 def run(density: float, threads: int, steps: int, solve: str = "groups") -> tuple[float, np.ndarray, int]:
@@ -48,7 +49,7 @@ def main() -> None:
     parser.add_argument("--densities", default="16000,64000,256000")
     parser.add_argument("--steps", type=int, default=20)
     parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--material-solve", default="groups", choices=("groups", "global"))
+    parser.add_argument("--material-solve", default="groups", choices=MATERIAL_SOLVES)
     args = parser.parse_args()
     if numba.config.NUMBA_NUM_THREADS < 2:
         raise SystemExit("numba has one thread here (NUMBA_NUM_THREADS): nothing to compare")

@@ -258,8 +258,8 @@ class SimConfig:
     threads: int | None = None
     """Threads of the tissue solver [-], 1 to 64: with more than one, the fingers' pads are swept
     (under ``material_solve`` 'global': solved) on threads of their own (each finger's groups touch
-    only its own particles and core, so the result is the same to the bit as on one thread). The work is split by pad, so a gripper's two pads use
-    at most two threads: more buy nothing. Where a pad has no core of its own (pads sharing one, a
+    only its own particles and core, so the result is the same to the bit as on one thread). The
+    work is split by pad, so a gripper's two pads use at most two threads: more buy nothing. Where a pad has no core of its own (pads sharing one, a
     free block) the solver runs on one thread and warns once (RuntimeWarning). The contacts and
     friction stay on one thread (the pads share the cylinder). None: the environment variable
     SOFTGRASP_THREADS, or 1 without it, so that processes run side by side (vector envs, RLlib workers) do not

@@ -3,7 +3,8 @@ recorded through the public API alone: ``gym.make``, ``reset``, ``step`` and the
 ``tests/data/trajectories_v3.npz`` holds the v3 ids as 0.5.0 shipped them, ``trajectories_more.npz``
 the other ids and the settings reached only through kwargs, ``trajectories_v4.npz`` the soft ids'
 v4 recorded on a CPU without AVX-512 and ``trajectories_v4_avx512.npz`` the same cases on one with
-it (before the kernels lost numba's reference counting); ``tests/test_trajectories.py``
+it (before the kernels lost numba's reference counting), ``trajectories_global_avx512.npz`` the v4
+tissue under the global material solve, with AVX-512; ``tests/test_trajectories.py``
 replays them and asserts bit-identical observations, rewards and flags, so a refactor or a speed-up
 that changes behaviour cannot land quietly. (The v1/v2 ids' recording went with them: release 0.6.0
 replays it.)
@@ -28,6 +29,7 @@ DATA_V3 = Path(__file__).parent / "data" / "trajectories_v3.npz"
 DATA_V4 = Path(__file__).parent / "data" / "trajectories_v4.npz"
 DATA_MORE = Path(__file__).parent / "data" / "trajectories_more.npz"
 DATA_V4_AVX512 = Path(__file__).parent / "data" / "trajectories_v4_avx512.npz"
+DATA_GLOBAL_AVX512 = Path(__file__).parent / "data" / "trajectories_global_avx512.npz"
 
 INFO_FLAGS = ("is_success", "held", "carrying", "diverged", "action_clipped")
 """Boolean info entries recorded per step."""
@@ -100,8 +102,18 @@ V4_CASES: tuple[tuple[str, str, dict, str, int], ...] = (
 """The soft ids' v4 (the goal's v5) on the v4 tissue (the grip id with random squeezes: the scripted
 grasp does not read taxels), its fine preset and the consistent coupling."""
 
+GLOBAL_CASES: tuple[tuple[str, str, dict, str, int], ...] = (
+    ("global-SoftGrasp-v4/scripted", "SoftGrasp-v4", {"material_solve": "global"}, "scripted", 100),
+    ("global-SoftGraspEasy-v4/random", "SoftGraspEasy-v4", {"material_solve": "global"}, "random", 130),
+    ("global-fine/scripted", "SoftGraspEasy-v4", {"preset": "fine", "material_solve": "global"}, "scripted", 40),
+)  # fmt: skip
+"""The v4 tissue under the global material solve (``material_solve="global"``, an option of every
+soft id): the scripted grasp through the carry, random actions across a reset, and the fine
+preset. Recorded with AVX-512 on the code before the solve was split by pad (for its threads), so
+that the replay shows the split kept every bit."""
+
 SETS = {"v3": (V3_CASES, DATA_V3), "more": (MORE_CASES, DATA_MORE), "v4": (V4_CASES, DATA_V4),
-        "v4-avx512": (V4_CASES, DATA_V4_AVX512)}
+        "v4-avx512": (V4_CASES, DATA_V4_AVX512), "global-avx512": (GLOBAL_CASES, DATA_GLOBAL_AVX512)}
 """The v4 cases are recorded twice, without AVX-512 (``v4``) and with it (``v4-avx512``), so that
 both kinds of machine replay them bit for bit (each replays the other's prefix within tolerance):
 the continuum group solve, which only the v4 tissue runs, is then checked whole on either."""
