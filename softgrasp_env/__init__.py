@@ -17,5 +17,5 @@ from .registration import ENV_IDS, register_envs  # noqa: E402
 
 register_envs()
 
-__version__ = "0.8.0"
+__version__ = "0.9.0.dev0"
 __all__ = ["ENV_IDS", "register_envs", "__version__"]
