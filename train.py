@@ -1,12 +1,12 @@
 """Train a stable-baselines3 agent on a SoftGrasp environment.
 
     python train.py --env SoftGrasp-v4 --algo sac --timesteps 100000
-    python train.py --env SoftGraspGoal-v4 --demos 100   # HER + SAC by default for the goal env
+    python train.py --env SoftGraspGoal-v6 --demos 100   # HER + SAC by default for the goal env
     python train.py --env SoftGraspRigid-v3 --algo ppo --n-envs 2
-    python train.py --env SoftGrasp-v3 --env-kwargs cylinder_mass=0.2 fingers="'segmented'"
-    python train.py --resume runs/SoftGrasp-v3_sac_0 --timesteps 50000   # 50k more steps
-    python train.py --env SoftGrasp-v3 --force       # start runs/SoftGrasp-v3_sac_0 anew (deletes the old run)
-    python train.py --env SoftGrasp-v3 --torch-threads 2   # the learner on 2 torch threads (default 1)
+    python train.py --env SoftGrasp-v5 --env-kwargs cylinder_mass=0.2 fingers="'segmented'"
+    python train.py --resume runs/SoftGrasp-v5_sac_0 --timesteps 50000   # 50k more steps
+    python train.py --env SoftGrasp-v5 --force       # start runs/SoftGrasp-v5_sac_0 anew (deletes the old run)
+    python train.py --env SoftGrasp-v5 --torch-threads 2   # the learner on 2 torch threads (default 1)
     python train.py --env SoftGraspGrip-v6 --asymmetric     # the critic also reads the object's mass, friction, pose
 
 Writes ``<out>/<env>_<algo>_<seed>/``: ``model.zip``, ``vecnormalize.pkl`` (observation statistics,

@@ -2,7 +2,7 @@
 ``softgrasp_env.policies.load_baseline``; ``agents/trained`` is a link to it): publishing a train.py
 run there with its model card, reading the cards back, and the results table.
 
-    python -m agents.cards publish runs/SoftGrasp-v3_ppo_0 runs/SoftGraspRigid-v3_ppo_0 ...
+    python -m agents.cards publish runs/SoftGrasp-v5_ppo_0 runs/SoftGraspRigid-v3_ppo_0 ...
     python -m agents.cards table                 # the results table (scripted measured live)
     python -m agents.cards objects --versions 1  # success per object on the object-set ids
 
@@ -379,12 +379,12 @@ def env_label(card: dict[str, Any]) -> str:
     return " ".join([card["env"], *(f"{k}={v!r}" for k, v in sorted(kwargs.items()))])
 
 
-SCRIPTED_IDS = ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspGoal-v4",
-                "SoftGraspGrip-v6", "SoftGraspGripRigid-v5", "SoftGraspGripRigidTorsion-v5",
-                "SoftGraspGrip-v5", "SoftGraspGripRigid-v4", "SoftGraspGripRigidTorsion-v4",
-                "SoftGraspObjects-v1", "SoftGraspObjectsRigid-v1", "SoftGraspObjectsRigidTorsion-v1",
-                "SoftGraspObjectsGrip-v2", "SoftGraspObjectsGripRigid-v2", "SoftGraspObjectsGripRigidTorsion-v2",
-                "SoftGraspObjectsGrip-v1", "SoftGraspObjectsGripRigid-v1", "SoftGraspObjectsGripRigidTorsion-v1")
+SCRIPTED_IDS = ("SoftGrasp-v5", "SoftGrasp-v4", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspGoal-v6",
+                "SoftGraspGoal-v5", "SoftGraspGrip-v7", "SoftGraspGrip-v6", "SoftGraspGripRigid-v5",
+                "SoftGraspGripRigidTorsion-v5", "SoftGraspGripRigid-v4", "SoftGraspGripRigidTorsion-v4",
+                "SoftGraspObjects-v2", "SoftGraspObjects-v1", "SoftGraspObjectsRigid-v1", "SoftGraspObjectsRigidTorsion-v1",
+                "SoftGraspObjectsGrip-v3", "SoftGraspObjectsGrip-v2", "SoftGraspObjectsGripRigid-v2",
+                "SoftGraspObjectsGripRigidTorsion-v2", "SoftGraspObjectsGripRigid-v1", "SoftGraspObjectsGripRigidTorsion-v1")
 """The ids whose scripted policy the tables measure live."""
 
 

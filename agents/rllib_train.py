@@ -2,11 +2,11 @@
 Ray cluster; Ray Tune runs several seeds or a small grid as parallel trials.
 
     scripts/setup.sh --rllib                      # .venv-rllib: RLlib pins its own gymnasium
-    .venv-rllib/bin/python -m agents.rllib_train --env SoftGrasp-v3 --timesteps 200000 --num-env-runners 2
+    .venv-rllib/bin/python -m agents.rllib_train --env SoftGrasp-v5 --timesteps 200000 --num-env-runners 2
     .venv-rllib/bin/python -m agents.rllib_train --seeds 0 1 2 --grid lr=1e-4,3e-4   # 6 trials
     # a cluster: `ray start --head --port 6379` on one node, `ray start --address HEAD:6379` on the others, then
     .venv-rllib/bin/python -m agents.rllib_train --address HEAD:6379 --num-env-runners 62 --timesteps 10000000
-    .venv-rllib/bin/python -m agents.evaluate --policy runs-rllib/SoftGrasp-v3_rllib-ppo/seed_0   # same table as SB3
+    .venv-rllib/bin/python -m agents.evaluate --policy runs-rllib/SoftGrasp-v5_rllib-ppo/seed_0   # same table as SB3
 
 Every trial's directory gets a ``run.json`` (``"backend": "rllib"``: env, env kwargs, algo, seed,
 hyperparameters, steps, wall time, the command, the checkpoint) beside Tune's own files
@@ -186,7 +186,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m agents.rllib_train", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     vector_ids = [i for i in softgrasp_env.ENV_IDS if not i.startswith("SoftGraspGoal")]
-    parser.add_argument("--env", default="SoftGrasp-v4", choices=vector_ids)
+    parser.add_argument("--env", default="SoftGrasp-v5", choices=vector_ids)
     parser.add_argument("--env-kwargs", nargs="+", type=parse_kwarg, default=None, metavar="KEY=VALUE",
                         help="passed to gym.make")  # fmt: skip
     parser.add_argument("--algo", choices=ALGOS, default="ppo")

@@ -27,10 +27,10 @@ import argparse
 import math
 import time
 
-import gymnasium as gym
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
+from benchmarks.retired import make
 from softgrasp_env.policies import ScriptedGraspPolicy
 
 IDS = {"tissue_v4": "SoftGrasp-v4", "tissue": "SoftGrasp-v3", "rigid": "SoftGraspRigid-v3",
@@ -102,7 +102,7 @@ def main(argv: list[str] | None = None) -> int:
           f"{'slide mm':>10}{'tilt deg':>10}")  # fmt: skip
     totals: dict[str, list[int]] = {}
     for kind in kinds:
-        env = gym.make(IDS[kind])
+        env = make(IDS[kind])
         policy = make_policy(specs.get(kind), env)
         tic = time.perf_counter()
         tot = totals.setdefault(kind, [0, 0, 0])

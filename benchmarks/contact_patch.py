@@ -31,10 +31,10 @@ from __future__ import annotations
 import argparse
 import sys
 
-import gymnasium as gym
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
+from benchmarks.retired import make
 from softgrasp_env.policies import ScriptedGraspPolicy
 from softgrasp_env.scene.scene import CYLINDER_SHAPE
 
@@ -86,7 +86,7 @@ def measure(options: dict, *, steps: int = 100, seed: int = 0, **env_kwargs) -> 
     """Per finger (left, right): every figure of ``patch_figures`` at the last physics step of env
     steps HOLD_FROM..steps (the hold) of the scripted grasp from ``options``; ``env_kwargs`` go to
     gym.make."""
-    env = gym.make("SoftGraspEasy-v3", **env_kwargs)
+    env = make("SoftGraspEasy-v3", **env_kwargs)
     try:
         base = env.unwrapped
         # below 1 N per finger the policy's grip threshold (0.5 N) would be the motors' whole force:

@@ -6,8 +6,8 @@ steps at the defaults.
 
 An id may carry ``gym.make`` keyword arguments after ``@`` (values read as Python literals, else
 as strings), so a setting is timed beside the default in the same run, e.g.
-``--ids SoftGrasp-v3,SoftGrasp-v3@tissue_contact_cone=True`` (the cones' cost),
-``--ids SoftGrasp-v3,"SoftGrasp-v3@tactile=(4,3)"`` (the taxels' cost).
+``--ids SoftGrasp-v5,SoftGrasp-v5@tissue_contact_cone=True`` (the cones' cost),
+``--ids SoftGrasp-v5,"SoftGrasp-v5@tactile=(4,3)"`` (the taxels' cost).
 
 Prints a table; the machine is shared, so each figure is the best of three runs. Episode resets
 are inside the timed loop, as in training.
@@ -27,7 +27,7 @@ from agents.scripted import ScriptedGraspPolicy
 
 def split_specs(text: str) -> list[str]:
     """The comma-separated specs of ``--ids``; a comma inside brackets belongs to a value
-    (``SoftGrasp-v3@tactile=(4,3)``)."""
+    (``SoftGrasp-v5@tactile=(4,3)``)."""
     specs, depth, start = [], 0, 0
     for k, ch in enumerate(text):
         depth += ch in "([{"

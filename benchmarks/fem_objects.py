@@ -22,10 +22,10 @@ import argparse
 import math
 import time
 
-import gymnasium as gym
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
+from benchmarks.retired import make
 from softgrasp_env.observation import OBS_NAMES
 from softgrasp_env.policies import ScriptedGraspPolicy
 
@@ -39,7 +39,7 @@ def episode(obj: str, seed: int, resolution: str = "coarse", grip_force: float |
     [N], None: its default): held (the env's success), lift at the end [m], peak tilt [deg], mean
     squeeze once both fingers read the policy's grip_force [N], deepest penetration [m], steps, wall time [s]."""
     t0 = time.perf_counter()
-    env = gym.make(ENV_ID, fingers="fem", fem_resolution=resolution, object=obj)
+    env = make(ENV_ID, fingers="fem", fem_resolution=resolution, object=obj)
     policy = ScriptedGraspPolicy.for_env(env, **({} if grip_force is None else {"grip_force": grip_force}))
     obs, _ = env.reset(seed=seed)
     scene = env.unwrapped.scene

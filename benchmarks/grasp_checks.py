@@ -22,6 +22,7 @@ import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
 from agents.scripted import ScriptedGraspPolicy
+from benchmarks.retired import make
 from softgrasp_env.config import SimConfig
 from softgrasp_env.registration import TISSUE_V4
 from softgrasp_env.scene.scene import LEFT, PALM, RIGHT
@@ -54,7 +55,7 @@ def _make(kind: dict, version: str, *, dt: float = 1.0 / 240.0, **kwargs) -> gym
     sim = SimConfig(dt=dt, coupling=kw.pop("coupling", "thesis"), iterations=kw.pop("iterations", SimConfig.iterations),
                     material_solve=kw.pop("material_solve", SimConfig.material_solve))  # fmt: skip
     env_id = f"SoftGraspEasyRigid-{version}" if kw.get("fingers") == "rigid" else f"SoftGraspEasy-{version}"
-    return gym.make(env_id, sim=sim, **kw, **kwargs)
+    return make(env_id, sim=sim, **kw, **kwargs)  # version "v3": SoftGraspEasy-v4 with TISSUE_V3 under kw
 
 
 class Recorder:

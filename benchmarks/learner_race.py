@@ -2,7 +2,7 @@
 TQC and sbx's (JAX) SAC, TQC and CrossQ, each trained on a SoftGrasp id for the same wall-clock
 budget, seeds side by side, success of the deterministic policy sampled at fixed training times.
 
-    PYTHONPATH=. python benchmarks/learner_race.py [--env SoftGrasp-v3] [--minutes 15] [--seeds 0,1]
+    PYTHONPATH=. python benchmarks/learner_race.py [--env SoftGrasp-v5] [--minutes 15] [--seeds 0,1]
         [--learners sac,tqc,sbx-sac,sbx-tqc,sbx-crossq] [--every 90] [--episodes 20] [--out runs/race]
 
 Every run is set up as train.py sets up its runs (one env, SB3's Monitor, observations normalised
@@ -207,7 +207,7 @@ def plot(results: list[dict], path: Path) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="SoftGrasp-v3")
+    parser.add_argument("--env", default="SoftGrasp-v5")
     parser.add_argument("--learners", default=",".join(LEARNERS))
     parser.add_argument("--seeds", default="0,1")
     parser.add_argument("--minutes", type=float, default=15.0, help="training time per run")

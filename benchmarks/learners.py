@@ -2,7 +2,7 @@
 steps/s end to end of SB3's SAC, sb3-contrib's TQC and sbx's (JAX) SAC, TQC and CrossQ on a
 SoftGrasp id and on Pendulum-v1, each in its own process on one thread, in one run.
 
-    PYTHONPATH=. python benchmarks/learners.py [--env SoftGrasp-v3] [--steps 2000] [--learners sac,tqc,...]
+    PYTHONPATH=. python benchmarks/learners.py [--env SoftGrasp-v5] [--steps 2000] [--learners sac,tqc,...]
 
 The ratio env / Pendulum says what the env and our glue cost against the learner itself (the
 target: >= 0.7, the env under a third of the learner's time). Each run trains a fresh
@@ -85,7 +85,7 @@ def _run(name: str, env_id: str, steps: int, seed: int) -> float:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="SoftGrasp-v3")
+    parser.add_argument("--env", default="SoftGrasp-v5")
     parser.add_argument("--steps", type=int, default=2000, help="timed env steps per learner and env")
     parser.add_argument("--learners", default=",".join(LEARNERS))
     parser.add_argument("--seed", type=int, default=0)

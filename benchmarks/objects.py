@@ -31,9 +31,9 @@ from softgrasp_env.policies import ScriptedGraspPolicy
 from softgrasp_env.scene.objects import PRESETS
 
 KINDS = {"soft": "SoftGraspEasy-v4", "rigid": "SoftGraspEasyRigid-v3", "rigid_torsion": "SoftGraspEasyRigidTorsion-v3",
-         "rigid_torsion_patch": "SoftGraspEasyRigidTorsion-v3", "segmented": "SoftGraspEasy-v3"}  # fmt: skip
+         "rigid_torsion_patch": "SoftGraspEasyRigidTorsion-v3", "segmented": "SoftGraspEasy-v4"}  # fmt: skip
 CARRY = {"soft": "SoftGrasp-v4", "rigid": "SoftGraspRigid-v3", "rigid_torsion": "SoftGraspRigidTorsion-v3",
-         "rigid_torsion_patch": "SoftGraspRigidTorsion-v3", "segmented": "SoftGrasp-v3"}  # fmt: skip
+         "rigid_torsion_patch": "SoftGraspRigidTorsion-v3", "segmented": "SoftGrasp-v4"}  # fmt: skip
 """--task carry: the ids' own task - the reach from a misaligned start (yaw, jaw wedge, offset), the
 lift and the carry's sway."""
 FINGERS = {"rigid_torsion_patch": TorsionalRigidConfig(spinning_friction="patch"), "segmented": "segmented"}

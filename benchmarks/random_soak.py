@@ -20,16 +20,16 @@ from __future__ import annotations
 import argparse
 import time
 
-import gymnasium as gym
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
+from benchmarks.retired import make
 from softgrasp_env.policies import ScriptedGraspPolicy
 
 
 def soak(env_id: str, steps: int, stream: str, *, seed: int = 0, **kwargs) -> dict:
     """``steps`` env steps of ``stream`` actions on ``env_id``; the divergences and the figures."""
-    env = gym.make(env_id, **kwargs)
+    env = make(env_id, **kwargs)
     scripted = ScriptedGraspPolicy.for_env(env)
     rng = np.random.default_rng(seed)
     env.action_space.seed(seed)
@@ -64,7 +64,7 @@ def soak(env_id: str, steps: int, stream: str, *, seed: int = 0, **kwargs) -> di
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="SoftGrasp-v3")
+    parser.add_argument("--env", default="SoftGrasp-v5")
     parser.add_argument("--steps", type=int, default=100_000, help="per stream")
     parser.add_argument("--streams", default="uniform,noisy-scripted")
     parser.add_argument("--coupling", default=None, help="the tissue's coupling (default: the preset's)")

@@ -34,10 +34,10 @@ from __future__ import annotations
 import argparse
 import sys
 
-import gymnasium as gym
 import numpy as np
 
 from benchmarks.carry_bands import IDS
+from benchmarks.retired import make
 from softgrasp_env.policies import ScriptedGraspPolicy
 from softgrasp_env.scene import CYLINDER_SHAPE
 
@@ -111,7 +111,7 @@ def run(kind: str, height: float, lift: float, noise: float, seeds: range, optio
         if not kind.startswith("tissue"):
             raise ValueError(f"particle_density is a tissue setting; {kind!r} has no tissue")
         kwargs["particle_density"] = particle_density
-    env = gym.make(KINDS[kind], **kwargs)
+    env = make(KINDS[kind], **kwargs)
     try:
         rows = [episode(env, height, lift, noise, s, options) for s in seeds]
     finally:

@@ -72,11 +72,11 @@ import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-import gymnasium as gym
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
 from agents.scripted import ScriptedGraspPolicy
+from benchmarks.retired import make as make_env
 from softgrasp_env.config import SimConfig
 from softgrasp_env.fingers import FINGERS
 from softgrasp_env.observation import CARRY_OBS_NAMES, OBS_NAMES
@@ -208,7 +208,7 @@ def grid(make: dict, rows: tuple[str, list[float]], cols: tuple[str, list[float]
                     env.close()
                 key = repr(kwargs)
                 try:  # the physics map: fingers start around the cylinder
-                    env = gym.make(env_id, **kwargs)
+                    env = make_env(env_id, **kwargs)
                 except ValueError:  # outside what this method accepts
                     env = None
             out[i][j] = Cell(-2) if env is None else episode(env, cell, policy_for(env))

@@ -30,10 +30,10 @@ import math
 import sys
 import time
 
-import gymnasium as gym
 import numpy as np
 
 from benchmarks.carry_bands import IDS, add_kind_arguments, kinds_and_policies, make_policy
+from benchmarks.retired import make
 
 SEED = 1000
 """The model cards' first seed (agents.cards.SEED): a region's rates read against the cards'."""
@@ -79,7 +79,7 @@ def episodes(
 ) -> list[dict[str, float]]:
     """Per seed: the start's quantities, ``held_at_carry`` and ``success`` (1.0 / 0.0); ``options``
     are passed to every reset."""
-    env = gym.make(IDS[kind])
+    env = make(IDS[kind])
     try:
         policy = make_policy(spec, env)
         rows = []

@@ -24,10 +24,10 @@ import math
 import time
 from pathlib import Path
 
-import gymnasium as gym
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
+from benchmarks.retired import make
 from softgrasp_env.policies import ScriptedGraspPolicy
 
 OUT = Path(__file__).resolve().parent / "out"
@@ -94,7 +94,7 @@ def main() -> None:
         print(f"\n== {set_name}: {kwargs or 'the defaults'}")
         for env_id in ids:
             t0 = time.perf_counter()
-            env = gym.make(env_id, **kwargs)
+            env = make(env_id, **kwargs)
             policy = ScriptedGraspPolicy.for_env(env)
             verdicts = [run(env, s, policy=policy)[0] for s in seeds]
             n = sum(v == "success" for v in verdicts)
@@ -105,12 +105,12 @@ def main() -> None:
             env.close()
         if args.no_open_loop:
             continue
-        src = gym.make(ids[0], **kwargs)
+        src = make(ids[0], **kwargs)
         src_policy = ScriptedGraspPolicy.for_env(src)
         for rs in record:
             verdict, actions = run(src, rs, policy=src_policy)
             for env_id in ids:
-                env = gym.make(env_id, **kwargs)
+                env = make(env_id, **kwargs)
                 verdicts = [run(env, s, actions=actions)[0] for s in seeds]
                 n = sum(v == "success" for v in verdicts)
                 why = {k: verdicts.count(k) for k in ("never lifted", "lost", "slid") if k in verdicts}

@@ -5,7 +5,7 @@ one run, with the speed-up over one subprocess env; with ``--rllib`` (in the RLl
 also RLlib sampling with 1, 2, ... env runners (what ``agents.rllib_train --num-env-runners N``
 uses), and what 64 cores over several machines would give at the measured per-runner rate.
 
-    PYTHONPATH=. python benchmarks/vec_throughput.py [--env SoftGrasp-v3] [--seconds 20] [--max-envs N]
+    PYTHONPATH=. python benchmarks/vec_throughput.py [--env SoftGrasp-v5] [--seconds 20] [--max-envs N]
     PYTHONPATH=. .venv-rllib/bin/python benchmarks/vec_throughput.py --rllib     # SB3 and RLlib in one run
 
 Random actions, seeded; each configuration is warmed up (process start, numba's cached kernels
@@ -86,7 +86,7 @@ def measure_rllib(env_id: str, n_runners: int, seconds: float) -> float:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--env", default="SoftGrasp-v3")
+    parser.add_argument("--env", default="SoftGrasp-v5")
     parser.add_argument("--seconds", type=float, default=20.0, help="timed window per configuration")
     parser.add_argument("--max-envs", type=int, default=os.cpu_count() or 1)
     parser.add_argument("--rllib", action="store_true", help="also RLlib env runners (needs Ray: .venv-rllib)")

@@ -1,13 +1,13 @@
 """Minari datasets (Farama's standard for offline RL) of recorded episodes: the scripted grasp and
-the best shipped learned baseline on the v3 ids (SoftGrasp-v3, SoftGraspRigid-v3,
-SoftGraspRigidTorsion-v3: SAC models). An id with no shipped baseline has no learned dataset
-(asking for one is an error). (The v2 ids' datasets were retired with them: release 0.6.0 has
-them.)
+the best shipped learned baseline on the soft id with one (SoftGrasp-v4) and the rigid twin and
+the torsional peer (SoftGraspRigid-v3, SoftGraspRigidTorsion-v3): SAC models. An id with no shipped
+baseline has no learned dataset (asking for one is an error). (The v2 ids' datasets were retired
+with them, release 0.6.0 has them; SoftGrasp-v3's, release 0.8.0.)
 
     .venv/bin/python scripts/make_dataset.py                                   # 100 episodes each
     .venv/bin/python scripts/make_dataset.py --episodes 3 --out datasets/minari --force   # the shipped sample
     MINARI_DATASETS_PATH=datasets/minari .venv/bin/python -c \\
-        "import minari; print(minari.load_dataset('softgrasp/SoftGrasp-v3/scripted-v0'))"
+        "import minari; print(minari.load_dataset('softgrasp/SoftGrasp-v4/scripted-v0'))"
 
 Writes ``softgrasp/<env id>/scripted-v0`` and ``softgrasp/<env id>/learned-v0`` (the baseline with
 the best success rate on its card; its name is the dataset's algorithm) under ``--out`` (default:
@@ -33,7 +33,7 @@ import softgrasp_env
 from softgrasp_env.policies import ScriptedGraspPolicy, baseline_card, list_baselines
 from softgrasp_env.policies.baselines import best_per_env
 
-ENVS = ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3")
+ENVS = ("SoftGrasp-v4", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3")
 POLICIES = ("scripted", "learned")
 INFO_KEYS = {"is_success": bool, "held": bool, "carrying": bool, "lift_height": float, "diverged": bool}
 """What each step keeps of ``info`` (Minari needs the same keys and types at every step; the rest

@@ -17,10 +17,10 @@ import argparse
 import sys
 from pathlib import Path
 
-import gymnasium as gym
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
+from benchmarks.retired import make
 from softgrasp_env.policies import ScriptedGraspPolicy
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -31,7 +31,7 @@ PANELS = (("SoftGrasp-v3", "soft fingers (tissue)"), ("SoftGraspRigid-v3", "rigi
 def episode_frames(env_id: str, seed: int, every: int, size: tuple[int, int], camera: dict) -> tuple[list, dict]:
     """Frames of one scripted episode as (image, info, terminated, time [s]): the reset's and
     every ``every``-th step's, the last one always; and the last info."""
-    env = gym.make(env_id, render_mode="rgb_array", render_width=size[0], render_height=size[1], **camera)
+    env = make(env_id, render_mode="rgb_array", render_width=size[0], render_height=size[1], **camera)
     policy = ScriptedGraspPolicy.for_env(env)
     try:
         obs, info = env.reset(seed=seed)

@@ -6,7 +6,7 @@ Importing the package registers the Gymnasium environments listed in ``ENV_IDS``
     import gymnasium as gym
     import softgrasp_env
 
-    env = gym.make("SoftGrasp-v3")
+    env = gym.make("SoftGrasp-v5")
 """
 
 from ._jit_cache import invalidate_stale_kernels

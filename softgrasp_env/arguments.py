@@ -163,8 +163,8 @@ KEYWORDS: tuple[Keyword, ...] = (
     _kw("material_solve", "physics", "str", None,
         "How the tissue's material is solved each pass (SimConfig.material_solve): 'groups', a Gauss-Seidel sweep "
         "over the element groups, or 'global', one prefactored solve across all of them, whose passes do not grow "
-        "with the resolution and whose world steps are the coupling's alone (fingers='tissue', the continuum "
-        "energy); None: the sim's, 'groups'"),
+        "with the resolution and whose world steps are the coupling's alone (the continuum energy; no effect on "
+        "fingers without tissue); None: the sim's, 'groups'"),
     # cylinder
     _kw("cylinder_radius", "cylinder", "float", 0.03,
         "Cylinder radius [m]"),
@@ -243,23 +243,24 @@ KEYWORDS: tuple[Keyword, ...] = (
         "Success needs the cylinder held at every step of the carry and its in-hand slide at most this [m]"),
     # grip_force
     _kw("squeeze_weight", "grip_force", "float", 0.0,
-        "The grip-force task (SoftGraspGrip-v6: 1, v5: 0.3): the reward charges squeeze_weight * mean finger "
-        "force / the reference of squeeze_reference per step (info['reward_terms']['squeeze']); needs carry=True"),
+        "The grip-force task (the soft grip ids and the rigid ones' v5: 1; the rigid ones' v4: 0.3): the reward "
+        "charges squeeze_weight * mean finger force / the reference of squeeze_reference per step "
+        "(info['reward_terms']['squeeze']); needs carry=True"),
     _kw("squeeze_reference", "grip_force", "str", "finger_force",
-        "What the squeeze charge measures the squeeze in: 'finger_force' (the object-set grip ids: its share"
-        " of the finger's full force, the same for every cylinder) or 'least' (SoftGraspGrip-v5 on: in least "
-        "forces, m g / (2 mu_s) with this episode's mass and friction, so a squeeze 1.3 x the least costs the "
-        "same on a light cylinder as on a heavy one)"),
+        "What the squeeze charge measures the squeeze in: 'finger_force' (the object set's rigid grip ids' v1: "
+        "its share of the finger's full force, the same for every cylinder) or 'least' (every other grip id: in "
+        "least forces, m g / (2 mu_s) with this episode's mass and friction, so a squeeze 1.3 x the least costs "
+        "the same on a light cylinder as on a heavy one)"),
     _kw("squeeze_charge_steps", "grip_force", "str", "all",
-        "Which env steps pay the squeeze charge: 'all' (SoftGraspGrip-v5 and before) or 'carry' (v6: only the carry's, "
-        "where the least force is judged: closing and lifting cost nothing, so a grasp carried through "
-        "pays more than leaving the cylinder alone)"),
+        "Which env steps pay the squeeze charge: 'all' (the rigid grip ids' v4) or 'carry' (the soft grip ids, "
+        "the rigid ones' v5: only the carry's, where the least force is judged: closing and lifting cost nothing, "
+        "so a grasp carried through pays more than leaving the cylinder alone)"),
     _kw("squeeze_free", "grip_force", "float", 0.0,
         "The part of the squeeze, in units of squeeze_reference, that the charge leaves free: the charge is "
         "squeeze_weight * max(0, F / reference - squeeze_free) (with squeeze_reference='least', 1 charges only "
-        "the margin over the static least force; SoftGraspGrip-v6: 1, before it 0)"),
+        "the margin over the static least force; the soft grip ids and the rigid ones' v5: 1, before it 0)"),
     _kw("squeeze_factor", "grip_force", "float", None,
-        "The grip-force task (SoftGraspGrip-v5, v6: 2): success also needs the carry's mean squeeze at most this many"
+        "The grip-force task (the grip ids: 2): success also needs the carry's mean squeeze at most this many"
         " times the least force that holds the cylinder through it (Coulomb, with its measured accelerations; "
         "info['carry_squeeze'], info['least_squeeze']); needs carry=True. None: off"),
     # observation
@@ -371,8 +372,9 @@ class PhysicsConfig:
         if threads is not None:
             sim = replace(sim, threads=threads)  # validated by SimConfig
         if material_solve is not None:
-            if not isinstance(fingers, TissueFingerConfig):
-                raise ValueError(f"material_solve is a setting of fingers='tissue', but fingers={fingers.kind!r}")
+            # a setting of the tissue's solver, like the tissue's own keywords taken by every kind of
+            # finger: the soft ids carry it, and gym.make(SoftGrasp-v5, fingers="rigid") is the rigid
+            # twin, whose sim no tissue reads
             sim = replace(sim, material_solve=material_solve)  # validated by SimConfig
         return cls(fingers, tissue, sim)
 

@@ -56,13 +56,19 @@ def _collect(ns: argparse.Namespace, cls: type, prefix: str = "") -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m softgrasp_env.demo", description=__doc__,
+    # no abbreviations: a retired flag (--material) must not be read as a prefix of a live one
+    parser = argparse.ArgumentParser(prog="python -m softgrasp_env.demo", description=__doc__, allow_abbrev=False,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     parser.add_argument("--rigid", action="store_true", help="rigid-only fingers (no tissue)")
-    parser.add_argument("--tissue", choices=["v4", "v3"], default="v4",
-                        help="the tissue of the soft ids of that version: v4 the continuum energy with Coulomb's law "
-                             "per contact (presets.v4_tissue), v3 the thesis' shape matching with its patch law")  # fmt: skip
+    parser.add_argument("--tissue", choices=["v5", "v4", "v3"], default="v5",
+                        help="the tissue of the soft ids of that version: v5 the v4 tissue solved globally "
+                             "(--material-solve global, the default), v4 the continuum energy with Coulomb's law per "
+                             "contact (presets.v4_tissue) swept group by group, v3 the thesis' shape matching with "
+                             "its patch law")  # fmt: skip
     parser.add_argument("--coupling", choices=["thesis", "consistent"], default=None, help="core-tissue coupling")
+    parser.add_argument("--material-solve", choices=["groups", "global"], default=None,
+                        help="how the tissue's material is solved each pass (SimConfig.material_solve; default: "
+                             "--tissue's, global for v5, groups for v4 and v3)")  # fmt: skip
     parser.add_argument("--gui", action="store_true", help="open the pybullet GUI (needs a display)")
     parser.add_argument("--hold", type=float, default=GraspPlan().hold, help="seconds to hold the lifted cylinder")
     _add_dataclass_flags(parser, TissueConfig)
@@ -72,10 +78,14 @@ def main(argv: list[str] | None = None) -> int:
     ns = parser.parse_args(argv)
     try:
         tissue_kw = _collect(ns, TissueConfig)
-        tissue = v4_tissue(**tissue_kw) if ns.tissue == "v4" else TissueConfig(**tissue_kw)
+        tissue = TissueConfig(**tissue_kw) if ns.tissue == "v3" else v4_tissue(**tissue_kw)
         sim_kw = _collect(ns, SimConfig)
+        if ns.tissue == "v5" and not ns.rigid:  # the soft ids' v5: the v4 tissue, solved globally
+            sim_kw.setdefault("material_solve", "global")
         if ns.coupling:
             sim_kw["coupling"] = ns.coupling
+        if ns.material_solve:
+            sim_kw["material_solve"] = ns.material_solve
         sim = SimConfig(**sim_kw)
         scene_kw = {k: getattr(ns, k) for k in ("cylinder_radius", "cylinder_height", "cylinder_mass",
                                                  "finger_force", "lateral_offset", "yaw") if getattr(ns, k) is not None}  # fmt: skip

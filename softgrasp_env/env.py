@@ -56,8 +56,9 @@ def _display_available() -> bool:
 
 class SoftGraspEnv(gym.Env):
     """Two fingers pick up a cylinder and hold it while the arm carries it: soft fingers, each a
-    rigid core wrapped in oriented-particle tissue (``SoftGrasp-v4``; the thesis' shape matching
-    in ``SoftGrasp-v3``), or the same cores touching the cylinder through pybullet's rigid contacts
+    rigid core wrapped in oriented-particle tissue (``SoftGrasp-v5``, solved globally;
+    ``SoftGrasp-v4``, swept group by group; the thesis' shape matching with ``TISSUE_V3``'s
+    keywords), or the same cores touching the cylinder through pybullet's rigid contacts
     (``SoftGraspRigid-v3``; with the torsional friction of the tissue's contact patch,
     ``SoftGraspRigidTorsion-v3``). Older versions live in the release that last registered them
     (Version history).
@@ -131,7 +132,7 @@ class SoftGraspEnv(gym.Env):
     ``reward_type="dense"`` (default): ``lift + reach``, ``lift = clip(lift_height /
     success_height, 0, 1)`` (1 once the cylinder is 5 cm up) and ``reach = -reach_weight *
     min(d, 0.1 m) / 0.1 m`` with ``d`` the grip point's distance to the cylinder centre; both terms
-    are in ``info["reward_terms"]``. ``reward_type="sparse"`` (``SoftGraspSparse-v3``): 1 on steps
+    are in ``info["reward_terms"]``. ``reward_type="sparse"`` (``SoftGraspSparse-v5``): 1 on steps
     where ``info["held"]``, else 0. The grip ids add a squeeze term (Grip-force task).
 
     ## Starting state
@@ -221,8 +222,8 @@ class SoftGraspEnv(gym.Env):
     at ``converged`` (the package's documentation: Finger kinds, the tissue's settings).
 
     ## Grip-force task
-    The grip ids (``SoftGraspGrip-v6``, ``SoftGraspGripRigid-v5``, ``SoftGraspGripRigidTorsion-v5``;
-    the versions before: ``SoftGraspGrip-v5``, ``SoftGraspGripRigid-v4``, ``SoftGraspGripRigidTorsion-v4``)
+    The grip ids (``SoftGraspGrip-v7``, ``SoftGraspGripRigid-v5``, ``SoftGraspGripRigidTorsion-v5``;
+    the versions before: ``SoftGraspGrip-v6``, ``SoftGraspGripRigid-v4``, ``SoftGraspGripRigidTorsion-v4``)
     ask for the least squeeze that holds. They take the easy start with the carry test; the
     action's last entry is the squeeze itself (``finger_action="force"``, up to ``finger_force`` =
     6 N); the cylinder's mass (0.17 kg × U(1 ± 0.75)) and every friction (× U(1 ± 0.45)) are drawn
@@ -287,6 +288,19 @@ class SoftGraspEnv(gym.Env):
     step 99).
 
     ## Version history
+    - v5 (the soft ids; the goal id's v6, the grip id's v7, the object set's v2 and its grip id's
+      v3): the v4 tissue with its material solved across all of its groups at once each pass
+      (``material_solve="global"``: a quasi-Newton step of the implicit step with the material's
+      stiffness at rest, prefactored once) in place of a Gauss-Seidel sweep over them. The same material and contact law (the spatial convergence
+      table's rows within the sweep's own spread), nearer the converged implicit step in the same
+      three passes, and the world in the coupling's steps alone (2 a physics step at the default
+      density where the sweep takes 6): about twice the speed. The thesis tissue's v3 (and the
+      goal's v4) was retired after 0.8.0: the v4 ids with ``TISSUE_V3``'s keywords are it, step
+      for step.
+    - v6 of SoftGraspGrip (v5 of its rigid kinds): only the carry's steps pay the squeeze charge,
+      for the margin over the least force alone (``squeeze_charge_steps="carry"``,
+      ``squeeze_free=1``, weight 1), under which carrying through pays more than letting go. The
+      soft grip's v5 was retired after 0.8.0.
     - v5 of SoftGraspGrip (v4 of its rigid kinds): the squeeze charged in least forces
       (``squeeze_reference="least"``, weight 0.3) and three taxel frames in the observation
       (``tactile_history=3``); the physics is v4's (and v3's for the rigid kinds).
@@ -544,7 +558,7 @@ class SoftGraspEnv(gym.Env):
 
 
 class SoftGraspGoalEnv(SoftGraspEnv):
-    """Goal-conditioned SoftGrasp (``SoftGraspGoal-v4``, ``-v3``) for hindsight experience replay.
+    """Goal-conditioned SoftGrasp (``SoftGraspGoal-v6``, ``-v5``) for hindsight experience replay.
 
     ## Description
     As :class:`SoftGraspEnv` - the same actions, physics, starting state and time limit, with soft
@@ -571,7 +585,7 @@ class SoftGraspGoalEnv(SoftGraspEnv):
     it, above the cylinder's start at its resting height plus U(goal_height_range) (default 5-8 cm).
 
     ## Episode end
-    ``SoftGraspGoal-v4`` (``end_when_knocked_over=False``): only a physics failure ends an episode
+    ``SoftGraspGoal-v6`` (``end_when_knocked_over=False``): only a physics failure ends an episode
     early - the cylinder below the ground or flung above the workspace, a diverged step; a
     knocked-over or pushed-away cylinder runs on to the time limit at -1 per step (an early end
     would pay less, and a learner would learn to end it). ``SoftGraspGoal-v3``
@@ -584,9 +598,12 @@ class SoftGraspGoalEnv(SoftGraspEnv):
     ((0.05, 0.08) m), ``end_when_knocked_over`` (False; True on ``SoftGraspGoal-v3``).
 
     ## Version history
+    - v6: v5's goal on the soft ids' v5 physics (the v4 tissue solved globally).
+    - v5: v4's goal on the v4 tissue.
     - v4: v3's physics and goal; a knocked-over or pushed-away cylinder no longer ends the episode
       (only a physics failure does). HER + SAC on v3 learned to topple the cylinder to end its
-      episodes early; v4's episodes run to the time limit.
+      episodes early; v4's episodes run to the time limit. Retired after 0.8.0 (v5 with
+      ``TISSUE_V3``'s keywords is it, step for step).
     - v3: the v3 physics (SoftGraspEnv's v3) with the lift task's ends: a knocked-over cylinder or
       one that leaves the workspace ends the episode.
     - v1: retired after 0.6.0 (``pip install softgrasp-env==0.6.0`` reproduces it).

@@ -26,9 +26,9 @@ observation (a gripper's own sensors do not give them; the documentation's Tacti
 what a learner does with them)."""
 GRIP_TASK_LEAST: dict[str, object] = {**GRIP_TASK, "squeeze_reference": "least", "squeeze_weight": SQUEEZE_WEIGHT_LEAST,
                                       "tactile_history": 3}  # fmt: skip
-"""The grip-force task of SoftGraspGrip-v5 and the rigid kinds' v4: the squeeze charged in least
-forces, ``SQUEEZE_WEIGHT_LEAST`` x F / (m g / (2 mu_s)) per env step, so a margin costs the same on
-every cylinder, and the taxels of the last three env steps in the observation (a slip is a change:
+"""The grip-force task of the rigid kinds' v4 (and of the retired SoftGraspGrip-v5): the squeeze
+charged in least forces, ``SQUEEZE_WEIGHT_LEAST`` x F / (m g / (2 mu_s)) per env step, so a margin
+costs the same on every cylinder, and the taxels of the last three env steps in the observation (a slip is a change:
 one frame does not show it). Over constant grips the expected return peaks at 1.2-1.5 x the least
 on the tissue, at 1.1 on the rigid kinds, which hold from there (the package's documentation,
 Results: where the grip reward peaks). The charge is paid from the first step, though, and on the
@@ -36,7 +36,7 @@ rigid twin a hand held open returns more than a carried grasp: :data:`GRIP_TASK_
 GRIP_TASK_CARRY: dict[str, object] = {**GRIP_TASK_LEAST, "squeeze_charge_steps": "carry", "squeeze_free": 1.0,
                                       "squeeze_weight": 1.0}  # fmt: skip
 """The grip-force task whose best policy is to carry the cylinder through on a grip just above the
-least force (SoftGraspGrip-v6 and the rigid kinds' v5): only the carry's steps pay, and they pay
+least force (SoftGraspGrip-v7 and -v6, and the rigid kinds' v5): only the carry's steps pay, and they pay
 for the margin over the least alone, ``max(0, F / (m g / (2 mu_s)) - 1)`` per env step (a grip at
 1.2 x the least costs 0.2 a step against the lift's reward of at most 1). Under
 :data:`GRIP_TASK_LEAST`'s charge, paid from the first step on the whole squeeze, the closing, the
@@ -74,28 +74,47 @@ spatial convergence table are within 5 % of the finite-element reference and Cou
 hold bound and the lowest friction within 10 %, as at every resolution measured; Results:
 convergence in space)."""
 
+TISSUE_GLOBAL: dict[str, object] = {**TISSUE_V4, "material_solve": "global"}
+"""The soft ids' latest physics (SoftGrasp-v5 and its family), as ``gym.make`` keywords: the v4
+tissue (:data:`TISSUE_V4`) with its material solved across all of its groups at once each pass
+(``material_solve="global"``, softgrasp_env/tissue/global_step.py: a quasi-Newton step of the
+implicit step with the material's stiffness at rest, prefactored once) in place of a Gauss-Seidel
+sweep over the groups. The same material and the same contact law: the rows of the spatial convergence table
+stay within the sweep's own spread at every density measured, while the pads come closer to the
+converged implicit step in the same three passes (half the sweep's pose error at the default
+density, a fifth at 4 x) and the world takes the coupling's steps alone, about twice the sweep's
+speed (the package's documentation, Results: methods, speed against accuracy)."""
+
+TISSUE_V3: dict[str, object] = {"group_energy": "shape_matching", "friction_law": "patch", "hourglass_stiffness": 0.0,
+                                "layers": 1}  # fmt: skip
+"""The thesis tissue as ``gym.make`` keywords over the v4 soft ids: shape matching with a stiffness
+per group (Mueller & Chentanez 2011 sec. 4), one friction bound per patch, one element layer. With
+them SoftGrasp-v4 (and its family's v4) is the retired SoftGrasp-v3 step for step, to the bit
+(:data:`RETIRED_AS`)."""
+
 _SPECS: dict[str, tuple[str, dict]] = {
+    # the soft ids: v5 (the goal's v6, the grip's v7, the object set's v2 and its grip's v3) solve the
+    # v4 tissue globally (TISSUE_GLOBAL); the version before, the same tissue swept group by group
+    "SoftGrasp-v5": (_ENV, {"fingers": "tissue", "reward_type": "dense", "carry": True, **TISSUE_GLOBAL}),
     "SoftGrasp-v4": (_ENV, {"fingers": "tissue", "reward_type": "dense", "carry": True, **TISSUE_V4}),
-    "SoftGrasp-v3": (_ENV, {"fingers": "tissue", "reward_type": "dense", "carry": True}),
     "SoftGraspRigid-v3": (_ENV, {"fingers": "rigid", "reward_type": "dense", "carry": True}),
+    "SoftGraspSparse-v5": (_ENV, {"fingers": "tissue", "reward_type": "sparse", "carry": True, **TISSUE_GLOBAL}),
     "SoftGraspSparse-v4": (_ENV, {"fingers": "tissue", "reward_type": "sparse", "carry": True, **TISSUE_V4}),
-    "SoftGraspSparse-v3": (_ENV, {"fingers": "tissue", "reward_type": "sparse", "carry": True}),
-    # v5: the v4 tissue. v4: the v3 physics; a knocked-over cylinder no longer ends the episode
-    # (tasks/goal.py says why).
+    # a knocked-over cylinder does not end the goal's episode (tasks/goal.py says why)
+    "SoftGraspGoal-v6": (_GOAL, {"fingers": "tissue", "end_when_knocked_over": False, **TISSUE_GLOBAL}),
     "SoftGraspGoal-v5": (_GOAL, {"fingers": "tissue", "end_when_knocked_over": False, **TISSUE_V4}),
-    "SoftGraspGoal-v4": (_GOAL, {"fingers": "tissue", "end_when_knocked_over": False}),
+    "SoftGraspEasy-v5": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", **TISSUE_GLOBAL}),
     "SoftGraspEasy-v4": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", **TISSUE_V4}),
-    "SoftGraspEasy-v3": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy"}),
     "SoftGraspEasyRigid-v3": (_ENV, {"fingers": "rigid", "reward_type": "dense", "start": "easy"}),
     "SoftGraspRigidTorsion-v3": (_ENV, {"fingers": "rigid_torsion", "reward_type": "dense", "carry": True}),
     "SoftGraspEasyRigidTorsion-v3": (_ENV, {"fingers": "rigid_torsion", "reward_type": "dense", "start": "easy"}),
-    # the grip-force task: v6 (the rigid kinds' v5) charges the margin over the least force on the
-    # carry's steps alone; v5 (v4) the whole squeeze in least forces from the first step. Both keep
-    # three taxel frames.
+    # the grip-force task: the soft v7 and v6 (the rigid kinds' v5) charge the margin over the least
+    # force on the carry's steps alone; the rigid kinds' v4 the whole squeeze in least forces from
+    # the first step. All keep three taxel frames.
+    "SoftGraspGrip-v7": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", "carry": True,
+                                **GRIP_TASK_CARRY, **TISSUE_GLOBAL}),
     "SoftGraspGrip-v6": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", "carry": True,
                                 **GRIP_TASK_CARRY, **TISSUE_V4}),
-    "SoftGraspGrip-v5": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", "carry": True,
-                                **GRIP_TASK_LEAST, **TISSUE_V4}),
     **{f"SoftGraspGrip{name}-v5": (_ENV, {"fingers": kind, "reward_type": "dense", "start": "easy", "carry": True,
                                           **GRIP_TASK_CARRY})
        for name, kind in (("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion"))},
@@ -103,16 +122,19 @@ _SPECS: dict[str, tuple[str, dict]] = {
                                           **GRIP_TASK_LEAST})
        for name, kind in (("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion"))},
     # the object-set family: the carry task and the grip-force task on every object
+    "SoftGraspObjects-v2": (_ENV, {"fingers": "tissue", "reward_type": "dense", "carry": True, **OBJECTS_TASK,
+                                   **TISSUE_GLOBAL}),
     "SoftGraspObjects-v1": (_ENV, {"fingers": "tissue", "reward_type": "dense", "carry": True, **OBJECTS_TASK,
                                    **TISSUE_V4}),
     "SoftGraspObjectsRigid-v1": (_ENV, {"fingers": "rigid", "reward_type": "dense", "carry": True, **OBJECTS_TASK}),
     "SoftGraspObjectsRigidTorsion-v1": (_ENV, {"fingers": PATCH_TORSION, "reward_type": "dense", "carry": True,
                                                **OBJECTS_TASK}),
-    # the grip-force variants: v2 takes the grip ids' latest charge (GRIP_TASK_CARRY), v1 the first
+    # the grip-force variants: the soft v3 and v2 and the rigid kinds' v2 take the grip ids' latest
+    # charge (GRIP_TASK_CARRY), the rigid kinds' v1 the first (GRIP_TASK)
+    "SoftGraspObjectsGrip-v3": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", "carry": True,
+                                       **GRIP_TASK_CARRY, **OBJECTS_GRIP_TASK, **TISSUE_GLOBAL}),
     "SoftGraspObjectsGrip-v2": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", "carry": True,
                                        **GRIP_TASK_CARRY, **OBJECTS_GRIP_TASK, **TISSUE_V4}),
-    "SoftGraspObjectsGrip-v1": (_ENV, {"fingers": "tissue", "reward_type": "dense", "start": "easy", "carry": True,
-                                       **GRIP_TASK, **OBJECTS_GRIP_TASK, **TISSUE_V4}),
     **{f"SoftGraspObjectsGrip{name}-v2": (_ENV, {"fingers": kind, "reward_type": "dense", "start": "easy",
                                                  "carry": True, **GRIP_TASK_CARRY, **OBJECTS_GRIP_TASK})
        for name, kind in (("Rigid", "rigid"), ("RigidTorsion", PATCH_TORSION))},
@@ -122,26 +144,29 @@ _SPECS: dict[str, tuple[str, dict]] = {
 }
 
 ENV_IDS: tuple[str, ...] = tuple(_SPECS)
-"""The registered ids, per family the latest version and the one before it. The task (v3 on): the
-reach with the carry test (approach from above and away, misaligned fingers, lift, then the arm
-sways the cylinder for the last 1.5 s, a sway drawn per episode; success means held through all of
-it) with soft fingers and the dense lift reward, its rigid-only twin, the torsional rigid peer, the
+"""The registered ids, per family the latest version and the one before it. The task: the reach
+with the carry test (approach from above and away, misaligned fingers, lift, then the arm sways the
+cylinder for the last 1.5 s, a sway drawn per episode; success means held through all of it) with
+soft fingers and the dense lift reward, its rigid-only twin, the torsional rigid peer, the
 sparse-reward variant, the goal-conditioned variant (dict observations, ``compute_reward`` for HER;
-a knocked-over cylinder does not end its episode since SoftGraspGoal-v4) and the gentle start
-(``start="easy"``: the open fingers around the cylinder's top, aligned) for debugging a policy or
-the physics; the grip-force task (SoftGraspGrip, soft / rigid / torsional: the gentle start with
-the carry, the squeeze as the action, mass and friction drawn and not observed, the squeeze charged
-and success within 2 x the least that holds, 4 x 4 taxels per pad, the cylinder's pose and motion
-not observed: softgrasp_env/tasks/grip.py; its v6, the rigid kinds' v5, charges the margin over the
-least force on the carry's steps (:data:`GRIP_TASK_CARRY`), v5 and v4 the whole squeeze in least
-forces from the first step (:data:`GRIP_TASK_LEAST`), both keeping three taxel frames); the object set (SoftGraspObjects, soft / rigid /
-torsional, and its grip-force variants, whose v2 takes the grip ids' latest charge and v1 the
-first: one of :data:`OBJECT_SET` drawn per episode, at a drawn size, mass and friction, its kind
-and extents observed). The arm moves the palm at the action's velocity along a
-smooth path (at most 0.15 m/s and 1.5 m/s^2). The soft ids' v4 (the goal's v5) is the same task on
-the v4 tissue (:data:`TISSUE_V4`); v3 (the goal's v4) keeps the thesis' shape matching with a
-friction law per patch. The rigid kinds have no tissue and stay v3. Older versions live in the
-tagged release that last registered them (:data:`RETIRED`)."""
+a knocked-over cylinder does not end its episode) and the gentle start (``start="easy"``: the open
+fingers around the cylinder's top, aligned) for debugging a policy or the physics; the grip-force
+task (SoftGraspGrip, soft / rigid / torsional: the gentle start with the carry, the squeeze as the
+action, mass and friction drawn and not observed, the squeeze charged and success within 2 x the
+least that holds, 4 x 4 taxels per pad and three taxel frames, the cylinder's pose and motion not
+observed: softgrasp_env/tasks/grip.py; the soft v7 and v6 and the rigid kinds' v5 charge the margin
+over the least force on the carry's steps, :data:`GRIP_TASK_CARRY`, the rigid kinds' v4 the whole
+squeeze in least forces from the first step, :data:`GRIP_TASK_LEAST`); the object set
+(SoftGraspObjects, soft / rigid / torsional, and its grip-force variants, whose rigid v1 keeps the
+grip ids' first charge: one of :data:`OBJECT_SET` drawn per episode, at a drawn size, mass and
+friction, its kind and extents observed). The arm moves the palm at the action's velocity along a
+smooth path (at most 0.15 m/s and 1.5 m/s^2).
+
+The soft ids' latest version (SoftGrasp-v5, the goal's v6, the grip's v7, the object set's v2, its
+grip's v3) solves the v4 tissue globally (:data:`TISSUE_GLOBAL`); the version before sweeps the same
+tissue group by group (:data:`TISSUE_V4`). The rigid kinds have no tissue and stay as they were.
+Older versions live in the tagged release that last registered them (:data:`RETIRED`); the thesis
+tissue's are the v4 ids with :data:`TISSUE_V3`."""
 
 RETIRED: dict[str, str] = {
     **{f"SoftGrasp{family}-{v}": "0.6.0" for family in ("", "Rigid", "Sparse") for v in ("v1", "v2")},
@@ -149,18 +174,41 @@ RETIRED: dict[str, str] = {
     "SoftGraspGoal-v3": "0.6.0",
     "SoftGraspGrip-v3": "0.6.0",
     **{f"SoftGraspGrip{kind}-{v}": "0.7.0" for kind, v in (("", "v4"), ("Rigid", "v3"), ("RigidTorsion", "v3"))},
+    **{env_id: "0.8.0" for env_id in ("SoftGrasp-v3", "SoftGraspSparse-v3", "SoftGraspGoal-v4", "SoftGraspEasy-v3",
+                                      "SoftGraspGrip-v5", "SoftGraspObjectsGrip-v1")},
 }
 """Retired id -> the last release that registers it. ``gym.make`` of one raises
-:class:`gymnasium.error.DeprecatedEnv` naming that release (:func:`retired_env`); they are not in
+:class:`gymnasium.error.DeprecatedEnv` naming that release (:func:`retired_env`), and the registered
+id with the keywords that are it where there is one (:data:`RETIRED_AS`); they are not in
 :data:`ENV_IDS`."""
+
+RETIRED_AS: dict[str, tuple[str, dict[str, object]]] = {
+    "SoftGrasp-v3": ("SoftGrasp-v4", TISSUE_V3),
+    "SoftGraspSparse-v3": ("SoftGraspSparse-v4", TISSUE_V3),
+    "SoftGraspGoal-v4": ("SoftGraspGoal-v5", TISSUE_V3),
+    "SoftGraspEasy-v3": ("SoftGraspEasy-v4", TISSUE_V3),
+    "SoftGraspGrip-v5": ("SoftGraspGrip-v6", {"squeeze_charge_steps": "all", "squeeze_free": 0.0,
+                                              "squeeze_weight": SQUEEZE_WEIGHT_LEAST}),
+    "SoftGraspObjectsGrip-v1": ("SoftGraspObjectsGrip-v2", {"squeeze_reference": "finger_force",
+                                                            "squeeze_weight": GRIP_TASK["squeeze_weight"],
+                                                            "squeeze_charge_steps": "all", "squeeze_free": 0.0,
+                                                            "tactile_history": 1}),
+}  # fmt: skip
+"""Retired id -> a registered id and the ``gym.make`` keywords with which it is the retired one,
+step for step: the thesis tissue's ids are their v4 successors with :data:`TISSUE_V3`; the grip
+ids' first charges are the latest grip ids with the charge's keywords (the same physics)."""
 
 
 def retired_message(env_id: str) -> str:
     """What ``gym.make(env_id)`` says for a retired id: the release (and its git tag) that has it."""
     release = RETIRED[env_id]
     current = [i for i in ENV_IDS if i.rsplit("-", 1)[0] == env_id.rsplit("-", 1)[0]]
-    return (f"{env_id} was retired; `pip install softgrasp-env=={release}` (git tag v{release}) reproduces its "
-            f"results" + (f". This release registers {', '.join(current)}" if current else ""))  # fmt: skip
+    message = f"{env_id} was retired; `pip install softgrasp-env=={release}` (git tag v{release}) reproduces its results"
+    if env_id in RETIRED_AS:
+        made, kwargs = RETIRED_AS[env_id]
+        keywords = ", ".join(f"{k}={v!r}" for k, v in kwargs.items())
+        message += f", and so does gym.make({made!r}, {keywords}), step for step"
+    return message + (f". This release registers {', '.join(current)}" if current else "")
 
 
 def retired_env(*, env_id: str, **kwargs: object) -> gym.Env:

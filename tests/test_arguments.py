@@ -12,6 +12,7 @@ import pytest
 
 from softgrasp_env.arguments import GROUPS, KEYWORDS, EnvArguments, EnvPlan, argument_table
 from softgrasp_env.env import SoftGraspEnv
+from softgrasp_env.registration import TISSUE_V3
 
 
 def test_the_card_lists_every_argument_once():
@@ -74,7 +75,7 @@ def test_the_old_flat_attributes_read_with_a_warning():
 
 def test_an_unknown_argument_is_a_type_error_naming_the_known_ones():
     with pytest.raises(TypeError, match=r"unknown argument\(s\) \['cylinder_mas'\].*'cylinder_mass'"):
-        gym.make("SoftGrasp-v3", cylinder_mas=0.2)
+        gym.make("SoftGrasp-v5", cylinder_mas=0.2)
 
 
 def test_the_arguments_make_the_scene_the_task_and_the_steps():
@@ -100,10 +101,12 @@ def test_range_corners_are_checked_without_building_scenes(monkeypatch):
 
 def test_the_contact_cones_reach_the_tissue_model_and_bad_values_are_named():
     """tissue_contact_cone goes to TissueConfig.contact_cone (default False, the patch law) and into
-    the solver's model per body; anything but a bool is a ValueError naming the field."""
+    the solver's model per body (on the patch law's SoftGraspEasy-v4 with the thesis tissue,
+    TISSUE_V3: under Coulomb per contact there is no patch to bound); anything but a bool is a
+    ValueError naming the field."""
     assert EnvArguments.from_kwargs().physics.tissue.contact_cone is False
     assert EnvArguments.from_kwargs(tissue_contact_cone=True).physics.tissue.contact_cone is True
-    env = gym.make("SoftGraspEasy-v3", tissue_contact_cone=True)
+    env = gym.make("SoftGraspEasy-v4", tissue_contact_cone=True, **TISSUE_V3)
     try:
         env.reset(seed=0)
         assert env.unwrapped.scene.world.solver.model.body_contact_cone.tolist() == [True, True]

@@ -36,15 +36,15 @@ def _plan(args):
 @pytest.mark.parametrize(
     "env_id, old, new",
     [
-        ("SoftGrasp-v3", dict(soft=False), dict(fingers="rigid")),
+        ("SoftGrasp-v5", dict(soft=False), dict(fingers="rigid")),
         ("SoftGraspRigid-v3", dict(soft=True), dict(fingers="tissue")),
-        ("SoftGrasp-v3", dict(soft=True), dict(fingers="tissue")),
-        ("SoftGrasp-v3", dict(soft=False, fingers="segmented"), dict(fingers="segmented")),  # a kind soft never named
-        ("SoftGrasp-v3", dict(tissue_density=5000.0), dict(particle_density=5000.0)),
+        ("SoftGrasp-v5", dict(soft=True), dict(fingers="tissue")),
+        ("SoftGrasp-v5", dict(soft=False, fingers="segmented"), dict(fingers="segmented")),  # a kind soft never named
+        ("SoftGrasp-v5", dict(tissue_density=5000.0), dict(particle_density=5000.0)),
         ("SoftGraspRigid-v3", dict(soft=True, tissue_density=5000.0), dict(fingers="tissue", particle_density=5000.0)),
-        ("SoftGrasp-v3", dict(gripper_speed=0.14), dict(arm_speed=0.14)),
-        ("SoftGrasp-v3", dict(friction_dynamic=0.7), dict(friction_kinetic=0.7)),
-        ("SoftGrasp-v3", dict(task="easy"), dict(start="easy")),
+        ("SoftGrasp-v5", dict(gripper_speed=0.14), dict(arm_speed=0.14)),
+        ("SoftGrasp-v5", dict(friction_dynamic=0.7), dict(friction_kinetic=0.7)),
+        ("SoftGrasp-v5", dict(task="easy"), dict(start="easy")),
     ],
 )
 def test_gym_make_takes_the_old_arguments_with_a_warning(env_id, old, new):
@@ -58,25 +58,25 @@ def test_gym_make_takes_the_old_arguments_with_a_warning(env_id, old, new):
 
 def test_old_gym_make_arguments_that_cannot_mean_one_thing_are_refused():
     with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="soft must be a bool"):
-        gym.make("SoftGrasp-v3", soft="no")
+        gym.make("SoftGrasp-v5", soft="no")
     with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="soft=True contradicts fingers="):
-        gym.make("SoftGrasp-v3", soft=True, fingers=RigidConfig())
+        gym.make("SoftGrasp-v5", soft=True, fingers=RigidConfig())
     with pytest.raises(TypeError, match="not both"):
-        gym.make("SoftGrasp-v3", tissue_density=5000.0, particle_density=5000.0)
+        gym.make("SoftGrasp-v5", tissue_density=5000.0, particle_density=5000.0)
     with pytest.raises(TypeError, match=r"give start= \(the new name of task=\), not both"):
-        gym.make("SoftGrasp-v3", task="easy", start="easy")
+        gym.make("SoftGrasp-v5", task="easy", start="easy")
 
 
 def test_gym_make_takes_a_kinds_own_argument_only_with_that_kind():
     """``tissue_faces=`` and ``fem_resolution=`` are the kinds' settings as gym.make arguments: the
     same as the kind's config, and an error with another kind (it would be lost)."""
-    assert _args("SoftGrasp-v3", tissue_faces="all") == _args("SoftGrasp-v3", fingers=TissueFingerConfig(faces="all"))
-    assert _args("SoftGrasp-v3", fingers="fem", fem_resolution="fine") == _args(
-        "SoftGrasp-v3", fingers=FemConfig(resolution="fine"))  # fmt: skip
+    assert _args("SoftGrasp-v5", tissue_faces="all") == _args("SoftGrasp-v5", fingers=TissueFingerConfig(faces="all"))
+    assert _args("SoftGrasp-v5", fingers="fem", fem_resolution="fine") == _args(
+        "SoftGrasp-v5", fingers=FemConfig(resolution="fine"))  # fmt: skip
     with pytest.raises(ValueError, match="tissue_faces is a setting of fingers='tissue', but fingers='rigid'"):
         gym.make("SoftGraspRigid-v3", tissue_faces="all")
     with pytest.raises(ValueError, match="fem_resolution is a setting of fingers='fem', but fingers='tissue'"):
-        gym.make("SoftGrasp-v3", fem_resolution="fine")
+        gym.make("SoftGrasp-v5", fem_resolution="fine")
 
 
 # --- TissueConfig -------------------------------------------------------------------------------------
@@ -233,13 +233,13 @@ def test_the_only_choice_left_warns_and_changes_nothing(kept):
     """``arm="smooth"``, ``tissue_material="compliant"``, ``carry_direction="any"``: what happens
     anyway since the other choices were retired; one DeprecationWarning, the same arguments."""
     with pytest.warns(DeprecationWarning, match=f"{next(iter(kept))}={next(iter(kept.values()))!r} is deprecated") as got:
-        old = _args("SoftGrasp-v3", **kept)
+        old = _args("SoftGrasp-v5", **kept)
     assert len([w for w in got if issubclass(w.category, DeprecationWarning) and "is deprecated" in str(w.message)]) == 1
-    assert old == _args("SoftGrasp-v3")
+    assert old == _args("SoftGrasp-v5")
 
 
 @pytest.mark.parametrize("retired", [dict(arm="jump"), dict(tissue_material="per_step"), dict(carry_direction="across"),
                                      dict(carry_amplitude=0.01), dict(carry_slide_limit=None)])  # fmt: skip
 def test_a_retired_choice_names_the_release_that_has_it(retired):
     with pytest.raises(ValueError, match=r"was retired; `pip install softgrasp-env==0\.6\.0` \(git tag v0\.6\.0\)"):
-        gym.make("SoftGrasp-v3", **retired)
+        gym.make("SoftGrasp-v5", **retired)

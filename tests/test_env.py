@@ -7,6 +7,7 @@ import copy
 import math
 import pickle
 import warnings
+from dataclasses import replace
 
 import gymnasium as gym
 import numpy as np
@@ -17,9 +18,21 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import softgrasp_env
 from softgrasp_env import ENV_IDS
+from softgrasp_env.arguments import KEYWORDS
 from softgrasp_env.env import SoftGraspEnv
 from softgrasp_env.observation import OBS_NAMES, obs_slice
-from softgrasp_env.registration import GRIP_TASK, RETIRED, SQUEEZE_WEIGHT_LEAST, TISSUE_V4, retired_message
+from softgrasp_env.registration import (
+    GRIP_TASK,
+    GRIP_TASK_LEAST,
+    OBJECTS_GRIP_TASK,
+    RETIRED,
+    RETIRED_AS,
+    SQUEEZE_WEIGHT_LEAST,
+    TISSUE_GLOBAL,
+    TISSUE_V3,
+    TISSUE_V4,
+    retired_message,
+)
 from tests.helpers import assert_same, obs_vector, rollout, run_episode
 
 # Gymnasium's checker notes unbounded observation boxes; like its MuJoCo envs, ours are unbounded.
@@ -30,14 +43,14 @@ _INF_BOUND = "observation space m"
 
 
 def test_ids_are_registered_with_time_limits():
-    """Per family the latest version and the one before it: 27 ids."""
-    assert ENV_IDS == ("SoftGrasp-v4", "SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspSparse-v4", "SoftGraspSparse-v3",
-                       "SoftGraspGoal-v5", "SoftGraspGoal-v4", "SoftGraspEasy-v4", "SoftGraspEasy-v3",
+    """Per family the latest version and the one before it: 28 ids."""
+    assert ENV_IDS == ("SoftGrasp-v5", "SoftGrasp-v4", "SoftGraspRigid-v3", "SoftGraspSparse-v5", "SoftGraspSparse-v4",
+                       "SoftGraspGoal-v6", "SoftGraspGoal-v5", "SoftGraspEasy-v5", "SoftGraspEasy-v4",
                        "SoftGraspEasyRigid-v3", "SoftGraspRigidTorsion-v3", "SoftGraspEasyRigidTorsion-v3",
-                       "SoftGraspGrip-v6", "SoftGraspGrip-v5", "SoftGraspGripRigid-v5", "SoftGraspGripRigidTorsion-v5",
+                       "SoftGraspGrip-v7", "SoftGraspGrip-v6", "SoftGraspGripRigid-v5", "SoftGraspGripRigidTorsion-v5",
                        "SoftGraspGripRigid-v4", "SoftGraspGripRigidTorsion-v4",
-                       "SoftGraspObjects-v1", "SoftGraspObjectsRigid-v1",
-                       "SoftGraspObjectsRigidTorsion-v1", "SoftGraspObjectsGrip-v2", "SoftGraspObjectsGrip-v1",
+                       "SoftGraspObjects-v2", "SoftGraspObjects-v1", "SoftGraspObjectsRigid-v1",
+                       "SoftGraspObjectsRigidTorsion-v1", "SoftGraspObjectsGrip-v3", "SoftGraspObjectsGrip-v2",
                        "SoftGraspObjectsGripRigid-v2", "SoftGraspObjectsGripRigidTorsion-v2",
                        "SoftGraspObjectsGripRigid-v1", "SoftGraspObjectsGripRigidTorsion-v1")  # fmt: skip
     gym.register_envs(softgrasp_env)  # the documented idiom is accepted
@@ -47,26 +60,30 @@ def test_ids_are_registered_with_time_limits():
         assert "arm" not in spec.kwargs
         versions = [i.rsplit("-", 1)[1] for i in ENV_IDS if i.rsplit("-", 1)[0] == env_id.rsplit("-", 1)[0]]
         assert len(versions) <= 2
-    # the soft ids' newest version is the one before on the v4 tissue, and nothing else
-    for new, old in (("SoftGrasp-v4", "SoftGrasp-v3"), ("SoftGraspSparse-v4", "SoftGraspSparse-v3"),
-                     ("SoftGraspEasy-v4", "SoftGraspEasy-v3"), ("SoftGraspGoal-v5", "SoftGraspGoal-v4")):  # fmt: skip
-        assert gym.spec(new).kwargs == {**gym.spec(old).kwargs, **TISSUE_V4}, new
-    # the grip-force task: v5 (the rigid kinds' v4) is the first task, GRIP_TASK, with the squeeze
-    # charged in least forces and three taxel frames, the soft one on the v4 tissue; v6 (v5) charges
-    # only the margin over the least, on the carry's steps
+    # the soft ids' newest version is the one before under the global material solve, and nothing else
+    assert TISSUE_GLOBAL == {**TISSUE_V4, "material_solve": "global"}
+    for new, old in (("SoftGrasp-v5", "SoftGrasp-v4"), ("SoftGraspSparse-v5", "SoftGraspSparse-v4"),
+                     ("SoftGraspEasy-v5", "SoftGraspEasy-v4"), ("SoftGraspGoal-v6", "SoftGraspGoal-v5"),
+                     ("SoftGraspGrip-v7", "SoftGraspGrip-v6"), ("SoftGraspObjects-v2", "SoftGraspObjects-v1"),
+                     ("SoftGraspObjectsGrip-v3", "SoftGraspObjectsGrip-v2")):  # fmt: skip
+        assert gym.spec(new).kwargs == {**gym.spec(old).kwargs, "material_solve": "global"}, new
+        assert all(gym.spec(old).kwargs[k] == v for k, v in TISSUE_V4.items()), old
+    # the grip-force task: the rigid kinds' v4 is the first task, GRIP_TASK, with the squeeze charged
+    # in least forces and three taxel frames; the soft v6 and the rigid kinds' v5 charge only the
+    # margin over the least, on the carry's steps
     least = {"squeeze_reference": "least", "squeeze_weight": SQUEEZE_WEIGHT_LEAST, "tactile_history": 3}
     carry = {"squeeze_charge_steps": "carry", "squeeze_free": 1.0, "squeeze_weight": 1.0}
     easy_carry = {"reward_type": "dense", "start": "easy", "carry": True}
-    assert gym.spec("SoftGraspGrip-v5").kwargs == {"fingers": "tissue", **easy_carry, **GRIP_TASK, **least, **TISSUE_V4}
-    assert gym.spec("SoftGraspGrip-v6").kwargs == {**gym.spec("SoftGraspGrip-v5").kwargs, **carry}
+    assert gym.spec("SoftGraspGrip-v6").kwargs == {"fingers": "tissue", **easy_carry, **GRIP_TASK, **least, **carry,
+                                                   **TISSUE_V4}  # fmt: skip
     for kind, fingers in (("Rigid", "rigid"), ("RigidTorsion", "rigid_torsion")):
         assert gym.spec(f"SoftGraspGrip{kind}-v4").kwargs == {"fingers": fingers, **easy_carry, **GRIP_TASK, **least}
         assert gym.spec(f"SoftGraspGrip{kind}-v5").kwargs == {**gym.spec(f"SoftGraspGrip{kind}-v4").kwargs, **carry}
-    assert gym.spec("SoftGraspGoal-v4").kwargs["end_when_knocked_over"] is False
-    assert gym.spec("SoftGrasp-v3").kwargs["fingers"] == "tissue"
+    assert gym.spec("SoftGraspGoal-v5").kwargs["end_when_knocked_over"] is False
+    assert gym.spec("SoftGrasp-v4").kwargs["fingers"] == "tissue"
     assert gym.spec("SoftGraspRigid-v3").kwargs["fingers"] == "rigid"
-    for name in ("SoftGrasp", "SoftGraspRigid", "SoftGraspSparse"):
-        assert gym.spec(f"{name}-v3").kwargs["carry"] is True
+    for name in ("SoftGrasp-v5", "SoftGraspRigid-v3", "SoftGraspSparse-v5"):
+        assert gym.spec(name).kwargs["carry"] is True
 
 
 def test_the_v4_tissue_is_the_continuum_with_coulomb_per_contact():
@@ -76,25 +93,53 @@ def test_the_v4_tissue_is_the_continuum_with_coulomb_per_contact():
     # the resolution is the caller's preset; the layers follow it
     fine = gym.make("SoftGrasp-v4", particle_density=64_000.0).unwrapped.args.physics.tissue
     assert (fine.group_energy, fine.layers) == ("continuum", 2)
-    v3 = gym.make("SoftGrasp-v3").unwrapped.args.physics.tissue
-    assert (v3.group_energy, v3.hourglass_stiffness, v3.friction_law, v3.layers) == ("shape_matching", 0.0, "patch", 1)
+    thesis = gym.make("SoftGrasp-v4", **TISSUE_V3).unwrapped.args.physics.tissue
+    assert (thesis.group_energy, thesis.hourglass_stiffness, thesis.friction_law, thesis.layers) == (
+        "shape_matching", 0.0, "patch", 1)  # fmt: skip
+    # v5: the same tissue, solved globally, in the coupling's world steps alone (2 a physics step
+    # at the default density, where the sweep takes 6)
+    v4, v5 = gym.make("SoftGraspEasy-v4"), gym.make("SoftGraspEasy-v5")
+    try:
+        assert v5.unwrapped.args.physics.tissue == v4.unwrapped.args.physics.tissue
+        assert v5.unwrapped.args.physics.sim == replace(v4.unwrapped.args.physics.sim, material_solve="global")
+        v4.reset(seed=0)
+        v5.reset(seed=0)
+        assert (v5.unwrapped.scene.world_steps, v4.unwrapped.scene.world_steps) == (2, 6)
+    finally:
+        v4.close()
+        v5.close()
 
 
-def test_the_v3_ids_are_the_v4_ids_with_the_thesis_tissue_keywords():
-    """The v3 tissue (the thesis' shape matching, a friction law per patch, one layer) is the v4 id
-    with those four keywords: the same configs and the same steps to the bit (random actions across
-    the grasp's first 40 env steps). So a v3 result stays reachable through the v4 ids' keywords."""
-    thesis = {"group_energy": "shape_matching", "friction_law": "patch", "hourglass_stiffness": 0.0, "layers": 1}
-    v3, v4 = gym.make("SoftGraspEasy-v3"), gym.make("SoftGraspEasy-v4", **thesis)
-    assert v3.unwrapped.args.physics == v4.unwrapped.args.physics
-    rng = np.random.default_rng(3)
-    first, _ = v3.reset(seed=3)
-    again, _ = v4.reset(seed=3)
-    assert first.tobytes() == again.tobytes()
-    for _ in range(40):
-        action = rng.uniform(-1.0, 1.0, size=4).astype(np.float32)
-        a, b = v3.step(action), v4.step(action)
-        assert a[0].tobytes() == b[0].tobytes() and a[1:4] == b[1:4]
+def test_a_retired_id_is_a_registered_id_with_keywords():
+    """The ids retired after 0.8.0 are registered ids with keywords (RETIRED_AS): the thesis tissue's
+    ids the v4 ids with TISSUE_V3, the grip ids' first charges the latest grip ids with the charge's
+    keywords. Each is checked here against the retired id's registered keywords, config for config;
+    the recorded trajectories replay the thesis tissue's ids through RETIRED_AS bit for bit
+    (tests/test_trajectories.py)."""
+    easy_carry = {"reward_type": "dense", "start": "easy", "carry": True}
+    was = {  # the retired ids' gym.make keywords as release 0.8.0 registered them
+        "SoftGrasp-v3": {"fingers": "tissue", "reward_type": "dense", "carry": True},
+        "SoftGraspSparse-v3": {"fingers": "tissue", "reward_type": "sparse", "carry": True},
+        "SoftGraspGoal-v4": {"fingers": "tissue", "end_when_knocked_over": False},
+        "SoftGraspEasy-v3": {"fingers": "tissue", "reward_type": "dense", "start": "easy"},
+        "SoftGraspGrip-v5": {"fingers": "tissue", **easy_carry, **GRIP_TASK_LEAST, **TISSUE_V4},
+        "SoftGraspObjectsGrip-v1": {"fingers": "tissue", **easy_carry, **GRIP_TASK, **OBJECTS_GRIP_TASK, **TISSUE_V4},
+    }  # fmt: skip
+    assert set(RETIRED_AS) == set(was) and all(RETIRED[i] == "0.8.0" for i in was)
+    entry = {"SoftGraspGoal-v4": "softgrasp_env.env:SoftGraspGoalEnv"}
+    defaults = {kw.name: kw.default for kw in KEYWORDS}
+    for env_id, kwargs in was.items():
+        made, keywords = RETIRED_AS[env_id]
+        assert gym.spec(made).entry_point == entry.get(env_id, "softgrasp_env.env:SoftGraspEnv")
+        a = gym.make(made, **keywords)
+        unset = {k: defaults[k] for k in gym.spec(made).kwargs if k not in kwargs}  # as the retired id left them
+        b = gym.make(made, **unset, **kwargs)
+        try:
+            assert a.unwrapped.args == b.unwrapped.args, env_id
+        finally:
+            a.close()
+            b.close()
+        assert "gym.make(" + repr(made) in retired_message(env_id)
 
 
 @pytest.mark.parametrize("env_id", sorted(RETIRED))
@@ -118,9 +163,14 @@ def test_the_retired_table_names_the_last_release_of_each():
                              "SoftGraspGoal-v1", "SoftGraspEasy-v1", "SoftGraspEasyRigid-v1", "SoftGraspGoal-v3",
                              "SoftGraspGrip-v3"]}  # fmt: skip
     # the grip task's first charge, re-versioned after 0.7.0
-    assert {i: r for i, r in RETIRED.items() if r != "0.6.0"} == {
+    assert {i: r for i, r in RETIRED.items() if r == "0.7.0"} == {
         "SoftGraspGrip-v4": "0.7.0", "SoftGraspGripRigid-v3": "0.7.0", "SoftGraspGripRigidTorsion-v3": "0.7.0"}
-    assert "This release registers SoftGraspGoal-v5, SoftGraspGoal-v4" in retired_message("SoftGraspGoal-v1")
+    # the thesis tissue's ids and the soft grip ids' versions before the global solve, after 0.8.0
+    assert {i for i, r in RETIRED.items() if r == "0.8.0"} == {
+        "SoftGrasp-v3", "SoftGraspSparse-v3", "SoftGraspGoal-v4", "SoftGraspEasy-v3", "SoftGraspGrip-v5",
+        "SoftGraspObjectsGrip-v1"}  # fmt: skip
+    assert set(RETIRED.values()) == {"0.6.0", "0.7.0", "0.8.0"}
+    assert "This release registers SoftGraspGoal-v6, SoftGraspGoal-v5" in retired_message("SoftGraspGoal-v1")
 
 
 def test_register_envs_is_idempotent():
@@ -224,8 +274,8 @@ def test_action_validation():
 
 def test_out_of_range_actions_are_clipped_and_reported():
     big = np.array([5.0, -3.0, 2.0, 9.0])
-    a = gym.make("SoftGrasp-v3")
-    b = gym.make("SoftGrasp-v3")
+    a = gym.make("SoftGrasp-v5")
+    b = gym.make("SoftGrasp-v5")
     a.reset(seed=4)
     b.reset(seed=4)
     for _ in range(5):
@@ -273,7 +323,7 @@ def test_reset_options_fix_the_randomised_quantities():
 
 
 def test_nan_in_the_tissue_ends_the_episode_with_a_finite_observation():
-    env = gym.make("SoftGrasp-v3")
+    env = gym.make("SoftGrasp-v5")
     obs0, _ = env.reset(seed=0)
     obs1, *_ = env.step(np.zeros(4, dtype=np.float32))
     env.unwrapped.scene.world.state.particle_x[7, 0] = np.nan
@@ -313,7 +363,7 @@ def test_knocked_over_cylinder_terminates():
 # --- physics seen through the env -----------------------------------------------------------------
 
 
-@pytest.mark.parametrize("env_id", ["SoftGraspEasy-v3", "SoftGraspEasyRigid-v3"])
+@pytest.mark.parametrize("env_id", ["SoftGraspEasy-v5", "SoftGraspEasyRigid-v3"])
 def test_scripted_policy_lifts_and_fingers_press_with_the_motor_force(env_id, make_env, scripted):
     """From the gentle start (aligned fingers: the rigid twin holds too) the scripted grasp lifts the cylinder 5 cm in every seed, and
     in the held state each finger's normal force equals its motor's force limit (3 N): the motor
@@ -335,12 +385,12 @@ def test_dense_and_sparse_rewards_follow_their_definitions(make_env, scripted):
     """The reach task (over to the cylinder, down, grip, lift), the same seed under both reward
     types: the same episode step for step, each reward as defined."""
     steps = {}
-    for env_id in ("SoftGrasp-v3", "SoftGraspSparse-v3"):
+    for env_id in ("SoftGrasp-v5", "SoftGraspSparse-v5"):
         seen = steps[env_id] = []
         ep = run_episode(make_env(env_id), scripted, seed=2,
                          on_step=lambda obs, r, term, trunc, info, seen=seen: seen.append((obs, r, info)))  # fmt: skip
         assert ep.steps == 100
-    for (od, rd, infd), (os_, rs, infs) in zip(steps["SoftGrasp-v3"], steps["SoftGraspSparse-v3"], strict=True):
+    for (od, rd, infd), (os_, rs, infs) in zip(steps["SoftGrasp-v5"], steps["SoftGraspSparse-v5"], strict=True):
         assert_same(od, os_)  # the reward type changes nothing else
         terms = infd["reward_terms"]
         assert rd == pytest.approx(terms["lift"] + terms["reach"])
@@ -348,7 +398,7 @@ def test_dense_and_sparse_rewards_follow_their_definitions(make_env, scripted):
         assert terms["lift"] == pytest.approx(min(max(infd["lift_height"] / 0.05, 0.0), 1.0))
         assert rs == float(infs["held"])  # held: before, during and after the carry
         assert not infs["is_success"] or infs["held"]
-    assert any(info["is_success"] for _, _, info in steps["SoftGraspSparse-v3"])
+    assert any(info["is_success"] for _, _, info in steps["SoftGraspSparse-v5"])
     assert infs["is_success"]  # success only once the carry is over: the last step
 
 
@@ -361,7 +411,7 @@ def _tissue_pixels(img: np.ndarray) -> int:
 
 
 def test_rgb_array_shows_the_tissue(make_env):
-    soft = make_env("SoftGraspEasy-v3", render_mode="rgb_array", render_width=160, render_height=120)
+    soft = make_env("SoftGraspEasy-v5", render_mode="rgb_array", render_width=160, render_height=120)
     rigid = make_env("SoftGraspEasyRigid-v3", render_mode="rgb_array", render_width=160, render_height=120)
     soft.reset(seed=0)
     rigid.reset(seed=0)
@@ -378,8 +428,8 @@ def test_rgb_array_shows_the_tissue(make_env):
 
 
 def test_rendering_does_not_change_the_trajectory():
-    a = gym.make("SoftGrasp-v3", render_mode="rgb_array", render_width=64, render_height=48)
-    b = gym.make("SoftGrasp-v3")
+    a = gym.make("SoftGrasp-v5", render_mode="rgb_array", render_width=64, render_height=48)
+    b = gym.make("SoftGrasp-v5")
     ra = [a.reset(seed=1)]
     rb = [b.reset(seed=1)]
     rng = np.random.default_rng(0)
@@ -411,7 +461,7 @@ def test_render_without_mode_warns_and_returns_none():
 
 def test_record_video_writes_an_episode(tmp_path):
     pytest.importorskip("moviepy")
-    env = gym.make("SoftGrasp-v3", render_mode="rgb_array", render_width=96, render_height=64, max_episode_steps=8)
+    env = gym.make("SoftGrasp-v5", render_mode="rgb_array", render_width=96, render_height=64, max_episode_steps=8)
     env = gym.wrappers.RecordVideo(env, str(tmp_path / "videos"), episode_trigger=lambda e: True, disable_logger=True)
     run_episode(env, lambda obs: env.action_space.sample(), seed=0)
     env.close()
@@ -423,7 +473,7 @@ def test_record_video_writes_an_episode(tmp_path):
 
 
 def test_pickled_fresh_env_behaves_like_the_original():
-    env = gym.make("SoftGrasp-v3")
+    env = gym.make("SoftGrasp-v5")
     twin = pickle.loads(pickle.dumps(env))
     assert_same(env.reset(seed=0), twin.reset(seed=0))
     act = np.array([0.3, -0.2, -0.5, 0.1], dtype=np.float32)
@@ -432,7 +482,7 @@ def test_pickled_fresh_env_behaves_like_the_original():
     twin.close()
 
 
-@pytest.mark.parametrize("env_id", ["SoftGrasp-v4", "SoftGraspGoal-v5"])
+@pytest.mark.parametrize("env_id", ["SoftGrasp-v5", "SoftGraspGoal-v6", "SoftGrasp-v4"])
 def test_deepcopy_mid_episode_is_exact(env_id):
     env = gym.make(env_id)
     env.reset(seed=5)
@@ -487,7 +537,7 @@ def test_create_and_close_100_envs_leaves_no_client_connected():
     before = _connected_clients()
     ids = []
     for k in range(100):
-        env = gym.make("SoftGrasp-v3", render_mode="rgb_array", render_width=32, render_height=24)
+        env = gym.make("SoftGrasp-v5", render_mode="rgb_array", render_width=32, render_height=24)
         env.reset(seed=k)
         if k % 10 == 0:
             env.render()
@@ -497,7 +547,7 @@ def test_create_and_close_100_envs_leaves_no_client_connected():
     assert _connected_clients() == before
     assert not set(ids) & before
     # an env closed before any reset, and closed twice
-    env = gym.make("SoftGrasp-v3")
+    env = gym.make("SoftGrasp-v5")
     env.close()
     env.close()
 
@@ -508,19 +558,19 @@ def test_jaw_wedge_defeats_rigid_fingers_but_not_soft_ones(make_env, scripted):
     it swings out of the grasp and topples; the tissue conforms and holds it upright."""
     options = {"jaw_wedge": 0.1, "yaw": 0.1, "lateral_offset": 0.005, "cylinder_xy": (0.0, 0.0)}
     outcome = {}
-    for env_id in ("SoftGraspRigid-v3", "SoftGrasp-v3"):
+    for env_id in ("SoftGraspRigid-v3", "SoftGrasp-v5"):
         ep = run_episode(make_env(env_id), scripted, seed=0, options=options)
         outcome[env_id] = (ep.terminated, ep.success, float(ep.observation[OBS_NAMES.index("cyl_axis_z")]))
     rigid_term, rigid_success, rigid_axis_z = outcome["SoftGraspRigid-v3"]
     assert rigid_term and not rigid_success and rigid_axis_z < math.cos(math.pi / 4)
-    soft_term, soft_success, soft_axis_z = outcome["SoftGrasp-v3"]
+    soft_term, soft_success, soft_axis_z = outcome["SoftGrasp-v5"]
     assert not soft_term and soft_success and soft_axis_z > math.cos(0.1)
 
 
 @pytest.mark.skipif(not softgrasp_env.env._display_available(), reason="needs a display (CI runs under xvfb-run)")
 def test_human_mode_runs_the_gui_with_the_particles_shown(make_env, scripted):
-    env = make_env("SoftGrasp-v3", render_mode="human")
-    ref = make_env("SoftGrasp-v3")
+    env = make_env("SoftGrasp-v5", render_mode="human")
+    ref = make_env("SoftGrasp-v5")
     ep = run_episode(env, scripted, seed=0, max_steps=10)
     ref_ep = run_episode(ref, scripted, seed=0, max_steps=10)
     assert_same(ep.observation, ref_ep.observation)  # the visual-only particle bodies take no part in the dynamics

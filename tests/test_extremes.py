@@ -17,6 +17,7 @@ import pytest
 
 from agents.scripted import ScriptedGraspPolicy
 from softgrasp_env.config import SimConfig, TissueConfig
+from softgrasp_env.registration import TISSUE_V3
 from tests.helpers import run_episode
 
 
@@ -24,10 +25,11 @@ def _finite(obs, reward, term, trunc, info) -> None:
     assert np.isfinite(obs).all() and math.isfinite(reward)
 
 
-def _episodes(kwargs: dict, *, seeds=(0,), scripted=(0,), env_id: str = "SoftGrasp-v3") -> list[str]:
-    """Random-action episodes on ``seeds`` and scripted ones on ``scripted``; the divergences,
-    each with its reason (empty when none). A divergence ends its episode: it is the last step."""
-    env = gym.make(env_id, **kwargs)
+def _episodes(kwargs: dict, *, seeds=(0,), scripted=(0,), env_id: str = "SoftGrasp-v4") -> list[str]:
+    """Random-action episodes on ``seeds`` and scripted ones on ``scripted``, on the thesis tissue the
+    ranges were measured on (TISSUE_V3 under ``kwargs``); the divergences, each with its reason
+    (empty when none). A divergence ends its episode: it is the last step."""
+    env = gym.make(env_id, **{**TISSUE_V3, **kwargs})
     problems = []
     try:
         for mode, episode_seeds in (("random", seeds), ("scripted", scripted)):
@@ -168,7 +170,7 @@ def test_slow_ends_run(kwargs):
 ])  # fmt: skip
 def test_settings_that_did_not_run_are_refused_naming_the_rule(kwargs, match):
     with pytest.raises(ValueError, match=match):
-        gym.make("SoftGrasp-v3", **kwargs)
+        gym.make("SoftGrasp-v5", **kwargs)
 
 
 def _draw(rng: np.random.Generator) -> dict:
@@ -201,7 +203,8 @@ def _draw(rng: np.random.Generator) -> dict:
 def test_fuzz_over_the_documented_ranges():
     """30 seeded draws of every setting at once, 100 random-action steps each (1,000 steps in all
     once the refused draws are left out: 20 of the 30 are, each by a rule of its own): no NaN, no
-    exception but gym.make's ValueError for a combination outside the rules, and no divergence.
+    exception but gym.make's ValueError for a combination outside the rules, and no divergence (on
+    SoftGrasp-v4 with the thesis tissue, TISSUE_V3, where the draws were measured).
     (Ten more draws found the segmented kind turning a segment at 100 rad/s, past its 90 rad/s
     divergence limit, at draw 36: the kind's own limit, not the tissue's; noted, not chased here.)"""
     rng = np.random.default_rng(12)
@@ -210,7 +213,7 @@ def test_fuzz_over_the_documented_ranges():
     for k in range(30):
         kwargs = _draw(rng)
         try:
-            env = gym.make("SoftGrasp-v3", **kwargs)
+            env = gym.make("SoftGrasp-v4", **{**TISSUE_V3, **kwargs})
         except ValueError:
             refused += 1
             continue

@@ -1,7 +1,8 @@
 """The env's own scripted grasp against Coulomb, at the defaults users get (the accuracy targets):
-the aligned gentle start (SoftGraspEasy-v3 / SoftGraspEasyRigid-v3, yaw, wedge, offset and
-position 0), 3 N per finger, mu_s = mu_k = 0.9, dt 1/240 unless stated; every figure from one
-physics step to the next (benchmarks/grasp_checks.py, which also bisects the bounds)."""
+the aligned gentle start (SoftGraspEasy-v4 with the thesis tissue, TISSUE_V3 / SoftGraspEasyRigid-v3,
+yaw, wedge, offset and position 0), 3 N per finger, mu_s = mu_k = 0.9, dt 1/240 unless stated;
+every figure from one physics step to the next (benchmarks/grasp_checks.py, which also bisects the
+bounds)."""
 
 from __future__ import annotations
 

@@ -18,23 +18,25 @@ IDS = tuple(i for i in ENV_IDS if i.startswith("SoftGraspObjects"))
 
 
 def test_the_family_is_soft_rigid_and_torsional_on_the_carry_and_the_grip_force_tasks():
-    assert IDS == ("SoftGraspObjects-v1", "SoftGraspObjectsRigid-v1", "SoftGraspObjectsRigidTorsion-v1",
-                   "SoftGraspObjectsGrip-v2", "SoftGraspObjectsGrip-v1", "SoftGraspObjectsGripRigid-v2",
-                   "SoftGraspObjectsGripRigidTorsion-v2", "SoftGraspObjectsGripRigid-v1",
-                   "SoftGraspObjectsGripRigidTorsion-v1")  # fmt: skip
+    assert IDS == ("SoftGraspObjects-v2", "SoftGraspObjects-v1", "SoftGraspObjectsRigid-v1",
+                   "SoftGraspObjectsRigidTorsion-v1", "SoftGraspObjectsGrip-v3", "SoftGraspObjectsGrip-v2",
+                   "SoftGraspObjectsGripRigid-v2", "SoftGraspObjectsGripRigidTorsion-v2",
+                   "SoftGraspObjectsGripRigid-v1", "SoftGraspObjectsGripRigidTorsion-v1")  # fmt: skip
     assert OBJECT_SET == tuple(PRESETS)  # every named object, the cylinder included
     kinds = [gym.spec(i).kwargs["fingers"] for i in IDS]
     patch = TorsionalRigidConfig(spinning_friction="patch")
-    assert kinds == ["tissue", "rigid", patch, "tissue", "tissue", "rigid", patch, "rigid", patch]
+    assert kinds == ["tissue", "tissue", "rigid", patch, "tissue", "tissue", "rigid", patch, "rigid", patch]
     for env_id in IDS:
         kw = gym.spec(env_id).kwargs
         assert kw["object"] == OBJECT_SET and kw["carry"] is True
-        # the grip variants' v2 takes the grip ids' latest charge, v1 the first
-        task = OBJECTS_TASK if "Grip" not in env_id else GRIP_TASK_CARRY if env_id.endswith("-v2") else GRIP_TASK
+        # the grip variants take the grip ids' latest charge but the rigid kinds' v1, which keeps the first
+        task = OBJECTS_TASK if "Grip" not in env_id else GRIP_TASK if env_id.endswith("-v1") else GRIP_TASK_CARRY
         assert all(kw[k] == v for k, v in task.items()), env_id
         assert kw.get("start", "reach") == ("easy" if "Grip" in env_id else "reach")
-    # the soft ids are on the v4 tissue
-    assert gym.make("SoftGraspObjects-v1").unwrapped.args.physics.tissue.group_energy == "continuum"
+    # the soft ids are on the v4 tissue, the latest solved across all of its groups at once
+    for env_id, solve in (("SoftGraspObjects-v2", "global"), ("SoftGraspObjects-v1", "groups")):
+        physics = gym.make(env_id).unwrapped.args.physics
+        assert (physics.tissue.group_energy, physics.sim.material_solve) == ("continuum", solve), env_id
 
 
 def test_the_draws_cover_the_set_at_sizes_masses_and_frictions_in_range(make_env):

@@ -58,9 +58,9 @@ def test_tactile_entries_are_the_pads_taxels(fingers, make_env):
             obs, *_ = env.step(policy(obs))
         return obs
 
-    env = make_env("SoftGrasp-v3", fingers=fingers, tactile=(4, 3))
+    env = make_env("SoftGrasp-v5", fingers=fingers, tactile=(4, 3))
     u = env.unwrapped
-    base = make_env("SoftGrasp-v3", fingers=fingers)
+    base = make_env("SoftGrasp-v5", fingers=fingers)
     assert u.obs_names == base.unwrapped.obs_names + tactile_names(4, 3)
     assert u.obs_names[-1] == f"tactile_right_r3_c2_{TAXEL_CHANNELS[-1]}" and env.observation_space.shape == (144,)
     obs = run(env)
@@ -76,7 +76,7 @@ def test_tactile_entries_are_the_pads_taxels(fingers, make_env):
 @pytest.mark.parametrize("bad", [(0, 3), (4, 33), (4,), 5, (2.0, 3), "4x3"])
 def test_tactile_refuses_a_bad_grid(bad, make_env):
     with pytest.raises(ValueError, match="tactile"):
-        make_env("SoftGrasp-v3", tactile=bad)
+        make_env("SoftGrasp-v5", tactile=bad)
 
 
 @pytest.mark.parametrize("fingers", ["tissue", "rigid"])
@@ -92,8 +92,8 @@ def test_tactile_history_keeps_the_frames_before(fingers, make_env):
     from softgrasp_env.observation import tactile_frames, tactile_names, tactile_view
     from softgrasp_env.policies import ScriptedGraspPolicy
 
-    env = make_env("SoftGrasp-v3", fingers=fingers, tactile=(3, 2), tactile_history=3)
-    one = make_env("SoftGrasp-v3", fingers=fingers, tactile=(3, 2))
+    env = make_env("SoftGrasp-v5", fingers=fingers, tactile=(3, 2), tactile_history=3)
+    one = make_env("SoftGrasp-v5", fingers=fingers, tactile=(3, 2))
     u, names = env.unwrapped, env.unwrapped.obs_names
     assert names == one.unwrapped.obs_names + tactile_names(3, 2, 3)[60:]
     assert names[-1].startswith("tactile_past2_right_r2_c1_") and env.observation_space.shape == (len(names),)

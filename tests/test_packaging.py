@@ -133,12 +133,12 @@ out["baselines"] = len(list_baselines())
 from softgrasp_env.scene.objects import PRESETS, object_geometry  # the shipped meshes load from the install
 out["pebble_cm3"] = round(object_geometry(PRESETS["pebble-0"]).volume * 1e6, 1)
 try:
-    load_baseline("SoftGrasp-v3_sac_1")  # the id's best: in the wheel
+    load_baseline("SoftGrasp-v4_sac_0")  # the id's best: in the wheel
     out["load_error"] = None
 except ImportError as exc:
     out["load_error"] = str(exc)
 try:
-    load_baseline("SoftGrasp-v3_ppo_0")  # not the id's best: kept in the repository, not the wheel
+    load_baseline("SoftGraspRigid-v3_ppo_0")  # not the id's best: kept in the repository, not the wheel
     out["other_error"] = None
 except ValueError as exc:
     out["other_error"] = str(exc)
@@ -200,7 +200,7 @@ def test_the_wheel_works_in_a_fresh_venv_without_extras(tmp_path):
 
     newest = max((i for i in softgrasp_env.ENV_IDS if i.rsplit("-v", 1)[0] == "SoftGrasp"),
                  key=lambda i: int(i.rsplit("-v", 1)[1]))
-    assert newest == "SoftGrasp-v4"
+    assert newest == "SoftGrasp-v5"
     assert result["env"] == newest and result["steps"] == 100 and result["success"] and result["in_space"]
     assert result["baselines"] == len(current)
     assert result["pebble_cm3"] == 112.7, result  # pebble-0's volume, from the installed mesh

@@ -25,21 +25,21 @@ def test_the_baselines_are_package_data_with_cards():
     import softgrasp_env
 
     assert names and all(baseline_card(n)["env"] in softgrasp_env.ENV_IDS for n in names), names
-    assert {"SoftGrasp-v3_sac_0", "SoftGraspRigid-v3_sac_0", "SoftGraspRigid-v3_ppo_0"} <= set(names)
+    assert {"SoftGrasp-v4_sac_0", "SoftGraspRigid-v3_sac_0", "SoftGraspRigid-v3_ppo_0"} <= set(names)
     assert policies.TRAINED.parent.name == "policies" and policies.TRAINED.parent.parent.name == "softgrasp_env"
-    v3 = list_baselines(env="SoftGrasp-v3")
-    assert v3 == [f"SoftGrasp-v3_{a}_{s}" for a in ("ppo", "sac") for s in range(3)]
-    assert list_baselines(env="SoftGrasp-v3", algo="sac") == [f"SoftGrasp-v3_sac_{s}" for s in range(3)]
-    card = baseline_card("SoftGrasp-v3_sac_0")
-    assert card["env"] == "SoftGrasp-v3" and card["algo"] == "sac" and card["evaluation"]["episodes"] == 100
+    rigid = list_baselines(env="SoftGraspRigid-v3")
+    assert rigid == [f"SoftGraspRigid-v3_{a}_{s}" for a in ("ppo", "sac") for s in range(3)]
+    assert list_baselines(env="SoftGraspRigid-v3", algo="sac") == [f"SoftGraspRigid-v3_sac_{s}" for s in range(3)]
+    card = baseline_card("SoftGrasp-v4_sac_0")
+    assert card["env"] == "SoftGrasp-v4" and card["algo"] == "sac" and card["evaluation"]["episodes"] == 100
     for name in names:
         folder = baseline_path(name)
         assert (folder / "model.zip").is_file() and (folder / "card.json").is_file()
 
 
 def test_an_unknown_baseline_is_named_with_the_nearest_ones():
-    with pytest.raises(ValueError, match=r"no shipped baseline 'SoftGrasp-v3_sac_7' \(did you mean 'SoftGrasp-v3_sac_"):
-        baseline_card("SoftGrasp-v3_sac_7")
+    with pytest.raises(ValueError, match=r"no shipped baseline 'SoftGraspRigid-v3_sac_7' \(did you mean 'SoftGraspRigid-v3_sac_"):
+        baseline_card("SoftGraspRigid-v3_sac_7")
     with pytest.raises(ValueError, match="no shipped baseline '../trained'"):
         load_baseline("../trained")
 
@@ -68,18 +68,6 @@ def test_a_loaded_baseline_acts_on_raw_observations_as_agents_runs_does():
         env.close()
 
 
-def test_a_her_baseline_loads_onto_an_env_of_its_own():
-    b = load_baseline("SoftGraspGoal-v4_her-sac-demos_2")
-    try:
-        assert b.stats is None and b._env is not None
-        env = b.make_env()
-        obs, _ = env.reset(seed=1000)
-        assert env.action_space.contains(np.asarray(b.policy(obs), dtype=np.float32))
-        env.close()
-    finally:
-        b.close()
-
-
 def test_loading_without_stable_baselines3_names_the_train_extra(monkeypatch):
     real_import = builtins.__import__
 
@@ -89,20 +77,20 @@ def test_loading_without_stable_baselines3_names_the_train_extra(monkeypatch):
         return real_import(name, *args, **kwargs)
 
     monkeypatch.setattr(builtins, "__import__", no_sb3)
-    assert list_baselines() and baseline_card("SoftGrasp-v3_sac_1")  # cards need no SB3
+    assert list_baselines() and baseline_card("SoftGrasp-v4_sac_0")  # cards need no SB3
     with pytest.raises(ImportError, match=r"softgrasp-env\[train\]") as exc:
-        load_baseline("SoftGrasp-v3_sac_1")
-    assert "SoftGrasp-v3_sac_1" in str(exc.value)
+        load_baseline("SoftGrasp-v4_sac_0")
+    assert "SoftGrasp-v4_sac_0" in str(exc.value)
 
 
 def test_a_missing_baseline_says_where_the_others_are():
     """The wheel carries the best baseline of each id: asking for another (or one of a retired id)
     names where they are; a name that is no baseline's gets the plain list."""
     with pytest.raises(ValueError, match="best baseline of each id only.*source repository.*retired id"):
-        baseline_card("SoftGrasp-v2_sac_0")
+        baseline_card("SoftGrasp-v3_sac_0")
     with pytest.raises(ValueError) as exc:
         baseline_card("ppo_0")
-    assert "best baseline of each id" not in str(exc.value) and "SoftGrasp-v3_sac_0" in str(exc.value)
+    assert "best baseline of each id" not in str(exc.value) and "SoftGrasp-v4_sac_0" in str(exc.value)
 
 
 def test_the_arm_keyword_of_the_scripted_policy_is_retired():

@@ -27,7 +27,7 @@ def _touches_border(mask: np.ndarray) -> bool:
     return bool(mask[0].any() or mask[-1].any() or mask[:, 0].any() or mask[:, -1].any())
 
 
-@pytest.mark.parametrize("env_id", ["SoftGrasp-v3", "SoftGraspRigid-v3"])
+@pytest.mark.parametrize("env_id", ["SoftGrasp-v5", "SoftGraspRigid-v3"])
 def test_the_follow_camera_frames_gripper_and_cylinder_at_every_start(env_id, make_env, scripted):
     env = make_env(env_id, render_mode="rgb_array", render_width=W, render_height=H)
     for seed in range(4):
@@ -46,7 +46,7 @@ def test_the_follow_camera_frames_gripper_and_cylinder_at_every_start(env_id, ma
 
 
 def test_the_fixed_camera_sees_the_whole_start(make_env):
-    env = make_env("SoftGrasp-v3", render_mode="rgb_array", render_camera="fixed", render_width=W, render_height=H)
+    env = make_env("SoftGrasp-v5", render_mode="rgb_array", render_camera="fixed", render_width=W, render_height=H)
     for seed in range(4):
         env.reset(seed=seed)
         _, masks = _frame_bodies(env)

@@ -24,12 +24,12 @@ def _make_warnings(env_id: str, **kwargs) -> list[str]:
 
 
 def test_a_time_limit_that_ends_before_the_carry_warns_at_make():
-    (msg,) = _make_warnings("SoftGrasp-v3", max_episode_steps=60)
+    (msg,) = _make_warnings("SoftGrasp-v5", max_episode_steps=60)
     assert "max_episode_steps=60" in msg and "5 s" in msg and ">= 100" in msg
-    assert _make_warnings("SoftGrasp-v3") == []  # the registered 100 steps: the carry ends on the last
-    assert _make_warnings("SoftGrasp-v3", max_episode_steps=100) == []
-    assert _make_warnings("SoftGrasp-v3", max_episode_steps=-1) == []  # no time limit at all
-    assert _make_warnings("SoftGraspEasy-v3", max_episode_steps=20) == []  # no carry: a lift may succeed any time
+    assert _make_warnings("SoftGrasp-v5") == []  # the registered 100 steps: the carry ends on the last
+    assert _make_warnings("SoftGrasp-v5", max_episode_steps=100) == []
+    assert _make_warnings("SoftGrasp-v5", max_episode_steps=-1) == []  # no time limit at all
+    assert _make_warnings("SoftGraspEasy-v5", max_episode_steps=20) == []  # no carry: a lift may succeed any time
     # the rule follows the carry's settings and the control rate
     (msg,) = _make_warnings("SoftGraspRigid-v3", carry_start=5.0, control_frequency=40.0)
     assert ">= 260" in msg
@@ -58,7 +58,7 @@ def test_the_observation_box_is_bounded_where_bounds_hold():
             assert (box.low[k], box.high[k]) == (np.float32(lo), np.float32(hi)), name
     assert np.isinf(box.low[CARRY_OBS_NAMES.index("finger_gap")])  # soft joint limits: no bound
     box = observation_box(CARRY_OBS_NAMES)
-    env = gym.make("SoftGrasp-v3")
+    env = gym.make("SoftGrasp-v5")
     goal = gym.make("SoftGraspGoal-v5")
     try:
         assert env.observation_space == box
@@ -69,7 +69,7 @@ def test_the_observation_box_is_bounded_where_bounds_hold():
         goal.close()
 
 
-@pytest.mark.parametrize("env_id", ["SoftGraspRigid-v3", "SoftGrasp-v4", "SoftGraspGoal-v4"])
+@pytest.mark.parametrize("env_id", ["SoftGraspRigid-v3", "SoftGrasp-v4", "SoftGraspGoal-v6"])
 def test_every_observation_lies_in_the_box(env_id, make_env, scripted):
     """Scripted grasps (the forces, the lift, the carry) and random flailing (tilts, fast spins)."""
     env = make_env(env_id)
@@ -86,9 +86,11 @@ def test_every_observation_lies_in_the_box(env_id, make_env, scripted):
 
 
 def test_evaluate_names_the_env_it_ran(capsys):
-    from agents.evaluate import main
+    from agents.evaluate import DEFAULT_ENV, main
+    from softgrasp_env import ENV_IDS
 
+    assert DEFAULT_ENV in ENV_IDS  # a registered id, not a retired one
     assert main(["--policy", "scripted", "--episodes", "1"]) == 0
-    assert capsys.readouterr().out.startswith("SoftGrasp-v3 / scripted: success")
+    assert capsys.readouterr().out.startswith(f"{DEFAULT_ENV} / scripted: success")
     assert main(["--policy", "random", "--env", "SoftGraspEasyRigid-v3", "--episodes", "1"]) == 0
     assert capsys.readouterr().out.startswith("SoftGraspEasyRigid-v3 / random: success")

@@ -25,6 +25,9 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 
+from softgrasp_env.registration import RETIRED_AS as REGISTERED_AS
+from softgrasp_env.registration import TISSUE_V3
+
 DATA_V3 = Path(__file__).parent / "data" / "trajectories_v3.npz"
 DATA_V4 = Path(__file__).parent / "data" / "trajectories_v4.npz"
 DATA_MORE = Path(__file__).parent / "data" / "trajectories_more.npz"
@@ -44,29 +47,36 @@ GRIP_V3_TASK = {"squeeze_reference": "finger_force", "squeeze_weight": 0.5, "squ
 SoftGraspGrip-v4's on the v4 tissue): the whole squeeze charged in shares of the finger's force,
 one taxel frame. The physics is the same."""
 RETIRED_AS: dict[str, tuple[str, dict]] = {
-    "SoftGraspGoal-v3": ("SoftGraspGoal-v4", {"end_when_knocked_over": True}),
+    **REGISTERED_AS,
+    "SoftGraspGoal-v3": ("SoftGraspGoal-v5", {**TISSUE_V3, "end_when_knocked_over": True}),
     "SoftGraspGrip-v3": ("SoftGraspGripRigid-v5", {**GRIP_V3_TASK, "fingers": "tissue"}),
     "SoftGraspGrip-v4": ("SoftGraspGrip-v6", GRIP_V3_TASK),
     "SoftGraspGripRigid-v3": ("SoftGraspGripRigid-v5", GRIP_V3_TASK),
     "SoftGraspGripRigidTorsion-v3": ("SoftGraspGripRigidTorsion-v5", GRIP_V3_TASK),
 }
-"""A recorded id that is retired, and the registered id with the keywords that are it (the goal's
-v3 is v4's physics with the lift task's ends; the grip ids' v3 and the soft grip's v4 are the
-latest grip ids with the first task, :data:`GRIP_V3_TASK`, the soft v3 on the rigid twin's v3
-tissue)."""
+"""A recorded id that is retired, and the registered id with the keywords that are it: the package's
+own table (softgrasp_env.registration.RETIRED_AS: the thesis tissue's ids are the v4 ids with
+TISSUE_V3), and the ids retired before it had one (the goal's v3 is the thesis tissue's goal with
+the lift task's ends; the grip ids' v3 and the soft grip's v4 are the latest grip ids with the
+first task, :data:`GRIP_V3_TASK`, the soft v3 on the rigid twin's v3 tissue)."""
 
 
-def _case(name: str, env_id: str, policy: str, steps: int) -> tuple[str, str, dict, str, int]:
-    made, kwargs = RETIRED_AS.get(env_id, (env_id, {}))
-    return (name, made, kwargs, policy, steps)
+def _made(env_id: str, kwargs: dict) -> tuple[str, dict]:
+    """The registered id and keywords of a case recorded on ``env_id`` with ``kwargs``."""
+    made, extra = RETIRED_AS.get(env_id, (env_id, {}))
+    return made, {**extra, **kwargs}
+
+
+def _case(name: str, env_id: str, policy: str, steps: int, kwargs: dict | None = None) -> tuple[str, str, dict, str, int]:
+    return (name, *_made(env_id, kwargs or {}), policy, steps)
 
 
 V3_CASES: tuple[tuple[str, str, dict, str, int], ...] = (
     *(_case(f"{env_id}/random", env_id, "random", 130) for env_id in V3_IDS),
     *(_case(f"{env_id}/scripted", env_id, "scripted", 100) for env_id in V3_IDS),  # through the carry (3.5-5 s)
-    ("v3-consistent/scripted", "SoftGrasp-v3", {"sim": "consistent"}, "scripted", 100),
-    ("v3-dt1000/scripted", "SoftGraspEasy-v3", {"sim": "dt1000"}, "scripted", 40),
-    ("v3-dt120/scripted", "SoftGraspEasy-v3", {"sim": "dt120"}, "scripted", 60),
+    _case("v3-consistent/scripted", "SoftGrasp-v3", "scripted", 100, {"sim": "consistent"}),
+    _case("v3-dt1000/scripted", "SoftGraspEasy-v3", "scripted", 40, {"sim": "dt1000"}),
+    _case("v3-dt120/scripted", "SoftGraspEasy-v3", "scripted", 60, {"sim": "dt120"}),
 )  # fmt: skip
 """The v3 ids and the settings a speed-up might treat differently: the consistent coupling, one
 world substep (1/1000 s) and four (1/120 s). (The recording also holds a case of the per-step
@@ -75,12 +85,12 @@ material, retired after 0.6.0; it is no longer replayed.)"""
 MORE_CASES: tuple[tuple[str, str, dict, str, int], ...] = (
     *(_case(f"{env_id}/random", env_id, "random", 130) for env_id in (
         "SoftGraspGoal-v4", "SoftGraspGrip-v3", "SoftGraspGripRigid-v3", "SoftGraspGripRigidTorsion-v3")),
-    ("SoftGraspGoal-v4/scripted", "SoftGraspGoal-v4", {}, "scripted", 100),
-    ("segmented/scripted", "SoftGraspEasy-v3", {"fingers": "segmented"}, "scripted", 60),
-    ("segmented/random", "SoftGrasp-v3", {"fingers": "segmented"}, "random", 40),
-    ("fem/scripted", "SoftGraspEasy-v3", {"fingers": "fem"}, "scripted", 12),
-    ("tissue-all-consistent/random", "SoftGrasp-v3", {"tissue_faces": "all", "sim": "consistent"}, "random", 40),
-    ("fast-preset/scripted", "SoftGrasp-v3", {"preset": "fast"}, "scripted", 60),
+    _case("SoftGraspGoal-v4/scripted", "SoftGraspGoal-v4", "scripted", 100),
+    _case("segmented/scripted", "SoftGraspEasy-v3", "scripted", 60, {"fingers": "segmented"}),
+    _case("segmented/random", "SoftGrasp-v3", "random", 40, {"fingers": "segmented"}),
+    _case("fem/scripted", "SoftGraspEasy-v3", "scripted", 12, {"fingers": "fem"}),
+    _case("tissue-all-consistent/random", "SoftGrasp-v3", "random", 40, {"tissue_faces": "all", "sim": "consistent"}),
+    _case("fast-preset/scripted", "SoftGrasp-v3", "scripted", 60, {"preset": "fast"}),
     ("ranges/random", "SoftGraspRigid-v3",
      {"friction_range": 0.3, "cylinder_mass_range": 0.5, "cylinder_radius_range": 0.005}, "random", 60),
     ("SoftGraspGripRigid-v5/random", "SoftGraspGripRigid-v5", {}, "random", 130),
@@ -103,14 +113,15 @@ V4_CASES: tuple[tuple[str, str, dict, str, int], ...] = (
 grasp does not read taxels), its fine preset and the consistent coupling."""
 
 GLOBAL_CASES: tuple[tuple[str, str, dict, str, int], ...] = (
-    ("global-SoftGrasp-v4/scripted", "SoftGrasp-v4", {"material_solve": "global"}, "scripted", 100),
-    ("global-SoftGraspEasy-v4/random", "SoftGraspEasy-v4", {"material_solve": "global"}, "random", 130),
-    ("global-fine/scripted", "SoftGraspEasy-v4", {"preset": "fine", "material_solve": "global"}, "scripted", 40),
+    ("global-SoftGrasp-v4/scripted", "SoftGrasp-v5", {}, "scripted", 100),
+    ("global-SoftGraspEasy-v4/random", "SoftGraspEasy-v5", {}, "random", 130),
+    ("global-fine/scripted", "SoftGraspEasy-v5", {"preset": "fine"}, "scripted", 40),
 )  # fmt: skip
-"""The v4 tissue under the global material solve (``material_solve="global"``, an option of every
-soft id): the scripted grasp through the carry, random actions across a reset, and the fine
-preset. Recorded with AVX-512 on the code before the solve was split by pad (for its threads), so
-that the replay shows the split kept every bit."""
+"""The soft ids' v5: the v4 tissue under the global material solve, recorded as the v4 ids with
+``material_solve="global"`` (what the v5 ids are) before they were registered: the scripted grasp
+through the carry, random actions across a reset, and the fine preset. Recorded with AVX-512 on the
+code before the solve was split by pad (for its threads), so that the replay shows the split kept
+every bit."""
 
 SETS = {"v3": (V3_CASES, DATA_V3), "more": (MORE_CASES, DATA_MORE), "v4": (V4_CASES, DATA_V4),
         "v4-avx512": (V4_CASES, DATA_V4_AVX512), "global-avx512": (GLOBAL_CASES, DATA_GLOBAL_AVX512)}

@@ -48,7 +48,7 @@ from .base import FingerConfig, FingerKind, FingerSite
 PATCH_SPINNING_FRICTION = 0.0167
 """The tissue's own torsional lever on the cylinder [m]: the pressure-weighted radius
 l = sum N_i |r_i - c| / sum N_i of its particle contacts, in the default soft grasp
-(SoftGraspEasy-v3, aligned and centred, the scripted policy's squeeze). Measured, not tuned; the
+(SoftGraspEasy-v4 with the thesis tissue, TISSUE_V3; aligned and centred, the scripted policy's squeeze). Measured, not tuned; the
 package's documentation (Finger kinds, "The rigid kinds' contact model") gives the measurement
 and how little misalignment and the tissue's resolution move it."""
 

@@ -8,9 +8,9 @@ hyperparameters, steps, seed, success over 100 seeded episodes, the command that
 
     from softgrasp_env.policies import list_baselines, baseline_card, load_baseline
 
-    list_baselines(env="SoftGrasp-v3")          # names; no stable-baselines3 needed
-    baseline_card("SoftGrasp-v3_sac_0")         # the card as a dict; no stable-baselines3 needed
-    b = load_baseline("SoftGrasp-v3_sac_0")     # needs the [train] extra
+    list_baselines(env="SoftGrasp-v4")          # names; no stable-baselines3 needed
+    baseline_card("SoftGrasp-v4_sac_0")         # the card as a dict; no stable-baselines3 needed
+    b = load_baseline("SoftGrasp-v4_sac_0")     # needs the [train] extra
     env = b.make_env()                          # the env it trained on, with its kwargs
     obs, _ = env.reset(seed=1000)
     action = b.policy(obs)                      # deterministic; the statistics applied inside

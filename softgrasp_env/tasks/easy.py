@@ -1,4 +1,4 @@
-"""Task 'easy' (SoftGraspEasy-v3, SoftGraspEasyRigid-v3, SoftGraspEasyRigidTorsion-v3): the gentle start, for debugging a policy
+"""Task 'easy' (SoftGraspEasy-v5, SoftGraspEasyRigid-v3, SoftGraspEasyRigidTorsion-v3): the gentle start, for debugging a policy
 or the physics - the open fingers around the cylinder's top (the grip point 5 cm above its mid
 height, over the origin), aligned (no wedge, yaw within +-5 degrees), the cylinder within +-1 cm.
 An open-loop "close, then lift" succeeds here, so it is no benchmark."""

@@ -1,4 +1,4 @@
-"""The goal variant (SoftGraspGoal-v4, -v3), a composition over a lift task for hindsight experience
+"""The goal variant (SoftGraspGoal-v6, -v5), a composition over a lift task for hindsight experience
 replay: the cylinder centre is the achieved goal, a point above the cylinder's start the desired
 one, and the reward is -1 while they are farther apart than ``distance_threshold``, else 0
 (``compute_reward``, vectorised over leading batch dimensions as HER needs). Success is exactly
@@ -13,8 +13,8 @@ goal-conditioned
 tasks HER was made on run a fixed number of steps (Andrychowicz et al. 2017; Plappert et al.
 2018, the Fetch tasks); here only a physics failure ends one early: the cylinder below the
 ground or flung above the workspace (lift.py's LOWEST, HIGHEST), and a diverged step (the env's).
-That is SoftGraspGoal-v4; ``end_when_knocked_over=True`` keeps the lift task's ends, as
-SoftGraspGoal-v3 was released with."""
+That is every registered goal id (since SoftGraspGoal-v4); ``end_when_knocked_over=True`` keeps
+the lift task's ends, as SoftGraspGoal-v3 was released with."""
 
 from __future__ import annotations
 

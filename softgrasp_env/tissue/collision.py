@@ -320,7 +320,7 @@ def shape_distance_of(kind, shape_params, s, p, more_kinds):
     the kernels once for each and the test on it is settled when they compile: for None they hold
     the code they had before the cone, the elliptic cylinder and the hull (``basic_shape_distance``)
     and the recorded trajectories replay to the bit. With the hull's branch always present they
-    did not (the first difference at step 5 of SoftGraspEasy-v3/random): any code added to what the
+    did not (the first difference at step 5 of the recorded SoftGraspEasy-v3/random): any code added to what the
     kernels inline can move LLVM's choices of which multiply-adds to fuse (jit.py: fastmath
     "contract")."""
     if more_kinds is None:

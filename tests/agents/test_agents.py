@@ -72,8 +72,8 @@ def test_evaluate_counts_success_per_object():
 
 
 def test_default_algos_and_presets():
-    assert default_algo("SoftGraspGoal-v4") == "her-sac"
-    assert default_algo("SoftGrasp-v3") == "sac"
+    assert default_algo("SoftGraspGoal-v6") == "her-sac"
+    assert default_algo("SoftGrasp-v5") == "sac"
     env = gym.make("SoftGraspRigid-v3")
     for algo in ("ppo", "sac"):
         model = make_model(algo, env, seed=0, **({"n_steps": 64, "batch_size": 64} if algo == "ppo" else {}))
@@ -86,7 +86,7 @@ def test_default_algos_and_presets():
 
 @pytest.mark.parametrize(("env_id", "algo", "steps"), [("SoftGraspRigid-v3", "sac", 300),
                                                        ("SoftGraspRigid-v3", "ppo", 1024),
-                                                       ("SoftGraspGoal-v4", "her-sac", 230)])  # fmt: skip
+                                                       ("SoftGraspGoal-v6", "her-sac", 230)])  # fmt: skip
 def test_train_writes_a_run_that_evaluate_can_load(tmp_path, env_id, algo, steps, capsys):
     import train
 
@@ -123,9 +123,9 @@ def test_train_rejects_bad_arguments(tmp_path):
     import train
 
     with pytest.raises(SystemExit):
-        train.main(["--env", "SoftGrasp-v3", "--algo", "her-sac", "--out", str(tmp_path)])
+        train.main(["--env", "SoftGrasp-v5", "--algo", "her-sac", "--out", str(tmp_path)])
     with pytest.raises(SystemExit):
-        train.main(["--env", "SoftGrasp-v3", "--timesteps", "0", "--out", str(tmp_path)])
+        train.main(["--env", "SoftGrasp-v5", "--timesteps", "0", "--out", str(tmp_path)])
     with pytest.raises(SystemExit):
         evaluate_main(["--policy", str(tmp_path / "missing.zip")])
 
@@ -147,21 +147,24 @@ def test_making_a_model_leaves_the_presets_as_they_are():
 
 def test_the_zoo_hyperparameter_files_say_what_the_presets_say():
     """agents/hyperparams/*.yml repeat the presets for rl-baselines3-zoo: their network sizes,
-    train_freq, gamma and learning rate must be the presets' (the HER preset once drifted)."""
+    train_freq, gamma and learning rate must be the presets' (the HER preset once drifted). Each
+    preset is the section its YAML anchor is defined on (the other ids' sections merge it), whatever
+    id that section is."""
     import re
     from pathlib import Path
 
     from agents.baselines import PRESETS
 
     root = Path(__file__).resolve().parents[2] / "agents" / "hyperparams"
-    for name, sections in (("ppo.yml", {"SoftGrasp-v3": "ppo"}), ("sac.yml", {"SoftGrasp-v3": "sac", "SoftGraspGoal-v4": "her-sac"})):
+    for name, anchors in (("ppo.yml", {"ppo-defaults": "ppo"}),
+                          ("sac.yml", {"sac-defaults": "sac", "her-defaults": "her-sac"})):  # fmt: skip
         text = (root / name).read_text()
-        for env_id, algo in sections.items():
-            block = re.search(rf"^{re.escape(env_id)}:.*?(?=^\S|\Z)", text, re.S | re.M).group(0)
+        for anchor, algo in anchors.items():
+            block = re.search(rf"^\S+: &{re.escape(anchor)}\n.*?(?=^\S|\Z)", text, re.S | re.M).group(0)
             preset = PRESETS[algo]
             arch = [int(x) for x in re.search(r"net_arch=\[([\d, ]+)\]", block).group(1).split(",")]
-            assert arch == preset["policy_kwargs"]["net_arch"], (name, env_id)
+            assert arch == preset["policy_kwargs"]["net_arch"], (name, anchor)
             assert float(re.search(r"gamma: ([\d.]+)", block).group(1)) == preset["gamma"]
             assert float(re.search(r"learning_rate: !!float ([\de.-]+)", block).group(1)) == preset["learning_rate"]
             freq = re.search(r"train_freq: (\d+)", block)
-            assert (int(freq.group(1)) if freq else None) == preset.get("train_freq"), (name, env_id)
+            assert (int(freq.group(1)) if freq else None) == preset.get("train_freq"), (name, anchor)

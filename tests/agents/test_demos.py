@@ -18,7 +18,7 @@ from agents.baselines import make_model
 from agents.demos import DEMO_SEED_BASE, add_demonstrations, demo_seeds
 from softgrasp_env.tasks.goal import DISTANCE_THRESHOLD
 
-GOAL = "SoftGraspGoal-v4"
+GOAL = "SoftGraspGoal-v6"
 RIGID = "SoftGraspRigidTorsion-v3"  # the scripted grasp holds there (100 % in the results table)
 
 
@@ -160,7 +160,7 @@ def test_an_asymmetric_run_stores_the_privileged_state_and_normalises_each_key()
 def test_the_grip_script_is_the_shear_lag_one_on_the_tissue_and_the_slip_one_on_rigid_pads():
     from agents.demos import grip_script
 
-    assert type(grip_script(gym.make("SoftGraspGrip-v5"))).__name__ == "ShearLagGripPolicy"
+    assert type(grip_script(gym.make("SoftGraspGrip-v7"))).__name__ == "ShearLagGripPolicy"
     for env_id in ("SoftGraspGripRigid-v4", "SoftGraspGripRigidTorsion-v4"):
         assert type(grip_script(gym.make(env_id))).__name__ == "TactileGripPolicy"
 

@@ -68,7 +68,7 @@ def test_ppo_on_a_local_ray_instance_with_two_env_runners_and_evaluation_of_its_
         assert evaluate(env, policy, episodes=1, seed=1000).episodes == 1
     finally:
         env.close()
-    soft = gym.make("SoftGrasp-v3")
+    soft = gym.make("SoftGrasp-v5")
     try:
         with pytest.raises(ValueError, match="trained on 'SoftGraspRigid-v3'"):
             load_policy(str(trial), soft)
@@ -127,17 +127,17 @@ def test_training_joins_a_two_node_cluster_and_restarts_a_killed_env_runner(tmp_
     try:
         cluster.add_node(num_cpus=2)
         cluster.wait_for_nodes()
-        rc = rllib_train.main(["--env", "SoftGrasp-v3", "--num-env-runners", "2", "--address", cluster.address, *SHORT,
+        rc = rllib_train.main(["--env", "SoftGrasp-v5", "--num-env-runners", "2", "--address", cluster.address, *SHORT,
                                "--out", str(tmp_path)])  # fmt: skip
         assert rc == 0
-        _, meta = _trial(tmp_path, "SoftGrasp-v3_rllib-ppo")
+        _, meta = _trial(tmp_path, "SoftGrasp-v5_rllib-ppo")
         assert meta["timesteps_trained"] >= 200
 
         ray.init(address=cluster.address)
         try:
             assert len([n for n in ray.nodes() if n["Alive"]]) == 2
             algo = rllib_train.build_algorithm(
-                "SoftGrasp-v3", num_env_runners=2, num_cpus_per_env_runner=1.0,
+                "SoftGrasp-v5", num_env_runners=2, num_cpus_per_env_runner=1.0,
                 training={"train_batch_size_per_learner": 200, "minibatch_size": 100, "num_epochs": 1})  # fmt: skip
             try:
                 group = algo.env_runner_group

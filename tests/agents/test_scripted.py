@@ -25,7 +25,7 @@ def _observations(env, steps: int = 40) -> list:
     return seen + [ep.observation]
 
 
-@pytest.mark.parametrize("env_id", ["SoftGraspRigid-v3", "SoftGraspEasyRigid-v3", "SoftGraspGoal-v4"])
+@pytest.mark.parametrize("env_id", ["SoftGraspRigid-v3", "SoftGraspEasyRigid-v3", "SoftGraspGoal-v6"])
 def test_predict_matches_the_callable_single_and_batched(env_id, make_env):
     policy = ScriptedGraspPolicy()
     seen = _observations(make_env(env_id))

@@ -306,7 +306,7 @@ def test_evaluation_refuses_a_damaged_run_json_or_a_model_of_another_algo(tiny_r
     (run / "run.json").write_text(json.dumps({**meta, "env": 3}))
     with pytest.raises(ValueError, match=r"run\.json': 'env' must be a str"):
         runs.load_run(run)
-    (run / "run.json").write_text('{"env": "SoftGrasp-v3",')
+    (run / "run.json").write_text('{"env": "SoftGrasp-v5",')
     with pytest.raises(ValueError, match=r"run\.json' cannot be read: JSONDecodeError"):
         runs.load_run(run)
     (run / "run.json").write_text(json.dumps(meta))
@@ -321,10 +321,10 @@ def test_evaluation_refuses_another_env_unless_asked_and_never_other_spaces(tiny
         evaluate_main(["--policy", run, "--env", "SoftGraspRigid-v3", "--episodes", "1"])
     assert "trained on 'SoftGraspEasyRigid-v3'" in capsys.readouterr().err
     # on purpose: the same spaces, another id
-    assert evaluate_main(["--policy", run, "--env", "SoftGraspEasy-v3", "--other-env", "--episodes", "1"]) == 0
-    assert "SoftGraspEasy-v3" in capsys.readouterr().out
+    assert evaluate_main(["--policy", run, "--env", "SoftGraspEasy-v5", "--other-env", "--episodes", "1"]) == 0
+    assert "SoftGraspEasy-v5" in capsys.readouterr().out
     with pytest.raises(SystemExit):
-        evaluate_main(["--policy", run, "--env", "SoftGraspGoal-v4", "--other-env", "--episodes", "1"])
+        evaluate_main(["--policy", run, "--env", "SoftGraspGoal-v6", "--other-env", "--episodes", "1"])
     assert "observation_space Dict(" in capsys.readouterr().err
     with pytest.raises(SystemExit):  # the carry test adds the clock: a policy without it cannot read it
         evaluate_main(["--policy", run, "--env", "SoftGraspRigid-v3", "--other-env", "--episodes", "1"])

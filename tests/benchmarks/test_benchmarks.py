@@ -11,6 +11,7 @@ from pathlib import Path
 import pytest
 
 from softgrasp_env.config import DEFAULT_MAX_DEVIATION
+from softgrasp_env.registration import TISSUE_V3
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -94,7 +95,7 @@ def test_random_soak_counts_divergences_and_reports_the_tissue_deviation():
     """The soak's bookkeeping on a short run (the 10^5-step run is the slow test below)."""
     from benchmarks.random_soak import soak
 
-    r = soak("SoftGrasp-v3", 150, "noisy-scripted")
+    r = soak("SoftGrasp-v5", 150, "noisy-scripted")
     assert r["steps"] == 150 and r["episodes"] >= 1 and r["divergences"] == []  # episodes end at 100 steps or a drop
     assert 0.0 < r["max_deviation"] < 0.03
 
@@ -111,22 +112,25 @@ def test_random_soak_runs_a_seeded_chunk_on_a_preset(capsys):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("env_id", "law"), [("SoftGrasp-v3", "patch"), ("SoftGrasp-v3", "contact"), ("SoftGrasp-v4", None)])
+@pytest.mark.parametrize(("env_id", "keywords"), [("SoftGrasp-v4", TISSUE_V3),
+                                                  ("SoftGrasp-v4", {**TISSUE_V3, "friction_law": "contact"}),
+                                                  ("SoftGrasp-v4", {})],
+                         ids=["thesis", "thesis-contact", "v4"])  # fmt: skip
 @pytest.mark.parametrize("stream", ["uniform", "noisy-scripted"])
-def test_no_tearing_in_a_hundred_thousand_random_steps(stream, env_id, law):
-    """No tearing: 10^5 env steps on SoftGrasp-v3, about 1,000 episodes, without one
-    divergence: uniform random actions, and the harsher noisy scripted grasp (benchmarks/
-    random_soak.py: the scripted policy plus Gaussian noise, pressing on rim and ground thousands
-    of times). Measured: none in either (8-9 min each); the largest tissue deviation 20.00 mm, the
-    strain limit (TissueConfig.max_deviation). Without the limit the compliant pad tore 2 and 3
-    times, caught on the cylinder's top rim; 0.4.0's per-step pad 0 and 1. The same with Coulomb at
-    every contact (friction_law="contact"): none in either (1,008 and 1,067 episodes, 13-14 min
-    each), the largest deviation 20.00 mm. On SoftGrasp-v4 (the continuum material, Coulomb per
-    contact): none in either (1,015 and 1,091 episodes, 31-33 min each at 50-54 env steps/s), the largest
-    deviation 20.00 mm."""
+def test_no_tearing_in_a_hundred_thousand_random_steps(stream, env_id, keywords):
+    """No tearing: 10^5 env steps on the thesis tissue (SoftGrasp-v4 with TISSUE_V3), about 1,000
+    episodes, without one divergence: uniform random actions, and the harsher noisy scripted grasp
+    (benchmarks/random_soak.py: the scripted policy plus Gaussian noise, pressing on rim and ground
+    thousands of times). Measured: none in either (8-9 min each); the largest tissue deviation
+    20.00 mm, the strain limit (TissueConfig.max_deviation). Without the limit the compliant pad
+    tore 2 and 3 times, caught on the cylinder's top rim; 0.4.0's per-step pad 0 and 1. The same
+    with Coulomb at every contact (friction_law="contact"): none in either (1,008 and 1,067
+    episodes, 13-14 min each), the largest deviation 20.00 mm. On SoftGrasp-v4's own v4 tissue (the
+    continuum material, Coulomb per contact): none in either (1,015 and 1,091 episodes, 31-33 min
+    each at 50-54 env steps/s), the largest deviation 20.00 mm."""
     from benchmarks.random_soak import soak
 
-    r = soak(env_id, 100_000, stream, **({} if law is None else {"friction_law": law}))
+    r = soak(env_id, 100_000, stream, **keywords)
     assert r["divergences"] == [], r["divergences"]
     assert r["max_deviation"] <= DEFAULT_MAX_DEVIATION + 1e-9
 
@@ -193,8 +197,8 @@ def test_env_throughput_prints_every_id_asked_for():
 def test_env_throughput_reads_a_comma_inside_a_value():
     from benchmarks.env_throughput import parse_spec, split_specs
 
-    specs = split_specs("SoftGrasp-v3,SoftGrasp-v3@tactile=(4,3),SoftGraspRigid-v3@carry_frequency=[1.5, 2.0]")
-    assert [parse_spec(s) for s in specs] == [("SoftGrasp-v3", {}), ("SoftGrasp-v3", {"tactile": (4, 3)}),
+    specs = split_specs("SoftGrasp-v5,SoftGrasp-v5@tactile=(4,3),SoftGraspRigid-v3@carry_frequency=[1.5, 2.0]")
+    assert [parse_spec(s) for s in specs] == [("SoftGrasp-v5", {}), ("SoftGrasp-v5", {"tactile": (4, 3)}),
                                               ("SoftGraspRigid-v3", {"carry_frequency": [1.5, 2.0]})]  # fmt: skip
 
 
@@ -268,10 +272,10 @@ def test_taxel_field_pictures_the_hold_and_the_slip(tmp_path):
 def test_env_throughput_names_a_malformed_keyword_argument():
     from benchmarks.env_throughput import parse_spec
 
-    assert parse_spec("SoftGrasp-v3@tissue_contact_cone=True@shear_modulus=2e3") == (
-        "SoftGrasp-v3", {"tissue_contact_cone": True, "shear_modulus": 2000.0})
+    assert parse_spec("SoftGrasp-v5@tissue_contact_cone=True@shear_modulus=2e3") == (
+        "SoftGrasp-v5", {"tissue_contact_cone": True, "shear_modulus": 2000.0})
     with pytest.raises(ValueError, match="'shear_modulus' is not key=value"):
-        parse_spec("SoftGrasp-v3@shear_modulus")
+        parse_spec("SoftGrasp-v5@shear_modulus")
 
 
 def test_grasp_checks_arm_row_is_smooth():

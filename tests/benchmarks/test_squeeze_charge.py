@@ -85,6 +85,8 @@ def test_the_shipped_measurement_puts_the_carry_only_charges_peak_where_the_ids_
     least there, the tissue's expected return is still highest between 1.2 and 1.5 times the
     least, and the rigid kinds' at 1.1; the ids' own charge re-priced from the same episodes peaks
     in the same places."""
+    # the shipped rows name the ids they were measured on: SoftGraspGrip-v5 is retired since (0.8.0),
+    # and is SoftGraspGrip-v6 with its charge's keywords (registration.RETIRED_AS)
     rows = squeeze_charge.load(ROOT / "docs" / "results" / "squeeze_charge_carry.csv")
     prices = (lambda r: 1.0 * r["sum_r_carry"], lambda r: 1.0 * r["sum_m_carry"], lambda r: SQUEEZE_WEIGHT_LEAST * r["sum_r"])
     for price in prices:

@@ -14,6 +14,7 @@ import pytest
 
 from softgrasp_env.accuracy import GraspPlan, run_grasp
 from softgrasp_env.fingers import FINGERS, FingerConfig
+from softgrasp_env.registration import TISSUE_V3
 from softgrasp_env.render import SceneRenderer
 from softgrasp_env.scene import GraspScene, SceneConfig
 from tests.helpers import assert_same, rollout, run_episode
@@ -75,9 +76,10 @@ def test_every_setting_of_a_kind_is_validated(name):
 
 @pytest.mark.parametrize("name", _kinds())
 def test_the_scripted_policy_lifts_and_holds(name, make_env, scripted):
-    """The gentle start (aligned fingers, where every kind holds): the cylinder is lifted past the
-    success height and held to the end, nothing diverges on the way."""
-    env = make_env("SoftGraspEasy-v3", fingers=name)
+    """The gentle start (aligned fingers, where every kind holds; SoftGraspEasy-v4 with the thesis
+    tissue, TISSUE_V3): the cylinder is lifted past the success height and held to the end, nothing
+    diverges on the way."""
+    env = make_env("SoftGraspEasy-v4", fingers=name, **TISSUE_V3)
     ep = run_episode(env, scripted, seed=3, on_step=lambda o, r, term, trunc, info: _healthy(info))
     assert ep.steps == 100 and ep.success and ep.successes >= 40
     assert ep.info["lift_height"] >= 0.05
@@ -101,8 +103,8 @@ def test_the_scene_level_grasp_holds_without_slip(name):
 @pytest.mark.parametrize("name", FINGERS)
 def test_same_seed_same_trajectory_and_reset_leaves_no_trace(name, make_env):
     steps = 1 if name in SLOW_KINDS else 15
-    a = make_env("SoftGrasp-v3", fingers=name)
-    b = make_env("SoftGrasp-v3", fingers=name)
+    a = make_env("SoftGrasp-v5", fingers=name)
+    b = make_env("SoftGrasp-v5", fingers=name)
     run_a = rollout(a, seed=11, steps=steps, action_seed=5)
     rollout(b, seed=3, steps=steps, action_seed=9)  # b lives through another episode first
     run_b = rollout(b, seed=11, steps=steps, action_seed=5)
@@ -141,7 +143,7 @@ def test_a_frame_shows_what_the_kind_reports(name):
 
 @pytest.mark.parametrize("name", FINGERS)
 def test_a_blown_up_state_ends_the_episode_with_a_finite_observation(name, make_env):
-    env = make_env("SoftGraspEasy-v3", fingers=name)
+    env = make_env("SoftGraspEasy-v5", fingers=name)
     obs0, _ = env.reset(seed=0)
     obs1, *_ = env.step(np.zeros(4, dtype=np.float32))
     sc = env.unwrapped.scene

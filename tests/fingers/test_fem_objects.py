@@ -14,6 +14,7 @@ import softgrasp_env  # noqa: F401  (registers the ids)
 from softgrasp_env.fingers.fem import object_depth
 from softgrasp_env.observation import OBS_NAMES
 from softgrasp_env.policies import ScriptedGraspPolicy
+from softgrasp_env.registration import TISSUE_V3
 from softgrasp_env.scene import GraspScene, SceneConfig
 from softgrasp_env.tissue.collision import hull_params
 
@@ -102,9 +103,10 @@ INDEX = {n: k for k, n in enumerate(OBS_NAMES)}
 
 @pytest.mark.slow
 def test_scripted_fem_grasp_lifts_and_holds_the_sphere():
-    """The scripted policy on the gentle start with the coarse FEM pads, seed 0: the sphere is lifted
-    to the success height and held; no pad node deeper than 2 mm in it or the ground."""
-    env = gym.make("SoftGraspEasy-v3", fingers="fem", object="sphere")
+    """The scripted policy on the gentle start (SoftGraspEasy-v4 with the thesis tissue's keywords,
+    TISSUE_V3, as measured) with the coarse FEM pads, seed 0: the sphere is lifted to the success
+    height and held; no pad node deeper than 2 mm in it or the ground."""
+    env = gym.make("SoftGraspEasy-v4", fingers="fem", object="sphere", **TISSUE_V3)
     try:
         policy = ScriptedGraspPolicy.for_env(env)
         obs, _ = env.reset(seed=0)

@@ -10,6 +10,7 @@ import pytest
 import softgrasp_env  # noqa: F401
 from softgrasp_env.fingers.tactile import INNER_NORMAL, TAXEL_CHANNELS, TaxelGrid, _spread
 from softgrasp_env.policies import ScriptedGraspPolicy
+from softgrasp_env.registration import TISSUE_V3
 
 G = 9.81
 
@@ -47,12 +48,14 @@ def test_a_footprint_is_spread_by_area_and_keeps_its_whole_load():
 
 
 def _held(fingers: str, steps: int = 80):
-    """The easy task's scripted grasp on ``fingers`` (``"tissue-consistent"``: the consistent
-    coupling), lifted and held still (6.5 cm up from 40 env steps on, measured)."""
+    """The easy task's scripted grasp (SoftGraspEasy-v4 with the thesis tissue, TISSUE_V3) on
+    ``fingers`` (``"tissue-consistent"``: the consistent coupling), lifted and held still (6.5 cm up
+    from 40 env steps on, measured)."""
     kind, _, coupling = fingers.partition("-")
     from softgrasp_env.config import SimConfig
 
-    env = gym.make("SoftGraspEasy-v3", fingers=kind, **({"sim": SimConfig(coupling=coupling)} if coupling else {}))
+    env = gym.make("SoftGraspEasy-v4", fingers=kind, **TISSUE_V3,
+                   **({"sim": SimConfig(coupling=coupling)} if coupling else {}))  # fmt: skip
     policy = ScriptedGraspPolicy.for_env(env)
     obs, _ = env.reset(seed=0)
     for _ in range(steps):
@@ -63,8 +66,9 @@ def _held(fingers: str, steps: int = 80):
 @pytest.mark.parametrize("fingers", ["tissue", "rigid", "rigid_torsion"])
 def test_no_contact_no_load(fingers):
     """Open fingers above the cylinder: no pressure, no traction anywhere. The tissue's shear
-    channel holds only its sag under its own weight (0.12 mm measured)."""
-    env = gym.make("SoftGraspEasy-v3", fingers=fingers)
+    channel holds only its sag under its own weight (0.12 mm measured; SoftGraspEasy-v4 with the
+    thesis tissue, TISSUE_V3)."""
+    env = gym.make("SoftGraspEasy-v4", fingers=fingers, **TISSUE_V3)
     try:
         env.reset(seed=0)
         kind = env.unwrapped.scene.fingers
@@ -186,8 +190,8 @@ def test_the_fem_pads_have_no_tactile_reading_and_say_so():
     """pybullet reports no contact points of its FEM pads' nodes: the kind refuses rather than read
     zeros."""
     with pytest.raises(ValueError, match="fingers='fem'.*no contact points"):
-        gym.make("SoftGraspEasy-v3", fingers="fem", tactile=(4, 3))
-    env = gym.make("SoftGraspEasy-v3", fingers="fem")
+        gym.make("SoftGraspEasy-v5", fingers="fem", tactile=(4, 3))
+    env = gym.make("SoftGraspEasy-v5", fingers="fem")
     try:
         env.reset(seed=0)
         kind = env.unwrapped.scene.fingers

@@ -237,14 +237,17 @@ def test_the_palm_itself_stays_under_the_acceleration_limit_under_bang_bang_acti
 def test_force_actions_squeeze_with_the_commanded_force(fingers):
     """``finger_action="force"``: the last action entry sets the squeeze, 0 to finger_force. Held
     aloft, the pads press with the commanded force (the taxels' pressure, within 0.5 %; measured
-    0.1 %), through the carry's own controls too; at -1 the fingers do not squeeze at all."""
+    0.1 %, on SoftGraspEasy-v4 with the thesis tissue, TISSUE_V3), through the carry's own controls
+    too; at -1 the fingers do not squeeze at all."""
     import gymnasium as gym
 
     import softgrasp_env  # noqa: F401
     from softgrasp_env.policies import ScriptedGraspPolicy
+    from softgrasp_env.registration import TISSUE_V3
 
     for squeeze in (1.5, 2.5):
-        env = gym.make("SoftGraspEasy-v3", fingers=fingers, finger_action="force", tactile=(2, 2), carry=True)
+        env = gym.make("SoftGraspEasy-v4", fingers=fingers, finger_action="force", tactile=(2, 2), carry=True,
+                       **TISSUE_V3)  # fmt: skip
         try:
             u = env.unwrapped
             policy = ScriptedGraspPolicy.for_env(env)
@@ -264,7 +267,7 @@ def test_force_actions_squeeze_with_the_commanded_force(fingers):
             np.testing.assert_allclose(pressed, squeeze, rtol=5e-3)
         finally:
             env.close()
-    env = gym.make("SoftGraspEasy-v3", fingers=fingers, finger_action="force")
+    env = gym.make("SoftGraspEasy-v4", fingers=fingers, finger_action="force", **TISSUE_V3)
     try:
         env.reset(seed=0)
         for _ in range(20):
@@ -274,4 +277,4 @@ def test_force_actions_squeeze_with_the_commanded_force(fingers):
     finally:
         env.close()
     with pytest.raises(ValueError, match="finger_action"):
-        gym.make("SoftGraspEasy-v3", finger_action="torque")
+        gym.make("SoftGraspEasy-v5", finger_action="torque")

@@ -13,6 +13,7 @@ import pytest
 
 import softgrasp_env  # noqa: F401  (registers the ids)
 from softgrasp_env.config import SimConfig, TissueConfig
+from softgrasp_env.registration import TISSUE_V3
 from softgrasp_env.scene import GraspScene, SceneConfig
 from softgrasp_env.scene.scene import CYLINDER, LEFT, RIGHT
 
@@ -88,16 +89,17 @@ def test_a_stiffer_material_compresses_less_as_a_thin_layer_under_a_cylinder():
 
 
 SNAG = Path(__file__).resolve().parents[1] / "data" / "snag_seed65_actions.npy"
-"""The 56 uniform random actions of benchmarks/random_soak.py's episode seed 65 on SoftGrasp-v3,
-where the compliant pad tore before it had a strain limit: a particle of the right pad caught on
-the cylinder's top face, 2 cm inside the rim, while the finger came down beside it."""
+"""The 56 uniform random actions of benchmarks/random_soak.py's episode seed 65 on SoftGrasp-v4 with
+the thesis tissue (TISSUE_V3), where the compliant pad tore before it had a strain limit: a particle
+of the right pad caught on the cylinder's top face, 2 cm inside the rim, while the finger came down
+beside it."""
 
 
 def test_a_pad_snagged_on_the_cylinders_top_slides_off_instead_of_tearing():
     """Replayed, the snagged particle is pulled to the strain limit (TissueConfig.max_deviation,
     2 cm) and slides off the rim (measured: 20.0 mm for three env steps, then released); without
     the limit it was dragged 3.2 cm from its spot in 8 env steps, and the episode ended as torn."""
-    env = gym.make("SoftGrasp-v3")
+    env = gym.make("SoftGrasp-v4", **TISSUE_V3)
     try:
         env.reset(seed=65)
         deviation = []

@@ -1,4 +1,4 @@
-"""The goal task (SoftGraspGoal-v5, -v4, softgrasp_env/tasks/goal.py): its reward is compute_reward on
+"""The goal task (SoftGraspGoal-v6, -v5, softgrasp_env/tasks/goal.py): its reward is compute_reward on
 (achieved, desired) goals, vectorised over batches, the same online and for HER's relabelled
 samples."""
 
@@ -13,7 +13,7 @@ from tests.helpers import run_episode
 
 
 def test_goal_env_compute_reward_is_vectorised_and_matches_step(make_env):
-    env = make_env("SoftGraspGoal-v4")
+    env = make_env("SoftGraspGoal-v6")
     u = env.unwrapped
     obs, _ = env.reset(seed=0)
     policy = ScriptedGraspPolicy(lift_to=obs["desired_goal"][2] - 0.05)
@@ -35,7 +35,7 @@ def test_goal_env_compute_reward_is_vectorised_and_matches_step(make_env):
 def test_her_trains_on_the_goal_env():
     from stable_baselines3 import SAC, HerReplayBuffer
 
-    env = gym.make("SoftGraspGoal-v4", max_episode_steps=20)
+    env = gym.make("SoftGraspGoal-v6", max_episode_steps=20)
     try:
         model = SAC("MultiInputPolicy", env, replay_buffer_class=HerReplayBuffer,
                     replay_buffer_kwargs={"n_sampled_goal": 2, "goal_selection_strategy": "future"},
@@ -72,17 +72,17 @@ def _knock_over(env, seed: int = 0) -> list[tuple[float, bool, bool]]:
 
 def test_knocking_the_cylinder_over_ends_the_lift_task_but_not_the_goal_episode(make_env):
     # The lift task ends the episode when the cylinder topples ...
-    env = make_env("SoftGrasp-v3")
+    env = make_env("SoftGrasp-v5")
     lift = _knock_over(env)
     assert lift[-1][1] and len(lift) < 30 and env.unwrapped._last.tilt > env.unwrapped.args.lift.max_tilt
-    # ... SoftGraspGoal-v4 runs on to its time limit at -1 a step: ending early would pay less (with -1
+    # ... SoftGraspGoal-v6 runs on to its time limit at -1 a step: ending early would pay less (with -1
     # per step HER + SAC learned to topple the cylinder for it), so it is not on offer.
-    goal = _knock_over(make_env("SoftGraspGoal-v4"))
-    assert len(goal) == gym.spec("SoftGraspGoal-v4").max_episode_steps
+    goal = _knock_over(make_env("SoftGraspGoal-v6"))
+    assert len(goal) == gym.spec("SoftGraspGoal-v6").max_episode_steps
     assert goal[-1][2] and not any(term for _, term, _ in goal)
     assert all(r == -1.0 for r, _, _ in goal[len(lift) :])
     # end_when_knocked_over=True keeps the lift task's ends (SoftGraspGoal-v3, retired, had them).
-    assert _knock_over(make_env("SoftGraspGoal-v4", end_when_knocked_over=True))[-1][1]
+    assert _knock_over(make_env("SoftGraspGoal-v6", end_when_knocked_over=True))[-1][1]
     # a flag, not a truthy value
     with pytest.raises(TypeError, match="end_when_knocked_over must be True or False"):
-        gym.make("SoftGraspGoal-v4", end_when_knocked_over="yes")
+        gym.make("SoftGraspGoal-v6", end_when_knocked_over="yes")

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from softgrasp_env.policies.grip import ConstantGripPolicy, TactileGripPolicy
-from softgrasp_env.registration import GRIP_TASK_CARRY, GRIP_TASK_LEAST
+from softgrasp_env.registration import GRIP_TASK_CARRY, GRIP_TASK_LEAST, RETIRED_AS
 from softgrasp_env.tasks import CarryTest, GripForceTask
 from softgrasp_env.tasks.grip import least_squeeze
 from tests.helpers import assert_same, rollout
@@ -35,10 +35,10 @@ def test_least_squeeze_is_coulomb_off_the_jaw_axis():
 
 
 def test_grip_ids_are_the_task(make_env):
-    for env_id, kind, task in (("SoftGraspGrip-v6", "tissue", GRIP_TASK_CARRY),
+    for env_id, kind, task in (("SoftGraspGrip-v7", "tissue", GRIP_TASK_CARRY),
+                               ("SoftGraspGrip-v6", "tissue", GRIP_TASK_CARRY),
                                ("SoftGraspGripRigid-v5", "rigid", GRIP_TASK_CARRY),
                                ("SoftGraspGripRigidTorsion-v5", "rigid_torsion", GRIP_TASK_CARRY),
-                               ("SoftGraspGrip-v5", "tissue", GRIP_TASK_LEAST),
                                ("SoftGraspGripRigid-v4", "rigid", GRIP_TASK_LEAST),
                                ("SoftGraspGripRigidTorsion-v4", "rigid_torsion", GRIP_TASK_LEAST)):  # fmt: skip
         spec = gym.spec(env_id)
@@ -194,7 +194,7 @@ def test_grip_policies_refuse_what_they_cannot_drive(make_env):
 
 
 def test_grip_task_is_deterministic(make_env):
-    a, b = make_env("SoftGraspGrip-v5"), make_env("SoftGraspGrip-v5")
+    a, b = make_env("SoftGraspGrip-v7"), make_env("SoftGraspGrip-v7")
     rollout(b, seed=2, steps=30, action_seed=1)
     assert_same(rollout(a, seed=7, steps=100, action_seed=4), rollout(b, seed=7, steps=100, action_seed=4))
 
@@ -332,11 +332,13 @@ def test_the_rigid_grip_reward_falls_with_every_margin_above_the_least(make_env)
 
 @pytest.mark.slow
 def test_the_tissue_grip_reward_peaks_between_1_2_and_1_5_least_forces(make_env):
-    """SoftGraspGrip-v5 over constant grips: the mean return at 1.35 x the static least is above
-    the one at 1.1 (where the tissue drops half the cylinders) and at 2.0 (the margin paid).
-    Measured over 36 seeds: 27.7 +- 5.5 / 34.8 +- 4.2 / 27.9 +- 0.1 (and 35.9, 35.7 at 1.2, 1.5;
-    benchmarks/squeeze_charge.py, 2 cores of an Intel Xeon, about 6 minutes for these 72 episodes)."""
-    env = make_env("SoftGraspGrip-v5")
+    """The retired SoftGraspGrip-v5 (SoftGraspGrip-v6 with its charge's keywords, RETIRED_AS: the
+    whole squeeze in least forces from the first step) over constant grips: the mean return at
+    1.35 x the static least is above the one at 1.1 (where the tissue drops half the cylinders)
+    and at 2.0 (the margin paid). Measured over 36 seeds: 27.7 +- 5.5 / 34.8 +- 4.2 / 27.9 +- 0.1
+    (and 35.9, 35.7 at 1.2, 1.5; benchmarks/squeeze_charge.py, 2 cores of an Intel Xeon, about 6 minutes for these 72 episodes)."""
+    made, keywords = RETIRED_AS["SoftGraspGrip-v5"]
+    env = make_env(made, **keywords)
     seeds = range(1000, 1024)
     low, mid, high = (float(np.mean([r for r, _ in _constant_returns(env, f, seeds)])) for f in (1.1, 1.35, 2.0))
     assert mid > low and mid > high + 3.0, (low, mid, high)

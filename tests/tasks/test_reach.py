@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from softgrasp_env.observation import OBS_NAMES, obs_slice
+from softgrasp_env.registration import TISSUE_V3
 from softgrasp_env.scene import SceneConfig
 from tests.helpers import run_episode
 
@@ -47,10 +48,11 @@ started around the cylinder)."""
 
 @pytest.mark.parametrize("name", ["close 15, then up", "down, close, up"])
 def test_open_loop_actions_rarely_succeed(name, make_env):
-    """The task needs feedback: measured over seeds 0-39 on the soft env, 'close 15, then up'
-    succeeds in 0 of 40, 'down, close, up' in 1 of 40. Asserted on 20 other seeds: at most 10 %."""
+    """The task needs feedback: measured over seeds 0-39 on the soft env (SoftGrasp-v4 with the
+    thesis tissue, TISSUE_V3), 'close 15, then up' succeeds in 0 of 40, 'down, close, up' in 1 of
+    40. Asserted on 20 other seeds: at most 10 %."""
     seq = ISSUE_SEQUENCE if name == "close 15, then up" else _open_loop((0.0, 0.0), 0)
-    rate = _success_rate(make_env("SoftGrasp-v3"), seq, range(1000, 1020))
+    rate = _success_rate(make_env("SoftGrasp-v4", **TISSUE_V3), seq, range(1000, 1020))
     assert rate <= 0.10, f"open-loop {name!r} succeeded in {rate:.0%}"
 
 
@@ -58,26 +60,27 @@ def test_open_loop_actions_rarely_succeed(name, make_env):
 @pytest.mark.parametrize("move,steps", [((0.7, 0.7), 5), ((0.7, 0.7), 9), ((-0.7, -0.7), 9), ((1.0, 0.0), 9),
                                         ((0.0, 1.0), 9), ((0.7, -0.7), 9)])  # fmt: skip
 def test_no_constant_move_finds_the_cylinder_often(move, steps, make_env):
-    """Move a fixed way first, then down, close, lift. Measured over seeds 0-39 (soft), eighteen
-    such sequences: 0-4 of 40 each; the best, along +x+y for 5 or 9 steps, 4 of 40 - at the
-    bound (and 6 of 60 over seeds 0-59): the start and the cylinder are spread as widely as the
-    workspace allows, and the soft fingers, wide open, still catch a cylinder that lies within
-    about 2.5 cm of where they come down."""
-    rate = _success_rate(make_env("SoftGrasp-v3"), _open_loop(move, steps), range(40))
+    """Move a fixed way first, then down, close, lift. Measured over seeds 0-39 (soft: SoftGrasp-v4
+    with the thesis tissue, TISSUE_V3), eighteen such sequences: 0-4 of 40 each; the best, along
+    +x+y for 5 or 9 steps, 4 of 40 - at the bound (and 6 of 60 over seeds 0-59): the start and the
+    cylinder are spread as widely as the workspace allows, and the soft fingers, wide open, still
+    catch a cylinder that lies within about 2.5 cm of where they come down."""
+    rate = _success_rate(make_env("SoftGrasp-v4", **TISSUE_V3), _open_loop(move, steps), range(40))
     assert rate <= 0.10, f"open-loop move {move} x{steps} succeeded in {rate:.0%}"
 
 
 def test_scripted_policy_solves_the_soft_task(make_env, scripted):
     """The scripted policy (observation only) succeeds in >= 90 % of seeded episodes with soft
-    fingers. Measured: 30 of 30 (seeds 0-29); the rigid twin 14 of 30 - its fingers lose the
-    cylinder under the jaw wedge (docs/RESULTS.md), which is what the task is to show."""
+    fingers (SoftGrasp-v4 with the thesis tissue, TISSUE_V3). Measured: 30 of 30 (seeds 0-29); the
+    rigid twin 14 of 30 - its fingers lose the cylinder under the jaw wedge (docs/RESULTS.md), which
+    is what the task is to show."""
     forces = []
 
     def watched(obs):
         forces.append(obs[FORCE])
         return scripted(obs)
 
-    rate = _success_rate(make_env("SoftGrasp-v3"), watched, range(2000, 2020))
+    rate = _success_rate(make_env("SoftGrasp-v4", **TISSUE_V3), watched, range(2000, 2020))
     assert rate >= 0.9, f"scripted policy: {rate:.0%}"
     # The arm only moves and lifts: the fingers press with their motors' 3 N, no more (measured
     # 2.93 N at most over 10 episodes); random arm pushes reach 220 N (the env card).
@@ -101,7 +104,7 @@ def test_rigid_fingers_press_no_harder_than_their_motors_in_the_scripted_grasp(m
 
 
 def test_reach_start_is_above_and_away_and_options_fix_it(make_env):
-    env = make_env("SoftGrasp-v3")
+    env = make_env("SoftGrasp-v5")
     for seed in range(5):
         env.reset(seed=seed)
         sc = env.unwrapped.scene
@@ -119,9 +122,9 @@ def test_reach_start_is_above_and_away_and_options_fix_it(make_env):
 
 def test_start_is_validated():
     with pytest.raises(ValueError, match="start must be one of"):
-        gym.make("SoftGrasp-v3", start="fly")
+        gym.make("SoftGrasp-v5", start="fly")
     with pytest.raises(ValueError, match="approach_range"):
-        gym.make("SoftGrasp-v3", approach_range=(0.05, 0.2))
+        gym.make("SoftGrasp-v5", approach_range=(0.05, 0.2))
 
 
 @pytest.mark.parametrize(
@@ -141,7 +144,7 @@ def test_geometry_that_cannot_start_is_refused_when_the_env_is_made(kwargs, matc
     range extremes that put a finger into the cylinder - each a ValueError naming the settings
     and the limit, at gym.make, not at some later reset."""
     with pytest.raises(ValueError, match=match):
-        gym.make("SoftGrasp-v3", **kwargs)
+        gym.make("SoftGrasp-v5", **kwargs)
 
 
 def test_scene_geometry_check_names_the_palm_and_allows_an_offset_along_the_faces():
@@ -151,7 +154,7 @@ def test_scene_geometry_check_names_the_palm_and_allows_an_offset_along_the_face
     with pytest.raises(ValueError, match="fingers start inside the cylinder"):
         SceneConfig(cylinder_xy=(0.03, 0.0))
     with pytest.raises(ValueError, match="reset option|does not fit"):
-        env = gym.make("SoftGrasp-v3")
+        env = gym.make("SoftGrasp-v5")
         try:
             env.reset(seed=0, options={"cylinder_radius": 0.06})
         finally:

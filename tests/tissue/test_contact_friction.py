@@ -12,6 +12,7 @@ import pytest
 
 import softgrasp_env  # noqa: F401  (registers the ids)
 from softgrasp_env.config import TissueConfig
+from softgrasp_env.registration import TISSUE_V3
 
 
 def test_friction_law_is_validated_and_reaches_the_solver():
@@ -19,7 +20,8 @@ def test_friction_law_is_validated_and_reaches_the_solver():
         TissueConfig(friction_law="cone")
     with pytest.raises(ValueError, match="contact_cone"):
         TissueConfig(friction_law="contact", contact_cone=True)
-    env = gym.make("SoftGraspEasy-v3", friction_law="contact")
+    # over the thesis tissue (patch law) of SoftGraspEasy-v4 with TISSUE_V3: the keyword changes the law
+    env = gym.make("SoftGraspEasy-v4", **{**TISSUE_V3, "friction_law": "contact"})
     try:
         env.reset(seed=0)
         model = env.unwrapped.scene.world.solver.model

@@ -464,9 +464,9 @@ def test_layers_as_thick_as_the_spacing_keep_the_compression_on_the_reference():
 
 
 def _candidate_grasp(coupling: str, mass: float, steps: int, material_solve: str = "groups") -> dict:
-    """The scripted aligned grasp (SoftGraspEasy-v3) on the continuum energy with hourglass control
-    1 and Coulomb per contact, run for ``steps`` env steps (20 Hz), under ``coupling`` and
-    ``material_solve`` (SimConfig)."""
+    """The scripted aligned grasp (SoftGraspEasy-v4, whose registered tissue keywords are this
+    tissue's) on the continuum energy with hourglass control 1 and Coulomb per contact, run for
+    ``steps`` env steps (20 Hz), under ``coupling`` and ``material_solve`` (SimConfig)."""
     import gymnasium as gym
 
     import softgrasp_env  # noqa: F401
@@ -475,7 +475,7 @@ def _candidate_grasp(coupling: str, mass: float, steps: int, material_solve: str
     from softgrasp_env.policies import ScriptedGraspPolicy
 
     tissue = TissueConfig(group_energy="continuum", hourglass_stiffness=1.0, friction_law="contact")
-    env = gym.make("SoftGraspEasy-v3", max_episode_steps=steps, tissue=tissue, sim=SimConfig(coupling=coupling, material_solve=material_solve))
+    env = gym.make("SoftGraspEasy-v4", max_episode_steps=steps, tissue=tissue, sim=SimConfig(coupling=coupling, material_solve=material_solve))
     try:
         policy = ScriptedGraspPolicy.for_env(env)
         obs, _ = env.reset(seed=0, options={**ALIGNED, "cylinder_mass": mass})
@@ -503,12 +503,12 @@ def test_the_candidate_tissue_holds_near_its_bound_for_a_minute():
 
 
 def test_both_couplings_press_the_cylinder_alike_on_the_continuum_energy():
-    """The scripted grasp at 2 x 3 N on the v4 material: the contacts' summed normal force on the
-    cylinder. Measured: 5.932 N (thesis coupling), 5.922 N (consistent: the sliding core is the
+    """The scripted grasp at 2 x 3 N on the v4 material (SoftGraspEasy-v4, whose registered tissue
+    keywords are this tissue's): the contacts' summed normal force on the cylinder. Measured: 5.932 N (thesis coupling), 5.922 N (consistent: the sliding core is the
     continuum group's unknown too); 4.85 N before it was, the core held still inside the step."""
     from benchmarks.grasp_checks import scripted_episode
 
     tissue = TissueConfig(group_energy="continuum", hourglass_stiffness=1.0, friction_law="contact")
-    press = [scripted_episode({"fingers": "tissue", "coupling": c}, "v3", options={"cylinder_mass": 0.3},
+    press = [scripted_episode({"fingers": "tissue", "coupling": c}, "v4", options={"cylinder_mass": 0.3},
                               tissue=tissue)["press"] for c in ("thesis", "consistent")]  # fmt: skip
     assert abs(press[1] / press[0] - 1.0) < 0.03, press
