@@ -1,15 +1,15 @@
 """The physics floor and how near each env gets to it, in one run.
 
-    PYTHONPATH=. python benchmarks/physics_floor.py [--seconds 3] [--repeats 3] [--ids SoftGrasp-v4,...]
+    PYTHONPATH=. python benchmarks/physics_floor.py [--seconds 3] [--repeats 3] [--ids SoftGrasp-v5,...]
         [--min-rows 2]      # the soft ids' pads with two particle rows across every face (tissue_min_rows)
-        [--material-solve global]   # the soft ids' material solved across its groups (gym.make's material_solve)
+        [--material-solve groups]   # the soft ids' material swept group by group (gym.make's material_solve)
 
 - **Floor**: pybullet alone stepping the scene's rigid bodies - the ground, the free cylinder, the
   palm on its arm constraint and the two prismatic finger cores squeezing the cylinder - nothing
   of ours around it: the env's own scene after the scripted grasp has closed, then only
   ``stepSimulation`` in a loop. Measured at 1/240 s (the rigid kinds' world step) and at the soft
-  env's world step (1/240 s over the compliant tissue's world steps per physics step, 6 for
-  SoftGrasp-v4's pads; the tissue is not stepped).
+  env's world step (1/240 s over the tissue's world steps per physics step: 2 for SoftGrasp-v5's
+  pads, 6 for SoftGrasp-v4's sweep; the tissue is not stepped).
 - **Envs**: env steps/s of each id, random actions, resets inside the loop.
 - **Ratios**: the overall one, env steps/s x physics steps per env step (12) / the 1/240 s floor; and
   per world step, env steps/s x pybullet steps per env step / the floor at that world step (what
@@ -22,7 +22,7 @@
 
 - **Targets**: each id's ratio to the floor against the speed work's aims (soft >= 0.25, rigid >=
   0.8), the hand-over and the env's own Python as a share of an env step (soft <= 25 %, rigid <=
-  40 %), and SoftGrasp-v4 at ``preset="converged"`` on one thread (>= 100 env steps/s;
+  40 %), and SoftGrasp-v5 at ``preset="converged"`` on one thread (>= 100 env steps/s;
   ``--no-converged`` leaves it out): met or missed, in this run.
 
 Interleaved: every configuration runs once per repeat, in turn, and the best of the repeats is
@@ -42,8 +42,8 @@ import softgrasp_env
 from softgrasp_env.policies import ScriptedGraspPolicy
 from softgrasp_env.tissue import solver as solver_module
 
-IDS = ("SoftGrasp-v4", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3")
-CONVERGED_ID = "SoftGrasp-v4"
+IDS = ("SoftGrasp-v5", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3")
+CONVERGED_ID = "SoftGrasp-v5"
 TARGETS = {"soft floor": 0.25, "rigid floor": 0.8, "soft ours": 0.25, "rigid ours": 0.40, "converged env steps/s": 100.0}
 """What the speed work aims at: env steps/s x 12 over the 1/240 s floor (soft ids, rigid ids); the
 hand-over and the env's own Python as a share of an env step (soft, rigid); the converged preset's
@@ -154,7 +154,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--ids", default=",".join(IDS))
     parser.add_argument("--no-converged", action="store_true",
-                        help="leave out SoftGrasp-v4 at preset='converged' (its target: env steps/s on one thread)")
+                        help="leave out SoftGrasp-v5 at preset='converged' (its target: env steps/s on one thread)")
     parser.add_argument("--min-rows", type=int, default=None,
                         help="the soft ids' fewest particle rows across a finger face (gym.make's tissue_min_rows)")
     parser.add_argument("--material-solve", choices=("groups", "global"), default=None,
