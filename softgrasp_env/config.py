@@ -280,6 +280,9 @@ class SimConfig:
             raise ValueError(f"SimConfig.coupling must be one of {COUPLING_MODES}, got {self.coupling!r}")
         if self.material_solve not in MATERIAL_SOLVES:
             raise ValueError(f"SimConfig.material_solve must be one of {MATERIAL_SOLVES}, got {self.material_solve!r}")
+        if self.material_solve == "global" and self.coupling != "thesis":  # named at make, not at the first step
+            raise ValueError("SimConfig.material_solve='global' needs coupling='thesis' (a core sliding inside the "
+                             f"solve is not in the global system); got coupling={self.coupling!r}")  # fmt: skip
         if self.orientation == "reaction":
             raise ValueError(
                 "SimConfig.orientation='reaction' was removed (its energy grew with spinning particles); "

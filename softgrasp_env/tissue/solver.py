@@ -659,9 +659,7 @@ class TissueSolver:
         its factor made for ``sim.dt`` once and again whenever the step length changes."""
         if self.sim.material_solve != "global":
             return None
-        if self.sim.coupling != "thesis":
-            raise ValueError("SimConfig.material_solve='global' needs coupling='thesis' (a core sliding inside the "
-                             f"solve is not in the global system); got coupling={self.sim.coupling!r}")  # fmt: skip
+        # (SimConfig refuses the global solve with any coupling but the thesis one)
         if self._global is None or self._global.dt != self.sim.dt:
             self._global = global_system(self.model, self.sim.dt)
         return self._global.arrays()

@@ -168,8 +168,12 @@ def test_bad_settings_are_refused_by_name():
     model = build_combined_body(CoreShape("box", half_extents=FACE), TissueConfig(), faces=("+x",))
     with pytest.raises(ValueError, match="group_energy='continuum'"):
         TissueSolver(model, SimConfig(material_solve="global"))
-    with pytest.raises(ValueError, match="coupling='thesis'"):
-        TissueSolver(pad(4_000.0), SimConfig(material_solve="global", coupling="consistent"))
+    with pytest.raises(ValueError, match="coupling='thesis'"):  # refused by the config, before any solver
+        SimConfig(material_solve="global", coupling="consistent")
+    import softgrasp_env  # noqa: F401  (the ids: the soft ids' v5 carry the global solve)
+
+    with pytest.raises(ValueError, match="needs coupling='thesis'.*got coupling='consistent'"):
+        gym.make("SoftGrasp-v5", sim=SimConfig(coupling="consistent"))
 
 
 def test_the_env_under_the_global_solve_grasps_and_repeats_itself():
