@@ -1,13 +1,13 @@
 """Train a stable-baselines3 agent on a SoftGrasp environment.
 
-    python train.py --env SoftGrasp-v4 --algo sac --timesteps 100000
+    python train.py --env SoftGrasp-v5 --algo sac --timesteps 100000
     python train.py --env SoftGraspGoal-v6 --demos 100   # HER + SAC by default for the goal env
     python train.py --env SoftGraspRigid-v3 --algo ppo --n-envs 2
     python train.py --env SoftGrasp-v5 --env-kwargs cylinder_mass=0.2 fingers="'segmented'"
     python train.py --resume runs/SoftGrasp-v5_sac_0 --timesteps 50000   # 50k more steps
     python train.py --env SoftGrasp-v5 --force       # start runs/SoftGrasp-v5_sac_0 anew (deletes the old run)
     python train.py --env SoftGrasp-v5 --torch-threads 2   # the learner on 2 torch threads (default 1)
-    python train.py --env SoftGraspGrip-v6 --asymmetric     # the critic also reads the object's mass, friction, pose
+    python train.py --env SoftGraspGrip-v7 --asymmetric     # the critic also reads the object's mass, friction, pose
 
 Writes ``<out>/<env>_<algo>_<seed>/``: ``model.zip``, ``vecnormalize.pkl`` (observation statistics,
 except for HER), ``replay_buffer.pkl`` (off-policy algos, for --resume), ``run.json`` (the
@@ -224,7 +224,7 @@ def algo_kwargs_error(algo: str, algo_kwargs: dict) -> str | None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python train.py", description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
-    parser.add_argument("--env", default=None, choices=softgrasp_env.ENV_IDS, help="default: SoftGrasp-v4")
+    parser.add_argument("--env", default=None, choices=softgrasp_env.ENV_IDS, help="default: SoftGrasp-v5")
     parser.add_argument("--env-kwargs", nargs="+", type=parse_kwarg, default=None, metavar="KEY=VALUE",
                         help="keyword arguments of gym.make (values as Python literals, else strings), "
                              "recorded in run.json; e.g. cylinder_mass=0.2 fingers=rigid")  # fmt: skip
@@ -354,7 +354,7 @@ def main(argv: list[str] | None = None) -> int:
             parser.error("--empty-buffer is for --resume: a new run starts with an empty replay buffer anyway")
         ns.eval_every = EVAL_EVERY if ns.eval_every is None else ns.eval_every
         ns.eval_episodes = EVAL_EPISODES if ns.eval_episodes is None else ns.eval_episodes
-        env_id = ns.env or "SoftGrasp-v4"
+        env_id = ns.env or "SoftGrasp-v5"
         algo = ns.algo or default_algo(env_id)
         n_envs = ns.n_envs or 1
         seed = 0 if ns.seed is None else ns.seed

@@ -2,7 +2,7 @@
 
     python -m agents.evaluate --env SoftGrasp-v5 --policy scripted --episodes 20
     python -m agents.evaluate --policy runs/SoftGrasp-v5_sac_0       # the run's env, kwargs and stats
-    python -m agents.evaluate --policy SoftGrasp-v4_sac_0            # a shipped baseline, by name
+    python -m agents.evaluate --policy SoftGrasp-v5_sac_1            # a shipped baseline, by name
     .venv-rllib/bin/python -m agents.evaluate --policy runs-rllib/SoftGrasp-v5_rllib-ppo/seed_0   # an RLlib trial
 
 Episodes use seeds ``seed, seed + 1, ...`` so two policies meet the same starts. A learned
@@ -159,7 +159,7 @@ def main(argv: list[str] | None = None) -> int:
                         help=f"default: the run's env (with its env kwargs) for a saved model, else {DEFAULT_ENV}")
     parser.add_argument("--policy", default="scripted",
                         help="'scripted', 'random', a run from train.py (its directory, model.zip or a checkpoint), "
-                             "a shipped baseline by name (e.g. SoftGrasp-v4_sac_0) or an RLlib trial from "
+                             "a shipped baseline by name (e.g. SoftGrasp-v5_sac_1) or an RLlib trial from "
                              "agents.rllib_train (its directory or a checkpoint_<N>)")  # fmt: skip
     parser.add_argument("--episodes", type=int, default=10)
     parser.add_argument("--seed", type=int, default=1000)

@@ -30,8 +30,8 @@ import time
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
-from benchmarks.retired import make
 from softgrasp_env.policies import ScriptedGraspPolicy
+from softgrasp_env.registration import make_as as make
 
 IDS = {"tissue_v4": "SoftGrasp-v4", "tissue": "SoftGrasp-v3", "rigid": "SoftGraspRigid-v3",
        "rigid_torsion": "SoftGraspRigidTorsion-v3"}  # fmt: skip

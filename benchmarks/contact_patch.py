@@ -34,8 +34,8 @@ import sys
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
-from benchmarks.retired import make
 from softgrasp_env.policies import ScriptedGraspPolicy
+from softgrasp_env.registration import make_as as make
 from softgrasp_env.scene.scene import CYLINDER_SHAPE
 
 GRASPS = {

@@ -25,9 +25,9 @@ import time
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
-from benchmarks.retired import make
 from softgrasp_env.observation import OBS_NAMES
 from softgrasp_env.policies import ScriptedGraspPolicy
+from softgrasp_env.registration import make_as as make
 
 ENV_ID = "SoftGraspEasy-v3"
 OBJECTS = ("sphere", "cube", "cone", "capsule", "pebble-1")

@@ -22,9 +22,9 @@ import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
 from agents.scripted import ScriptedGraspPolicy
-from benchmarks.retired import make
 from softgrasp_env.config import SimConfig
 from softgrasp_env.registration import TISSUE_V4
+from softgrasp_env.registration import make_as as make
 from softgrasp_env.scene.scene import LEFT, PALM, RIGHT
 from softgrasp_env.tasks.carry import CARRY_SLIDE_LIMIT
 

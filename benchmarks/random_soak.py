@@ -23,8 +23,8 @@ import time
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
-from benchmarks.retired import make
 from softgrasp_env.policies import ScriptedGraspPolicy
+from softgrasp_env.registration import make_as as make
 
 
 def soak(env_id: str, steps: int, stream: str, *, seed: int = 0, **kwargs) -> dict:

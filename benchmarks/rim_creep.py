@@ -37,8 +37,8 @@ import sys
 import numpy as np
 
 from benchmarks.carry_bands import IDS
-from benchmarks.retired import make
 from softgrasp_env.policies import ScriptedGraspPolicy
+from softgrasp_env.registration import make_as as make
 from softgrasp_env.scene import CYLINDER_SHAPE
 
 KINDS = {**IDS, "tissue_cones": "SoftGrasp-v3"}

@@ -76,11 +76,11 @@ import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
 from agents.scripted import ScriptedGraspPolicy
-from benchmarks.retired import make as make_env
 from softgrasp_env.config import SimConfig
 from softgrasp_env.fingers import FINGERS
 from softgrasp_env.observation import CARRY_OBS_NAMES, OBS_NAMES
 from softgrasp_env.registration import TISSUE_V4
+from softgrasp_env.registration import make_as as make_env
 
 OUT = Path(__file__).resolve().parent / "out"
 LABELS = {2: "held", 1: "slipped", 0: "dropped", -1: "diverged", -2: "refused"}

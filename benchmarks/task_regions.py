@@ -33,7 +33,7 @@ import time
 import numpy as np
 
 from benchmarks.carry_bands import IDS, add_kind_arguments, kinds_and_policies, make_policy
-from benchmarks.retired import make
+from softgrasp_env.registration import make_as as make
 
 SEED = 1000
 """The model cards' first seed (agents.cards.SEED): a region's rates read against the cards'."""

@@ -27,8 +27,8 @@ from pathlib import Path
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
-from benchmarks.retired import make
 from softgrasp_env.policies import ScriptedGraspPolicy
+from softgrasp_env.registration import make_as as make
 
 OUT = Path(__file__).resolve().parent / "out"
 IDS = ("SoftGrasp-v3", "SoftGraspRigid-v3", "SoftGraspRigidTorsion-v3")

@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 
 import softgrasp_env  # noqa: F401  (registers the ids)
-from benchmarks.retired import make
 from softgrasp_env.policies import ScriptedGraspPolicy
+from softgrasp_env.registration import make_as as make
 
 ROOT = Path(__file__).resolve().parents[1]
 PANELS = (("SoftGrasp-v3", "soft fingers (tissue)"), ("SoftGraspRigid-v3", "rigid fingers"),

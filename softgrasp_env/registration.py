@@ -199,6 +199,24 @@ step for step: the thesis tissue's ids are their v4 successors with :data:`TISSU
 ids' first charges are the latest grip ids with the charge's keywords (the same physics)."""
 
 
+def registered_as(env_id: str, kwargs: dict[str, object] | None = None, *,
+                  table: dict[str, tuple[str, dict[str, object]]] | None = None) -> tuple[str, dict[str, object]]:
+    """The registered id and ``gym.make`` keywords that are ``env_id`` made with ``kwargs``: a retired
+    id of ``table`` (default :data:`RETIRED_AS`) as its registered twin, the twin's keywords under
+    ``kwargs``; any other id as itself. Nothing is checked here: ``gym.make`` checks the result."""
+    made, keywords = (RETIRED_AS if table is None else table).get(env_id, (env_id, {}))
+    return made, {**keywords, **(kwargs or {})}
+
+
+def make_as(env_id: str, **kwargs: object) -> gym.Env:
+    """``gym.make(env_id, **kwargs)``, except that a retired id with a registered twin
+    (:data:`RETIRED_AS`, e.g. the thesis tissue's ``SoftGrasp-v3`` = ``SoftGrasp-v4`` with
+    :data:`TISSUE_V3`) is made as that twin, step for step the retired id. For results measured on a
+    retired id, reproduced on this release; a retired id without a twin raises as ``gym.make`` does."""
+    made, keywords = registered_as(env_id, kwargs)
+    return gym.make(made, **keywords)
+
+
 def retired_message(env_id: str) -> str:
     """What ``gym.make(env_id)`` says for a retired id: the release (and its git tag) that has it."""
     release = RETIRED[env_id]

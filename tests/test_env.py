@@ -31,6 +31,8 @@ from softgrasp_env.registration import (
     TISSUE_GLOBAL,
     TISSUE_V3,
     TISSUE_V4,
+    make_as,
+    registered_as,
     retired_message,
 )
 from tests.helpers import assert_same, obs_vector, rollout, run_episode
@@ -140,6 +142,24 @@ def test_a_retired_id_is_a_registered_id_with_keywords():
             a.close()
             b.close()
         assert "gym.make(" + repr(made) in retired_message(env_id)
+
+
+def test_make_as_makes_a_retired_id_as_its_registered_twin():
+    """``make_as``: a retired id of RETIRED_AS is its twin with the twin's keywords (a caller's
+    keyword over them); a registered id is itself; a retired id without a twin raises as gym.make."""
+    a = make_as("SoftGrasp-v3", layers=2)
+    b = gym.make("SoftGrasp-v4", **{**TISSUE_V3, "layers": 2})
+    c = make_as("SoftGrasp-v5", cylinder_mass=0.2)
+    try:
+        assert a.spec.id == "SoftGrasp-v4" and a.unwrapped.args == b.unwrapped.args
+        assert c.spec.id == "SoftGrasp-v5" and c.unwrapped.args == gym.make("SoftGrasp-v5", cylinder_mass=0.2).unwrapped.args
+    finally:
+        for env in (a, b, c):
+            env.close()
+    assert registered_as("SoftGrasp-v3", {"layers": 2}) == ("SoftGrasp-v4", {**TISSUE_V3, "layers": 2})
+    assert registered_as("X-v1", {"a": 1}, table={"X-v1": ("Y-v2", {"a": 0, "b": 2})}) == ("Y-v2", {"a": 1, "b": 2})
+    with pytest.raises(gym.error.DeprecatedEnv, match="0.6.0"):
+        make_as("SoftGrasp-v1")
 
 
 @pytest.mark.parametrize("env_id", sorted(RETIRED))

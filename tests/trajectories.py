@@ -26,7 +26,7 @@ import gymnasium as gym
 import numpy as np
 
 from softgrasp_env.registration import RETIRED_AS as REGISTERED_AS
-from softgrasp_env.registration import TISSUE_V3
+from softgrasp_env.registration import TISSUE_V3, registered_as
 
 DATA_V3 = Path(__file__).parent / "data" / "trajectories_v3.npz"
 DATA_V4 = Path(__file__).parent / "data" / "trajectories_v4.npz"
@@ -63,8 +63,7 @@ first task, :data:`GRIP_V3_TASK`, the soft v3 on the rigid twin's v3 tissue)."""
 
 def _made(env_id: str, kwargs: dict) -> tuple[str, dict]:
     """The registered id and keywords of a case recorded on ``env_id`` with ``kwargs``."""
-    made, extra = RETIRED_AS.get(env_id, (env_id, {}))
-    return made, {**extra, **kwargs}
+    return registered_as(env_id, kwargs, table=RETIRED_AS)
 
 
 def _case(name: str, env_id: str, policy: str, steps: int, kwargs: dict | None = None) -> tuple[str, str, dict, str, int]:
