@@ -392,13 +392,14 @@ def scripted_evaluations(*, episodes: int = EPISODES, seed: int = SEED, versions
                          ids: tuple[str, ...] = SCRIPTED_IDS) -> list[tuple[str, str, Any]]:  # fmt: skip
     """The scripted policy of each of ``ids`` (of ``versions`` if given) on the cards' episodes:
     ``(label, env id, Evaluation)``. The grip ids' policy (the squeeze as the action) reads the
-    taxels ('scripted tactile'); the others run the scripted grasp."""
+    taxels ('scripted tactile': ``grip_script``, the shear-lag script on tissue pads, the slip script
+    on rigid ones); the others run the scripted grasp."""
     import gymnasium as gym
 
     import softgrasp_env  # noqa: F401
     from agents.evaluate import evaluate
     from softgrasp_env.policies import ScriptedGraspPolicy
-    from softgrasp_env.policies.grip import TactileGripPolicy
+    from softgrasp_env.policies.grip import grip_script
 
     out = []
     for env_id in ids:
@@ -407,7 +408,7 @@ def scripted_evaluations(*, episodes: int = EPISODES, seed: int = SEED, versions
         env = gym.make(env_id)
         grip = env.unwrapped.args.control.finger_action == "force"
         try:
-            policy = TactileGripPolicy(env) if grip else ScriptedGraspPolicy.for_env(env)
+            policy = grip_script(env) if grip else ScriptedGraspPolicy.for_env(env)
             ev = evaluate(env, policy, episodes=episodes, seed=seed)
         finally:
             env.close()

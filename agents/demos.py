@@ -12,9 +12,9 @@ behaviour-cloning loss, no Q-filter (Nair et al.'s further terms), so a result w
 measures what the data alone gives.
 
 On the grip-force ids (finger_action "force") the demonstrations come from the tactile grip
-script that does best on the id's fingers (:func:`grip_script`): on the tissue the shear-lag
-script (ShearLagGripPolicy: 46 of 50 on the soft grip id), on rigid pads, which do not shear,
-the slip script (TactileGripPolicy: 89 % on the rigid grip ids' cards). Both set the squeeze from
+script that does best on the id's fingers (softgrasp_env.policies.grip.grip_script): on the
+tissue the shear-lag script (ShearLagGripPolicy: 89 % on the soft grip id's cards), on rigid pads,
+which do not shear, the slip script (TactileGripPolicy: 89 % on the rigid grip ids' cards). Both set the squeeze from
 the taxels. A run without the taxels (``--env-kwargs tactile=None tactile_history=1``) gets the
 same episodes: the script runs on the id's own taxels and the buffer stores the observation the
 learner has (the taxel entries left out; the taxels are a sensor and change nothing of the
@@ -50,6 +50,7 @@ from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
 from stable_baselines3.common.vec_env import VecNormalize
 from stable_baselines3.sac import SAC
 
+from softgrasp_env.policies.grip import grip_script
 from softgrasp_env.policies.replay import DemoReplayBuffer, DictDemoReplayBuffer, KeptDemonstrations, demo_buffer
 from softgrasp_env.wrappers import PRIVILEGED, SENSED, PrivilegedObservation
 
@@ -134,21 +135,12 @@ def _grip_env(env: gym.Env) -> bool:
     return env.unwrapped.plan.args.control.finger_action == "force"
 
 
-def grip_script(env: gym.Env) -> Any:
-    """The tactile grip script demonstrations come from on a grip-force env: ShearLagGripPolicy on
-    tissue fingers, TactileGripPolicy on the others (module docstring)."""
-    from softgrasp_env.policies.grip import ShearLagGripPolicy, TactileGripPolicy
-
-    tissue = env.unwrapped.plan.args.physics.fingers.kind == "tissue"
-    return ShearLagGripPolicy(env) if tissue else TactileGripPolicy(env)
-
-
 def demonstrator(env_id: str, env_kwargs: dict[str, Any]) -> tuple[gym.Env, Any, np.ndarray | None]:
     """The env the demonstrations run in, its scripted policy, and the indices of the learner's
     observation entries in that env's observation (None: the same observation).
 
     The scripted grasp (ScriptedGraspPolicy) on the lift ids; on a grip-force id its tactile grip
-    script (:func:`grip_script`), in the id's own taxels when the learner's env has none (module
+    script (``grip_script``), in the id's own taxels when the learner's env has none (module
     docstring)."""
     from softgrasp_env.policies import ScriptedGraspPolicy
 
@@ -237,4 +229,4 @@ def add_demonstrations(model: OffPolicyAlgorithm, env_id: str, env_kwargs: dict[
 
 
 __all__ = ["DEMO_SEED_BASE", "MAX_DEMOS", "TAXEL_KEYWORDS", "DemoReplayBuffer", "DemoSAC", "DictDemoReplayBuffer",
-           "add_demonstrations", "demo_buffer", "demo_seeds", "demonstrator", "grip_script"]
+           "add_demonstrations", "demo_buffer", "demo_seeds", "demonstrator"]

@@ -22,7 +22,8 @@ along the pad's mean shear - the slip annulus falling behind the stick zone); it
 prefixed ``lag_``. It reads the tissue's shear, which rigid pads do not have.
 
 The band: ramp rates x squeezes per finger x friction coefficients (mu_s = mu_k, the mu detector
-told the true mu). Kinds: ``tissue`` the v4 soft pads (Coulomb per contact: partial slip), ``peer`` the
+told the true mu). Kinds: ``tissue`` the v4 soft pads (Coulomb per contact: partial slip; the
+soft ids' v4), ``tissue_global`` the same tissue solved globally (the soft ids' v5), ``peer`` the
 rigid fingers with torsional friction (pybullet's contact points binned onto the same taxels),
 ``rigid`` the bare rigid twin.
 """
@@ -38,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from softgrasp_env.accuracy import shear_under_load
+from softgrasp_env.config import SimConfig
 from softgrasp_env.fingers import TorsionalRigidConfig
 from softgrasp_env.fingers.tactile import SHEAR_LAG, SLIP_RATIO, SLIP_SHARE, shear_lag_warning, slip_warning
 from softgrasp_env.presets import v4_tissue
@@ -45,6 +47,7 @@ from softgrasp_env.scene import GraspScene, SceneConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 KINDS = {"tissue": lambda: SceneConfig(tissue=v4_tissue()),
+         "tissue_global": lambda: SceneConfig(tissue=v4_tissue(), sim=SimConfig(material_solve="global")),
          "peer": lambda: SceneConfig(fingers=TorsionalRigidConfig()),
          "rigid": lambda: SceneConfig(fingers="rigid")}  # fmt: skip
 EVERY = 2

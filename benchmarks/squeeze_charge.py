@@ -18,7 +18,7 @@ factor (which shapes need more than the static least). The ids only name the row
 kind run the same physics.
 
 ``policies``: what a learner compares - the return of the tactile grip script the demonstrations
-come from (agents.demos.grip_script), of the same script letting go when the carry begins, of a
+come from (softgrasp_env.policies.grip.grip_script), of the same script letting go when the carry begins, of a
 hand held open and of one left half closed, under the id's own charge and under charges on the carry's
 steps alone (weight ``--weight-carry``: on the squeeze, or on its margin over the least), the same
 episodes re-priced.
@@ -217,10 +217,10 @@ alone (``squeeze_charge_steps="carry"``); ``w max(0, F / F_least - 1)`` on them 
 def policy_returns(env_id: str, seeds: int, weight_carry: float, first_seed: int = 1000) -> dict[str, dict]:
     """Per policy: success count and (mean, worst) return under each of POLICY_PRICES, the same
     episodes re-priced (the charge does not act on the physics). The policies: the tactile grip
-    script the demonstrations come from (agents.demos.grip_script), the same script letting go when
+    script the demonstrations come from (softgrasp_env.policies.grip.grip_script), the same script letting go when
     the carry begins (what a learner can do if carrying costs more than it pays), a hand held open
     and one left half closed (action 0)."""
-    from agents.demos import grip_script
+    from softgrasp_env.policies.grip import grip_script
 
     env = gym.make(env_id)
     base = env.unwrapped

@@ -244,8 +244,9 @@ class SoftGraspEnv(gym.Env):
     at most ``squeeze_factor`` (2) times ``info["least_squeeze"]``, the least force per finger that
     holds this cylinder through this carry: Coulomb, ``m max|a - g| / (2 mu_s)`` across the jaw axis
     with the cylinder's accelerations over each env step of the carry (both 0 before it;
-    :mod:`softgrasp_env.tasks.grip`). :mod:`softgrasp_env.policies.grip` has a tactile and a
-    force-blind scripted policy.
+    :mod:`softgrasp_env.tasks.grip`). :mod:`softgrasp_env.policies.grip` has tactile scripted
+    policies (``grip_script(env)`` picks the fingers' better one: on tissue pads the script that
+    feels slip coming in the pads' shear) and a force-blind one.
 
     ## Object set
     The object-set ids draw what is grasped per episode from eleven objects, each as likely: the

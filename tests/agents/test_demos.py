@@ -158,7 +158,7 @@ def test_an_asymmetric_run_stores_the_privileged_state_and_normalises_each_key()
 
 
 def test_the_grip_script_is_the_shear_lag_one_on_the_tissue_and_the_slip_one_on_rigid_pads():
-    from agents.demos import grip_script
+    from softgrasp_env.policies.grip import grip_script
 
     assert type(grip_script(gym.make("SoftGraspGrip-v7"))).__name__ == "ShearLagGripPolicy"
     for env_id in ("SoftGraspGripRigid-v4", "SoftGraspGripRigidTorsion-v4"):
