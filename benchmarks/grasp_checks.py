@@ -23,7 +23,7 @@ import numpy as np
 import softgrasp_env  # noqa: F401  (registers the ids)
 from agents.scripted import ScriptedGraspPolicy
 from softgrasp_env.config import SimConfig
-from softgrasp_env.registration import TISSUE_V4
+from softgrasp_env.registration import TISSUE_GLOBAL, TISSUE_V4
 from softgrasp_env.registration import make_as as make
 from softgrasp_env.scene.scene import LEFT, PALM, RIGHT
 from softgrasp_env.tasks.carry import CARRY_SLIDE_LIMIT
@@ -39,10 +39,13 @@ KINDS = {"soft": dict(fingers="tissue"), "soft-consistent": dict(fingers="tissue
          "soft-16k": dict(fingers="tissue", particle_density=16_000.0),
          "soft-v4": dict(fingers="tissue", **TISSUE_V4),
          "soft-v4-mu_k=0.7": dict(fingers="tissue", friction_kinetic=0.7, **TISSUE_V4),
-         "soft-v4-16k": dict(fingers="tissue", particle_density=16_000.0, **TISSUE_V4)}  # fmt: skip
+         "soft-v4-16k": dict(fingers="tissue", particle_density=16_000.0, **TISSUE_V4),
+         "soft-v5": dict(fingers="tissue", **TISSUE_GLOBAL),
+         "soft-v5-16k": dict(fingers="tissue", particle_density=16_000.0, **TISSUE_GLOBAL)}  # fmt: skip
 """The finger kinds compared (the tissue at its default mu_k = mu_s, pybullet's one coefficient),
 and the tissue with a two-coefficient law (mu_k 0.7 < mu_s 0.9); ``soft-v4`` is the v4 tissue
-(registration.TISSUE_V4: SoftGraspEasy-v4's physics)."""
+(registration.TISSUE_V4: SoftGraspEasy-v4's physics), ``soft-v5`` the same solved globally
+(registration.TISSUE_GLOBAL: SoftGraspEasy-v5's)."""
 NO_SLIP = CARRY_SLIDE_LIMIT
 """The mass and friction rows count a cylinder held only if it also moved at most this in the hand
 from lift-off to the end [m], the v3 success's slide limit: a grasp that slips while the arm
