@@ -233,21 +233,23 @@ def test_the_palm_itself_stays_under_the_acceleration_limit_under_bang_bang_acti
         sc.close()
 
 
-@pytest.mark.parametrize("fingers", ["tissue", "rigid"])
-def test_force_actions_squeeze_with_the_commanded_force(fingers):
+@pytest.mark.parametrize(("fingers", "env_id"), [("tissue", "SoftGraspEasy-v4"), ("tissue", "SoftGraspEasy-v5"),
+                                                ("rigid", "SoftGraspEasy-v4")])  # fmt: skip
+def test_force_actions_squeeze_with_the_commanded_force(fingers, env_id):
     """``finger_action="force"``: the last action entry sets the squeeze, 0 to finger_force. Held
     aloft, the pads press with the commanded force (the taxels' pressure, within 0.5 %; measured
-    0.1 %, on SoftGraspEasy-v4 with the thesis tissue, TISSUE_V3), through the carry's own controls
-    too; at -1 the fingers do not squeeze at all."""
+    0.1 %, on SoftGraspEasy-v4 with the thesis tissue, TISSUE_V3; the soft ids' latest physics,
+    SoftGraspEasy-v5, too), through the carry's own controls too; at -1 the fingers do not squeeze
+    at all."""
     import gymnasium as gym
 
     import softgrasp_env  # noqa: F401
     from softgrasp_env.policies import ScriptedGraspPolicy
     from softgrasp_env.registration import TISSUE_V3
 
+    thesis = TISSUE_V3 if env_id == "SoftGraspEasy-v4" else {}
     for squeeze in (1.5, 2.5):
-        env = gym.make("SoftGraspEasy-v4", fingers=fingers, finger_action="force", tactile=(2, 2), carry=True,
-                       **TISSUE_V3)  # fmt: skip
+        env = gym.make(env_id, fingers=fingers, finger_action="force", tactile=(2, 2), carry=True, **thesis)
         try:
             u = env.unwrapped
             policy = ScriptedGraspPolicy.for_env(env)
@@ -267,7 +269,7 @@ def test_force_actions_squeeze_with_the_commanded_force(fingers):
             np.testing.assert_allclose(pressed, squeeze, rtol=5e-3)
         finally:
             env.close()
-    env = gym.make("SoftGraspEasy-v4", fingers=fingers, finger_action="force", **TISSUE_V3)
+    env = gym.make(env_id, fingers=fingers, finger_action="force", **thesis)
     try:
         env.reset(seed=0)
         for _ in range(20):
