@@ -68,6 +68,42 @@ def test_a_loaded_baseline_acts_on_raw_observations_as_agents_runs_does():
         env.close()
 
 
+def test_a_her_baseline_loads_onto_an_env_of_its_own(tmp_path, monkeypatch):
+    """A HER + SAC model (the goal id's learner; its replay buffer needs an env to load onto) loads
+    as a shipped baseline does: its own env made from the card, raw observations (no statistics),
+    actions in the space; closing the baseline closes that env. No goal model ships yet, so the
+    model here is a 100-step train.py run (HER samples only once an episode has ended: no update
+    before 1,000 steps) given a card."""
+    import json
+
+    import train
+    from softgrasp_env.policies import baselines
+
+    assert train.main(["--env", "SoftGraspGoal-v6", "--timesteps", "100", "--learning-starts", "1000",
+                       "--eval-every", "1000", "--eval-episodes", "1", "--no-progress", "--out", str(tmp_path)]) == 0  # fmt: skip
+    run = tmp_path / "SoftGraspGoal-v6_her-sac_0"
+    name = "SoftGraspGoal-v6_her-sac_9"
+    shipped = tmp_path / "trained" / name
+    shipped.mkdir(parents=True)
+    (shipped / "model.zip").write_bytes((run / "model.zip").read_bytes())
+    assert not (run / "vecnormalize.pkl").exists()  # HER keeps raw observations
+    card = {"name": name, "env": "SoftGraspGoal-v6", "env_kwargs": {}, "algo": "her-sac",
+            "evaluation": {"success_rate": 0.0}}  # fmt: skip
+    (shipped / "card.json").write_text(json.dumps(card))
+    monkeypatch.setattr(baselines, "TRAINED", tmp_path / "trained")
+    b = load_baseline(name)
+    try:
+        assert b.stats is None and b._env is not None and b.model.env is not None
+        env = b.make_env()
+        obs, _ = env.reset(seed=1000)
+        assert set(obs) == {"observation", "achieved_goal", "desired_goal"}
+        assert env.action_space.contains(np.asarray(b.policy(obs), dtype=np.float32))
+        env.close()
+    finally:
+        b.close()
+    assert b._env is None
+
+
 def test_loading_without_stable_baselines3_names_the_train_extra(monkeypatch):
     real_import = builtins.__import__
 
