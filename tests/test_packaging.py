@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import shutil
 import subprocess
 import sys
 import time
@@ -160,7 +161,12 @@ def test_the_wheel_works_in_a_fresh_venv_without_extras(tmp_path):
     35 s (the compile), then reset 0.03 s and the first step 0.004 s."""
     dist = tmp_path / "dist"
     tic = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(dist), str(ROOT)], check=True)
+    # from a copy of the sources without build products: setuptools packs a checkout's stale
+    # build/lib as it finds it (retired models came back into a wheel that way)
+    source = tmp_path / "source"
+    skip = shutil.ignore_patterns(".git", ".venv*", "build", "_build", "*.egg-info", "runs", "__pycache__", ".*_cache")
+    shutil.copytree(ROOT, source, symlinks=True, ignore=skip)
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", "-w", str(dist), str(source)], check=True)
     (wheel,) = dist.glob("softgrasp_env-*.whl")
     build_s = time.perf_counter() - tic
     with zipfile.ZipFile(wheel) as z:
