@@ -36,7 +36,7 @@ COLORS = {"SoftGrasp": "tab:blue", "SoftGraspRigid": "tab:red", "SoftGraspGoal":
           "SoftGraspRigidTorsion": "tab:orange", "SoftGraspGrip": "tab:blue", "SoftGraspGripRigid": "tab:red",
           "SoftGraspGripRigidTorsion": "tab:orange"}  # fmt: skip
 ALGO_COLORS = {"ppo": "tab:purple", "sac": "tab:blue", "her-sac": "tab:green"}
-VERSIONS = {"v4": "v4 (v3, no early end)", "v3": "v3 (the sway band)"}
+VERSIONS = {"v5": "v5 (the v4 tissue solved globally)", "v4": "v4 (the v4 tissue, swept)", "v3": "v3 (the sway band)"}
 
 
 def _split(env_id: str) -> tuple[str, str]:
