@@ -87,7 +87,8 @@ def convergence(progress: list[dict[str, str]], budget: int, *, window: float = 
     sxx = float(np.sum((x - x.mean()) ** 2))
     se = float(np.sqrt(np.sum(resid**2) / max(1, len(x) - 2) / sxx)) if sxx > 0 else float("nan")
     span = budget * window
-    out.update(change_points=round(float(slope * span * 100), 2), stderr_points=round(se * span * 100, 2),
+    # + 0.0: a flat line's slope rounds to -0.0, which a card would print as "-0.0"
+    out.update(change_points=round(float(slope * span * 100), 2) + 0.0, stderr_points=round(se * span * 100, 2) + 0.0,
                converged=bool(abs(slope * span * 100) < points), final_evaluation=float(y[-1]))  # fmt: skip
     return out
 

@@ -195,8 +195,11 @@ def main(argv: list[str] | None = None) -> int:
         ax.legend(fontsize=8, loc="upper left")
     for row in axes:
         row[0].set_ylabel("success rate")
-    fig.suptitle("success vs env steps; lines: last 100 training episodes (mean, band: min-max over seeds)\n"
-                 "dots: evaluations of the deterministic policy (train.py's --eval-episodes each)", fontsize=9)  # fmt: skip
+    # one line a clause on a narrow figure (a single panel), two on a wide one
+    sep = "\n" if shape[1] == 1 else "; "
+    fig.suptitle(f"success vs env steps{sep}lines: last 100 training episodes (mean, band: min-max over seeds)\n"
+                 "dots: evaluations of the deterministic policy (train.py's --eval-episodes each)",
+                 fontsize=8 if shape[1] == 1 else 9)  # fmt: skip
     fig.tight_layout()
     ns.out.mkdir(parents=True, exist_ok=True)
     fig.savefig(ns.out / f"{ns.name}.png", dpi=110)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -62,6 +63,8 @@ def test_convergence_reads_the_last_fifth_of_the_budget():
     flat = cards.convergence(rows([0.0] * 7 + [0.9, 0.92, 0.9, 0.88]), 110_000)  # the early rise is outside
     assert flat["converged"] is True and flat["evaluations"] == 3 and abs(flat["change_points"]) < 5
     assert cards.convergence(rows([0.5, 0.6]), 20_000)["converged"] is None
+    level = cards.convergence(rows([1.0] * 10), 100_000)  # every evaluation at 100 %: no "-0.0" on a card
+    assert level["change_points"] == 0.0 and math.copysign(1.0, level["change_points"]) == 1.0
 
 
 def test_train_seconds_of_a_run_trained_in_parts():
