@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from agents.evaluate import Episode, run_episode
+from softgrasp_env.registration import TISSUE_V3
 
 __all__ = ["Episode", "assert_same", "obs_vector", "rollout", "run_episode"]
 
@@ -43,3 +44,18 @@ def rollout(env, seed: int, steps: int, action_seed: int) -> list:
         if res[2] or res[3]:
             out.append(env.reset())
     return out
+
+
+SOFT_PHYSICS = ("thesis", "v5")
+"""The soft physics the threshold tests run on: the thesis tissue they were first measured on (a
+family's v4 id with TISSUE_V3) and the soft ids' latest (its v5: the v4 tissue solved globally)."""
+
+
+def soft_physics(family: str, physics: str) -> tuple[str, dict]:
+    """The id and ``gym.make`` keywords of ``family`` (``"SoftGrasp"``, ``"SoftGraspEasy"``) on
+    ``physics`` (one of :data:`SOFT_PHYSICS`)."""
+    if physics == "thesis":
+        return f"{family}-v4", dict(TISSUE_V3)
+    if physics == "v5":
+        return f"{family}-v5", {}
+    raise ValueError(f"physics must be one of {SOFT_PHYSICS}, got {physics!r}")

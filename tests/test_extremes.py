@@ -21,23 +21,18 @@ import pytest
 from agents.scripted import ScriptedGraspPolicy
 from softgrasp_env.config import SimConfig, TissueConfig
 from softgrasp_env.registration import TISSUE_V3
-from tests.helpers import run_episode
+from tests.helpers import SOFT_PHYSICS, run_episode, soft_physics
 
 
 def _finite(obs, reward, term, trunc, info) -> None:
     assert np.isfinite(obs).all() and math.isfinite(reward)
 
 
-PHYSICS = {"thesis": ("SoftGrasp-v4", TISSUE_V3), "v5": ("SoftGrasp-v5", {})}
-"""The physics the ends run on: the thesis tissue the ranges were measured on (SoftGrasp-v4 with
-TISSUE_V3), and the soft ids' latest."""
-
-
 def _episodes(kwargs: dict, *, seeds=(0,), scripted=(0,), physics: str = "thesis") -> list[str]:
     """Random-action episodes on ``seeds`` and scripted ones on ``scripted``, on ``physics``
-    (:data:`PHYSICS`: its id, its keywords under ``kwargs``); the divergences, each with its reason
+    (tests.helpers.soft_physics: its id, its keywords under ``kwargs``); the divergences, each with its reason
     (empty when none). A divergence ends its episode: it is the last step."""
-    env_id, keywords = PHYSICS[physics]
+    env_id, keywords = soft_physics("SoftGrasp", physics)
     env = gym.make(env_id, **{**keywords, **kwargs})
     problems = []
     try:
@@ -140,7 +135,7 @@ SLOW_COMBINATIONS = {
 def _cases(table: dict[str, dict]) -> list:
     """(physics, name) for every setting of ``table`` on every physics, but the consistent
     coupling's on v5's global solve, which refuses it when the env is made."""
-    return [pytest.param(physics, name, id=f"{physics}-{name}") for physics in PHYSICS for name, kw in table.items()
+    return [pytest.param(physics, name, id=f"{physics}-{name}") for physics in SOFT_PHYSICS for name, kw in table.items()
             if not (physics == "v5" and getattr(kw.get("sim"), "coupling", "thesis") == "consistent")]  # fmt: skip
 
 

@@ -14,10 +14,9 @@ import pytest
 
 from softgrasp_env.accuracy import GraspPlan, run_grasp
 from softgrasp_env.fingers import FINGERS, FingerConfig
-from softgrasp_env.registration import TISSUE_V3
 from softgrasp_env.render import SceneRenderer
 from softgrasp_env.scene import GraspScene, SceneConfig
-from tests.helpers import assert_same, rollout, run_episode
+from tests.helpers import assert_same, rollout, run_episode, soft_physics
 
 SLOW_KINDS = {"fem"}
 """pybullet's FEM pads run at a few env steps per second (8 substeps of explicit elasticity):
@@ -74,14 +73,15 @@ def test_every_setting_of_a_kind_is_validated(name):
         SceneConfig(fingers=name + "-x")
 
 
-@pytest.mark.parametrize(("name", "env_id"), [
-    *(pytest.param(name, "SoftGraspEasy-v4", marks=[pytest.mark.slow] if name in SLOW_KINDS else []) for name in FINGERS),
-    ("tissue", "SoftGraspEasy-v5")])  # fmt: skip
-def test_the_scripted_policy_lifts_and_holds(name, env_id, make_env, scripted):
+@pytest.mark.parametrize(("name", "physics"), [
+    *(pytest.param(name, "thesis", marks=[pytest.mark.slow] if name in SLOW_KINDS else []) for name in FINGERS),
+    ("tissue", "v5")])  # fmt: skip
+def test_the_scripted_policy_lifts_and_holds(name, physics, make_env, scripted):
     """The gentle start (aligned fingers, where every kind holds; SoftGraspEasy-v4 with the thesis
     tissue, TISSUE_V3, and the tissue on the soft ids' latest physics): the cylinder is lifted past
     the success height and held to the end, nothing diverges on the way."""
-    env = make_env(env_id, fingers=name, **(TISSUE_V3 if env_id == "SoftGraspEasy-v4" else {}))
+    env_id, keywords = soft_physics("SoftGraspEasy", physics)
+    env = make_env(env_id, fingers=name, **keywords)
     ep = run_episode(env, scripted, seed=3, on_step=lambda o, r, term, trunc, info: _healthy(info))
     assert ep.steps == 100 and ep.success and ep.successes >= 40
     assert ep.info["lift_height"] >= 0.05

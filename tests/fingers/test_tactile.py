@@ -10,7 +10,7 @@ import pytest
 import softgrasp_env  # noqa: F401
 from softgrasp_env.fingers.tactile import INNER_NORMAL, TAXEL_CHANNELS, TaxelGrid, _spread
 from softgrasp_env.policies import ScriptedGraspPolicy
-from softgrasp_env.registration import TISSUE_V3
+from tests.helpers import soft_physics
 
 G = 9.81
 
@@ -47,20 +47,16 @@ def test_a_footprint_is_spread_by_area_and_keeps_its_whole_load():
     assert _spread(0.05, 0.0, 0.005, 0.005, g.params(), index, weight) == 0  # off the face
 
 
-EASY = {"thesis": ("SoftGraspEasy-v4", TISSUE_V3), "v5": ("SoftGraspEasy-v5", {})}
-"""The easy task on the thesis tissue (SoftGraspEasy-v4 with TISSUE_V3, where these readings were
-first measured) and on the soft ids' latest physics (the v4 tissue solved globally). A finger
-kind written ``kind@v5`` runs on the latest."""
-
-
 def _easy(fingers: str, **kwargs):
+    """The easy task on ``fingers``; ``kind@v5`` on the soft ids' latest physics, else on the thesis
+    tissue these readings were first measured on (tests.helpers.soft_physics)."""
     kind, _, physics = fingers.partition("@")
-    env_id, keywords = EASY[physics or "thesis"]
+    env_id, keywords = soft_physics("SoftGraspEasy", physics or "thesis")
     return gym.make(env_id, fingers=kind, **keywords, **kwargs)
 
 
 def _held(fingers: str, steps: int = 80):
-    """The easy task's scripted grasp (:data:`EASY`) on ``fingers`` (``"tissue-consistent"``: the
+    """The easy task's scripted grasp (:func:`_easy`) on ``fingers`` (``"tissue-consistent"``: the
     consistent coupling; ``"tissue@v5"``: the latest physics), lifted and held still (6.5 cm up
     from 40 env steps on, measured)."""
     kind, _, coupling = fingers.partition("-")

@@ -233,9 +233,8 @@ def test_the_palm_itself_stays_under_the_acceleration_limit_under_bang_bang_acti
         sc.close()
 
 
-@pytest.mark.parametrize(("fingers", "env_id"), [("tissue", "SoftGraspEasy-v4"), ("tissue", "SoftGraspEasy-v5"),
-                                                ("rigid", "SoftGraspEasy-v4")])  # fmt: skip
-def test_force_actions_squeeze_with_the_commanded_force(fingers, env_id):
+@pytest.mark.parametrize(("fingers", "physics"), [("tissue", "thesis"), ("tissue", "v5"), ("rigid", "thesis")])
+def test_force_actions_squeeze_with_the_commanded_force(fingers, physics):
     """``finger_action="force"``: the last action entry sets the squeeze, 0 to finger_force. Held
     aloft, the pads press with the commanded force (the taxels' pressure, within 0.5 %; measured
     0.1 %, on SoftGraspEasy-v4 with the thesis tissue, TISSUE_V3; the soft ids' latest physics,
@@ -245,11 +244,11 @@ def test_force_actions_squeeze_with_the_commanded_force(fingers, env_id):
 
     import softgrasp_env  # noqa: F401
     from softgrasp_env.policies import ScriptedGraspPolicy
-    from softgrasp_env.registration import TISSUE_V3
+    from tests.helpers import soft_physics
 
-    thesis = TISSUE_V3 if env_id == "SoftGraspEasy-v4" else {}
+    env_id, keywords = soft_physics("SoftGraspEasy", physics)
     for squeeze in (1.5, 2.5):
-        env = gym.make(env_id, fingers=fingers, finger_action="force", tactile=(2, 2), carry=True, **thesis)
+        env = gym.make(env_id, fingers=fingers, finger_action="force", tactile=(2, 2), carry=True, **keywords)
         try:
             u = env.unwrapped
             policy = ScriptedGraspPolicy.for_env(env)
@@ -269,7 +268,7 @@ def test_force_actions_squeeze_with_the_commanded_force(fingers, env_id):
             np.testing.assert_allclose(pressed, squeeze, rtol=5e-3)
         finally:
             env.close()
-    env = gym.make(env_id, fingers=fingers, finger_action="force", **thesis)
+    env = gym.make(env_id, fingers=fingers, finger_action="force", **keywords)
     try:
         env.reset(seed=0)
         for _ in range(20):

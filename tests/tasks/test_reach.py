@@ -10,9 +10,8 @@ import numpy as np
 import pytest
 
 from softgrasp_env.observation import OBS_NAMES, obs_slice
-from softgrasp_env.registration import TISSUE_V3
 from softgrasp_env.scene import SceneConfig
-from tests.helpers import run_episode
+from tests.helpers import SOFT_PHYSICS, run_episode, soft_physics
 
 FORCE = obs_slice(OBS_NAMES, "force")
 LIFT = OBS_NAMES.index("lift")
@@ -46,19 +45,14 @@ ISSUE_SEQUENCE = [[0, 0, 0, 1]] * 15 + [[0, 0, 1, 1]] * 85
 started around the cylinder)."""
 
 
-SOFT = {"v5": ("SoftGrasp-v5", {}), "thesis": ("SoftGrasp-v4", TISSUE_V3)}
-"""The soft envs the task is measured on: the soft ids' latest (the v4 tissue solved globally) and
-the thesis tissue (SoftGrasp-v4 with TISSUE_V3), on which these figures were first measured."""
-
-
-@pytest.mark.parametrize("soft", list(SOFT))
+@pytest.mark.parametrize("soft", SOFT_PHYSICS)
 @pytest.mark.parametrize("name", ["close 15, then up", "down, close, up"])
 def test_open_loop_actions_rarely_succeed(name, soft, make_env):
     """The task needs feedback: measured over seeds 0-39, 'close 15, then up' succeeds in 0 of 40
     on both soft envs, 'down, close, up' in 1 of 40 on both. Asserted on 20 other seeds (measured
     0 of 20 each): at most 10 %."""
     seq = ISSUE_SEQUENCE if name == "close 15, then up" else _open_loop((0.0, 0.0), 0)
-    env_id, keywords = SOFT[soft]
+    env_id, keywords = soft_physics("SoftGrasp", soft)
     rate = _success_rate(make_env(env_id, **keywords), seq, range(1000, 1020))
     assert rate <= 0.10, f"open-loop {name!r} succeeded in {rate:.0%}"
 
@@ -66,7 +60,7 @@ def test_open_loop_actions_rarely_succeed(name, soft, make_env):
 @pytest.mark.slow
 @pytest.mark.parametrize("move,steps", [((0.7, 0.7), 5), ((0.7, 0.7), 9), ((-0.7, -0.7), 9), ((1.0, 0.0), 9),
                                         ((0.0, 1.0), 9), ((0.7, -0.7), 9)])  # fmt: skip
-@pytest.mark.parametrize("soft", list(SOFT))
+@pytest.mark.parametrize("soft", SOFT_PHYSICS)
 def test_no_constant_move_finds_the_cylinder_often(move, steps, soft, make_env):
     """Move a fixed way first, then down, close, lift. Measured over seeds 0-39 on the thesis
     tissue, eighteen such sequences: 0-4 of 40 each; the best, along +x+y for 5 or 9 steps, 4 of 40
@@ -74,12 +68,12 @@ def test_no_constant_move_finds_the_cylinder_often(move, steps, soft, make_env):
     as the workspace allows, and the soft fingers, wide open, still catch a cylinder that lies
     within about 2.5 cm of where they come down. On SoftGrasp-v5 the six here: 4, 4, 3, 1, 1, 3 of
     40."""
-    env_id, keywords = SOFT[soft]
+    env_id, keywords = soft_physics("SoftGrasp", soft)
     rate = _success_rate(make_env(env_id, **keywords), _open_loop(move, steps), range(40))
     assert rate <= 0.10, f"open-loop move {move} x{steps} succeeded in {rate:.0%}"
 
 
-@pytest.mark.parametrize("soft", list(SOFT))
+@pytest.mark.parametrize("soft", SOFT_PHYSICS)
 def test_scripted_policy_solves_the_soft_task(soft, make_env, scripted):
     """The scripted policy (observation only) succeeds in >= 90 % of seeded episodes with soft
     fingers. Measured: 30 of 30 (seeds 0-29) on both soft envs, and 20 of 20 here on SoftGrasp-v5;
@@ -91,7 +85,7 @@ def test_scripted_policy_solves_the_soft_task(soft, make_env, scripted):
         forces.append(obs[FORCE])
         return scripted(obs)
 
-    env_id, keywords = SOFT[soft]
+    env_id, keywords = soft_physics("SoftGrasp", soft)
     rate = _success_rate(make_env(env_id, **keywords), watched, range(2000, 2020))
     assert rate >= 0.9, f"scripted policy: {rate:.0%}"
     # The arm only moves and lifts: the fingers press with their motors' 3 N, no more (measured
