@@ -183,6 +183,23 @@ def test_the_shear_lag_grip_feels_slip_coming_and_holds_lightly(make_env, seed):
     assert 1.2 < info["carry_squeeze"] / info["least_squeeze"] < 1.8
 
 
+def test_the_shear_lag_grip_catches_a_slide_right_after_a_drop(make_env):
+    """A heavy, slippery cylinder (seed 1024 on the v7 tissue: 0.25 kg, mu 0.53, least 2.3 N) whose
+    lag never rises (it lifted near 1) slides when the search drops the squeeze below its least: the
+    traction falls from 1.21 to 0.96 N the step after the drop (-20 %, the pads' relaxing dips it
+    by at most a few per cent). Caught there, the grip holds 1.5 x the last squeeze that held and
+    carries it (measured 3.48 N, 1.50 x the least); left to the next judging step, as with a
+    tolerance no fall reaches, the cylinder slides another step, out of the task's lift."""
+    env = make_env("SoftGraspGrip-v7")
+    caught = ShearLagGripPolicy(env)
+    info = _grip_episode(env, caught, 1024)
+    assert info["is_success"] and caught.phase == "hold" and np.isnan(caught.fired_lag), info
+    assert 1.3 < info["carry_squeeze"] / info["least_squeeze"] < 1.7
+    late = ShearLagGripPolicy(env, drop_tolerance=1.0)
+    info = _grip_episode(env, late, 1024)
+    assert not info["is_success"] and not info["held"], info
+
+
 def test_the_shear_lag_grip_on_rigid_pads_falls_back_to_gross_slip(make_env):
     """The rigid twin's pads do not shear: the lag never warns, and the policy holds 1.5 x the last
     squeeze that held once the traction falls below the weight (measured: seed 1002 carried at
@@ -197,6 +214,7 @@ def test_the_shear_lag_grip_on_rigid_pads_falls_back_to_gross_slip(make_env):
 @pytest.mark.parametrize(("kwargs", "match"), [
     ({"rise": 0.0}, "rise"), ({"rise": 1.5}, "rise"), ({"margin": 0.9}, "margin"),
     ({"slip_margin": 0.5}, "slip_margin"), ({"wait": 0}, "wait"), ({"step": 1.0}, "step"),
+    ({"drop_tolerance": 0.0}, "drop_tolerance"), ({"drop_tolerance": 1.5}, "drop_tolerance"),
     ({"start_force": 7.0}, "start_force"),
 ])  # fmt: skip
 def test_bad_shear_lag_grip_settings_are_named(make_env, kwargs, match):

@@ -250,16 +250,16 @@ def test_feeling_the_tissue_pads_beats_every_force_blind_grip(make_env, env_id, 
 def test_the_tissue_that_feels_slip_coming_grips_as_surely_as_the_peer_and_lighter(make_env):
     """The soft grip id's shear-lag script (the pads' edges lagging their centre: slip on its way)
     against the torsional peer's slip script (its binned contact forces falling below the weight),
-    the same 50 seeds (1000-1049). Measured: the tissue 46 of 50 at a median squeeze of 1.40 x the
-    least that holds, the peer 46 of 50 at 1.56 x (on the cards' 100 seeds 89 and 89, 1.44 and
-    1.57 x; benchmarks/grip_force.py)."""
+    the same 50 seeds (1000-1049). Measured: the tissue 47 of 50 at a median squeeze of 1.40 x the
+    least that holds, the peer 46 of 50 at 1.56 x (on the cards' 100 seeds 92 and 89, 1.44 and
+    1.57 x; on seeds 3000-3099 95 and 93; benchmarks/grip_force.py)."""
     seeds = range(1000, 1050)
     soft = make_env("SoftGraspGrip-v7")
     peer = make_env("SoftGraspGripRigidTorsion-v5")
     mine = _episodes(soft, ShearLagGripPolicy(soft), seeds)
     theirs = _episodes(peer, TactileGripPolicy(peer), seeds)
     wins = sum(i["is_success"] for i in mine)
-    assert wins >= 44 and wins >= sum(i["is_success"] for i in theirs) - 1, wins
+    assert wins >= 45 and wins >= sum(i["is_success"] for i in theirs), wins
 
     def median_ratio(infos) -> float:
         return float(np.median([i["carry_squeeze"] / i["least_squeeze"] for i in infos if i["is_success"]]))
