@@ -62,6 +62,14 @@ def wilson(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
     return max(0.0, centre - half), min(1.0, centre + half)
 
 
+def change_text(change: float, stderr: float, points: float = CONVERGED_POINTS) -> str:
+    """A convergence's change and its standard error as a card prints them: one decimal, or two
+    where one would round the change onto or past the rule's bound (+4.96 printed "+5.0" beside
+    "converged")."""
+    digits = 2 if (abs(round(change, 1)) >= points) != (abs(change) >= points) else 1
+    return f"{change:+.{digits}f} ± {stderr:.{digits}f}"
+
+
 def convergence(progress: list[dict[str, str]], budget: int, *, window: float = CONVERGED_WINDOW,
                 points: float = CONVERGED_POINTS) -> dict[str, Any]:  # fmt: skip
     """Whether a run's evaluation success settled: the change over the last ``window`` of its
@@ -339,7 +347,7 @@ def _card_extras(card: dict[str, Any]) -> list[str]:
             verdict = f"not decided ({conv['evaluations']} evaluations in the window)"
         else:
             verdict = (f"{'**converged**' if conv['converged'] else '**not converged**'}: "
-                       f"{conv['change_points']:+.1f} ± {conv['stderr_points']:.1f} points "
+                       f"{change_text(conv['change_points'], conv['stderr_points'])} points "
                        f"over the window, {conv['evaluations']} evaluations")  # fmt: skip
         rows.append(f"| convergence | {verdict}; rule: {conv['rule']} |")
     if card.get("asymmetric"):
@@ -494,7 +502,7 @@ def runs_table(*, versions: tuple[int, ...] | None = None) -> str:
             continue
         ev, conv = card["evaluation"], card.get("convergence") or {}
         lo, hi = ev.get("wilson95") or wilson(round(ev["success_rate"] * ev["episodes"]), ev["episodes"])
-        change = "-" if conv.get("change_points") is None else f"{conv['change_points']:+.1f} ± {conv['stderr_points']:.1f}"
+        change = "-" if conv.get("change_points") is None else change_text(conv["change_points"], conv["stderr_points"])
         verdict = {True: "yes", False: "no"}.get(conv.get("converged"), "undecided" if conv else "-")
         minutes = "-" if card["train_seconds"] is None else f"{card['train_seconds'] / 60:.0f}"
         learner, plus, demos = policy_label(card).partition(" + ")  # the algo in capitals, the demos as they read

@@ -67,6 +67,16 @@ def test_convergence_reads_the_last_fifth_of_the_budget():
     assert level["change_points"] == 0.0 and math.copysign(1.0, level["change_points"]) == 1.0
 
 
+def test_a_change_just_inside_the_rule_does_not_print_as_the_bound():
+    """SoftGrasp-v5_ppo_0 converged at +4.96 points, which one decimal printed as "+5.0" beside
+    "converged": a change that one decimal would round onto or past the bound gets two."""
+    assert cards.change_text(4.96, 3.8) == "+4.96 ± 3.80"
+    assert cards.change_text(-4.951, 1.0) == "-4.95 ± 1.00"
+    assert cards.change_text(5.04, 1.0) == "+5.0 ± 1.0"  # outside the rule, and "5.0" is not below 5
+    assert cards.change_text(4.94, 3.8) == "+4.9 ± 3.8" and cards.change_text(0.0, 0.0) == "+0.0 ± 0.0"
+    assert cards.change_text(7.25, 2.0) == "+7.2 ± 2.0"
+
+
 def test_train_seconds_of_a_run_trained_in_parts():
     """A run cut at 50k steps (no time recorded) and resumed from its 50k checkpoint: the cut part
     counts up to the checkpoint on the evaluations' clock, the resumed part its recorded time; the
