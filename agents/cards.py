@@ -289,6 +289,7 @@ def publish(run_dir: Path, *, episodes: int = EPISODES, seed: int = SEED, dest: 
         "convergence": convergence(progress, int(loaded.model.num_timesteps)),
         **({"demonstrations": meta["demonstrations"]} if meta.get("demonstrations") else {}),
         **({"asymmetric": True} if meta.get("asymmetric") else {}),
+        **({"distilled": meta["distilled"]} if meta.get("distilled") else {}),
         "versions": {"softgrasp_env": softgrasp_env.__version__, "stable_baselines3": stable_baselines3.__version__,
                      "torch": torch.__version__, "numpy": np.__version__, "python": platform.python_version()},
         "machine": "2-core x86-64 CPU, no GPU; two runs trained at a time, one torch thread each",
@@ -354,6 +355,13 @@ def _card_extras(card: dict[str, Any]) -> list[str]:
         rows.append("| critic | asymmetric: in training the critic also read the privileged state (the object's pose, "
                     "mass and friction: `softgrasp_env.wrappers.PrivilegedObservation`); the actor reads the env's "
                     "observation alone |")  # fmt: skip
+    distilled = card.get("distilled")
+    if distilled:
+        rows.append(f"| distilled | the actor fitted to {distilled['expert']}'s actions (`agents/distill.py`: behaviour "
+                    f"cloning, the expert's actions perturbed by noise of std {distilled['noise']:g} after its first "
+                    f"{distilled['episodes']} episodes; {distilled['rounds']} rounds of {distilled['round_episodes']} "
+                    f"more; seeds {distilled['seeds']}, the expert successful in {distilled['expert_successes']}); "
+                    "no reinforcement learning |")  # fmt: skip
     demos = card.get("demonstrations")
     if demos:
         script = {"ShearLagGripPolicy": "the shear-lag grip script", "TactileGripPolicy": "the slip grip script"}.get(
@@ -374,6 +382,8 @@ def policy_label(card: dict[str, Any]) -> str:
     each a group of its own."""
     demos = card.get("demonstrations")
     algo = f"{card['algo']} asymmetric" if card.get("asymmetric") else card["algo"]
+    if card.get("distilled"):
+        return f"{algo} distilled from {card['distilled']['expert']}"
     if not demos:
         return algo
     kept = f" ({demos['share']:.0%} of each batch{', BC %g' % demos['bc'] if demos.get('bc') else ''})" if demos.get(
