@@ -47,8 +47,9 @@ def _split(env_id: str) -> tuple[str, str]:
 
 
 def _base(algo: str) -> str:
-    """The algo of a table label (``"her-sac + 100 demos"`` -> ``"her-sac"``)."""
-    return algo.split(" + ", 1)[0]
+    """The algo of a table label (``"her-sac + 100 demos"``, ``"sac distilled from ..."`` ->
+    ``"her-sac"``, ``"sac"``)."""
+    return algo.split(" + ", 1)[0].split(" ", 1)[0]
 
 
 def _variant(env: str) -> str:

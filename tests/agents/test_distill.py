@@ -31,9 +31,12 @@ def test_a_distilled_run_is_a_train_py_run_that_loads_and_acts(tmp_path):
     run = _tiny(tmp_path)
     meta = json.loads((run / "run.json").read_text())
     assert meta["algo"] == "sac" and meta["env"] == GRIP and meta["timesteps"] == 300
+    assert meta["algo_kwargs"] == {"policy_kwargs": {"net_arch": [256, 256]}}
     d = meta["distilled"]
     assert d["expert"] == "ShearLagGripPolicy" and d["episodes"] == 2 and d["rounds"] == 1 and d["noise"] == 0.05
     assert d["seeds"] == f"{DISTILL_SEED_BASE}-{DISTILL_SEED_BASE + 2}" and meta["train_seconds"] > 0
+    log = (run / "logs" / "progress.csv").read_text().splitlines()  # the expert's rollouts, as SB3 logs its own
+    assert log[0].startswith("time/total_timesteps,time/time_elapsed,rollout/success_rate") and len(log) == 3
     rows = (run / "progress.csv").read_text().splitlines()
     assert rows[0].startswith("timesteps,success_rate") and [r.split(",")[0] for r in rows[1:]] == ["200", "300"]
     loaded = load_run(run)
@@ -58,7 +61,7 @@ def test_without_the_taxels_the_student_reads_the_same_episodes_without_them(tmp
         assert not any(n.startswith("tactile") for n in blind.unwrapped.obs_names)
         env, expert, project = demonstrator(GRIP, NO_TAXELS)
         try:
-            obs, _, _ = collect(env, expert, project, [DISTILL_SEED_BASE], noise=0.0, rng=np.random.default_rng(0))
+            obs, _, _, _ = collect(env, expert, project, [DISTILL_SEED_BASE], noise=0.0, rng=np.random.default_rng(0))
         finally:
             env.close()
         first, _ = blind.reset(seed=DISTILL_SEED_BASE)
@@ -72,8 +75,8 @@ def test_noise_perturbs_what_is_done_not_the_labels():
     state it saw (the script run again on the recorded observations gives the same actions)."""
     env, expert, project = demonstrator(GRIP, {})
     try:
-        clean_obs, clean_act, _ = collect(env, expert, project, [11], noise=0.0, rng=np.random.default_rng(0))
-        obs, act, _ = collect(env, expert, project, [11], noise=0.3, rng=np.random.default_rng(0))
+        clean_obs, clean_act, _, _ = collect(env, expert, project, [11], noise=0.0, rng=np.random.default_rng(0))
+        obs, act, _, _ = collect(env, expert, project, [11], noise=0.3, rng=np.random.default_rng(0))
     finally:
         env.close()
     assert obs.shape[0] == act.shape[0] == 100 and not np.array_equal(obs, clean_obs)
@@ -98,7 +101,8 @@ def test_fitting_moves_the_actor_onto_the_labels():
 
 @pytest.mark.parametrize(("kwargs", "match"), [
     ({"episodes": 0}, "episodes"), ({"rounds": -1}, "rounds"), ({"noise": 2.0}, "noise"),
-    ({"noise": float("nan")}, "noise"), ({"eval_episodes": 0}, "eval_episodes"),
+    ({"noise": float("nan")}, "noise"), ({"eval_episodes": 0}, "eval_episodes"), ({"net_arch": ()}, "net_arch"),
+    ({"net_arch": (64, 0)}, "net_arch"),
 ])  # fmt: skip
 def test_bad_settings_are_refused_by_name(tmp_path, kwargs, match):
     with pytest.raises(ValueError, match=match):

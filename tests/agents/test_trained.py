@@ -116,12 +116,16 @@ def test_training_log_of_a_run_trained_in_parts(tmp_path):
 @pytest.mark.parametrize("model_dir", MODELS, ids=[d.name for d in MODELS])
 def test_card_agrees_with_the_files(model_dir):
     card = cards.read_card(model_dir)
-    # the baseline cards say their convergence, and the demonstrations a run started from
-    assert CARD_KEYS <= set(card) <= CARD_KEYS | {"convergence", "demonstrations"}
+    # the baseline cards say their convergence, the demonstrations a run started from, and the
+    # script a distilled run imitated (agents/distill.py)
+    assert CARD_KEYS <= set(card) <= CARD_KEYS | {"convergence", "demonstrations", "distilled"}
     meta = json.loads((model_dir / "run.json").read_text())
     assert card.get("demonstrations") == meta.get("demonstrations")
     if "demonstrations" in card:
         assert f"--demos {card['demonstrations']['episodes']}" in card["command"]
+    assert card.get("distilled") == meta.get("distilled")
+    if "distilled" in card:
+        assert card["command"].startswith("python -m agents.distill ") and "distilled" in card["name"]
     assert (card["env"], card["algo"], card["seed"], card["env_kwargs"]) == (
         meta["env"], meta["algo"], meta["seed"], meta.get("env_kwargs", {}))  # fmt: skip
     assert card["env"].endswith(f"-v{card['env_version']}")
@@ -141,7 +145,8 @@ def test_card_agrees_with_the_files(model_dir):
     if "convergence" in card:
         with open(model_dir / "progress.csv", newline="") as f:
             assert card["convergence"] == cards.convergence(list(csv.DictReader(f)), card["timesteps"])
-    assert card["command"].startswith("python train.py") and f"--env {card['env']}" in card["command"]
+    made_by = "python -m agents.distill" if card.get("distilled") else "python train.py"
+    assert card["command"].startswith(made_by) and f"--env {card['env']}" in card["command"]
     assert card["train_seconds"] > 0
     assert (model_dir / "README.md").read_text() == cards.render_card(card)
     assert (model_dir / "vecnormalize.pkl").exists() == (card["algo"] != "her-sac")
@@ -184,13 +189,13 @@ def test_results_table_lists_every_group_with_its_cards_rates():
                            if cards.read_card(d)["env_version"] == 3})  # fmt: skip
     assert cards.env_label({"env": "SoftGraspGrip-v6", "env_kwargs": {"tactile": None}}) == "SoftGraspGrip-v6 tactile=None"
     # The per-run table: a row per model, its success and convergence verdict from its card.
-    per_run = cards.runs_table(versions=(3, 4, 5)).splitlines()[2:]
+    per_run = cards.runs_table(versions=(3, 4, 5, 6, 7)).splitlines()[2:]
     current = [cards.read_card(d) for d in MODELS if cards.read_card(d)["env_version"] >= 3]
     assert len(per_run) == len(current)
     for card in current:
         (row,) = [r for r in per_run if f" {cards.env_label(card)} seed {card['seed']} |" in r
                   and r.startswith(f"| {cards.policy_label(card).upper().replace(' DEMOS', ' demos')} ")]  # fmt: skip
-        verdict = {True: "yes", False: "no"}[card["convergence"]["converged"]]
+        verdict = {True: "yes", False: "no", None: "undecided"}[card["convergence"]["converged"]]
         assert f"**{card['evaluation']['success_rate']:.0%}**" in row and f"| {verdict} |" in row
     # A run started from scripted demonstrations is a group of its own.
     demos = {"algo": "her-sac", "demonstrations": {"episodes": 100}}
