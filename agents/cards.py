@@ -357,11 +357,11 @@ def _card_extras(card: dict[str, Any]) -> list[str]:
                     "observation alone |")  # fmt: skip
     distilled = card.get("distilled")
     if distilled:
+        noisy = (f", then {distilled['rounds']} rounds of {distilled['round_episodes']} with its actions perturbed by "
+                 f"noise of std {distilled['noise']:g}" if distilled["rounds"] else "")  # fmt: skip
         rows.append(f"| distilled | the actor fitted to {distilled['expert']}'s actions (`agents/distill.py`: behaviour "
-                    f"cloning, the expert's actions perturbed by noise of std {distilled['noise']:g} after its first "
-                    f"{distilled['episodes']} episodes; {distilled['rounds']} rounds of {distilled['round_episodes']} "
-                    f"more; seeds {distilled['seeds']}, the expert successful in {distilled['expert_successes']}); "
-                    "no reinforcement learning |")  # fmt: skip
+                    f"cloning on {distilled['episodes']} of its episodes{noisy}; seeds {distilled['seeds']}, the "
+                    f"expert successful in {distilled['expert_successes']}); no reinforcement learning |")  # fmt: skip
     demos = card.get("demonstrations")
     if demos:
         script = {"ShearLagGripPolicy": "the shear-lag grip script", "TactileGripPolicy": "the slip grip script"}.get(
