@@ -23,24 +23,25 @@ imitating the script.
   robust imitation learning"), which shows the expert the states a learner's small errors lead
   to. None by default: on ``SoftGraspGrip-v7`` noise of 0.05 brought the script from 97 % to
   34-44 % of its episodes and taught the student without the taxels a margin that made it as
-  good as the one with them (28 against 26 % of the cards' episodes), while on clean episodes
-  only the student with the taxels grips (36 against 0 %). DAgger (Ross et al. 2011) labels the
+  good as the one with them (30 against 26 % of the cards' episodes), while on clean episodes
+  only the student with the taxels grips (38 against 0 %). DAgger (Ross et al. 2011) labels the
   learner's own states instead, but the script is a search over the squeeze that keeps its own
   state: run in the shadow of a learner's actions it labels with the squeeze its own search
   reached, not one that fits the state (a student fell from 27 to 12 of 50 after one such round).
 - **The student** is SAC's actor (:func:`agents.baselines.make_model`, the ``sac`` preset with
-  ``net_arch`` hidden layers, 256 x 256 by default: the preset's 128 x 128 carried 20 against 35
-  % of 40 episodes on the same data): its deterministic action fitted to the labels by mean
-  squared error with the actor's own optimiser, ``epochs`` passes over all the data after each round, observations normalised by
-  the data's mean and variance (a frozen VecNormalize). A SAC model, so that it is saved, loaded,
-  evaluated and published as any run of ``train.py`` (``agents.evaluate``, ``agents.cards
-  publish``), and so that RL can fine-tune it (``train.py --resume``).
+  ``net_arch`` hidden layers, 256 x 256 by default: the preset's 128 x 128 carried 20 against
+  35 % of 40 episodes on the same data): its deterministic action fitted to the labels by mean
+  squared error with the actor's own optimiser, ``epochs`` passes over all the data after each
+  round, observations normalised by the data's mean and variance (a frozen VecNormalize). A SAC
+  model, so that it is saved, loaded, evaluated and published as any run of ``train.py``
+  (``agents.evaluate``, ``agents.cards publish``), and a start for RL to fine-tune (TacSL's
+  second half, not built here: ``train.py --resume`` does not take a distilled run yet).
 - After each round the student is evaluated on ``eval_episodes`` episodes from train.py's
   evaluation seeds (10,000 on): a row of ``progress.csv``, at the env steps of data so far.
 
 The run directory is a train.py run's: ``model.zip``, ``vecnormalize.pkl``, ``run.json`` (with
-``distilled``: the expert, episodes, rounds, noise, the expert's own successes) and
-``progress.csv``.
+``distilled``: the expert, episodes, rounds, noise, the expert's own successes), ``progress.csv``
+and ``logs/progress.csv`` (SB3's columns; its rollouts are the expert's episodes).
 """
 
 from __future__ import annotations
@@ -74,8 +75,9 @@ def distill_seeds(seed: int, episodes: int) -> list[int]:
 def collect(env, expert, project: np.ndarray | None, seeds: list[int], *, noise: float,
             rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, int, list[float]]:  # fmt: skip
     """Episodes of ``expert`` on ``env`` from ``seeds``: (the learner's observations, the expert's
-    actions, the expert's successes, each episode's return). With ``noise`` > 0 the action carried out is the expert's
-    plus N(0, noise^2) per entry, clipped to [-1, 1]; the label is always the expert's own."""
+    actions, the expert's successes, each episode's return). With ``noise`` > 0 the action carried
+    out is the expert's plus N(0, noise^2) per entry, clipped to [-1, 1]; the label is always the
+    expert's own."""
     obs_rows, act_rows, wins, returns = [], [], 0, []
     for s in seeds:
         expert.reset()
