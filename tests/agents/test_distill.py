@@ -31,7 +31,8 @@ def test_a_distilled_run_is_a_train_py_run_that_loads_and_acts(tmp_path):
     run = _tiny(tmp_path)
     meta = json.loads((run / "run.json").read_text())
     assert meta["algo"] == "sac" and meta["env"] == GRIP and meta["timesteps"] == 300
-    assert meta["algo_kwargs"] == {"policy_kwargs": {"net_arch": [256, 256]}}
+    assert meta["algo_kwargs"] == {"policy_kwargs": {"net_arch": {"pi": [256, 256], "qf": [64, 64]}}}
+    assert (run / "model.zip").stat().st_size < 1.5e6  # the actor, small critics, no optimiser moments
     d = meta["distilled"]
     assert d["expert"] == "ShearLagGripPolicy" and d["episodes"] == 2 and d["rounds"] == 1 and d["noise"] == 0.05
     assert d["seeds"] == f"{DISTILL_SEED_BASE}-{DISTILL_SEED_BASE + 2}" and meta["train_seconds"] > 0
