@@ -228,7 +228,8 @@ class ShearLagGripPolicy(TactileGripPolicy):
     :class:`TactileGripPolicy` does; in the ``wait`` steps right after a drop, where the pads'
     relaxing dips the traction by a few per cent, a fall of more than ``drop_tolerance`` is that
     slip too (caught a step before the next judging one: a heavy, slippery cylinder left to slide
-    that step went a centimetre down the pads and out of the task's lift). At ``deadline`` [s] (default: just
+    that step went a centimetre down the pads and out of the task's lift). At ``deadline`` [s]
+    (default: just
     before the carry) the search stops where it is. After the episode: ``fired_lag`` (the rise that
     warned, NaN if none) and ``mu_read``.
 
@@ -253,6 +254,11 @@ class ShearLagGripPolicy(TactileGripPolicy):
         self.fired_lag = np.nan
         self.mu_read = np.nan
 
+    def _slipped(self) -> float:
+        """Gross slip: hold ``slip_margin`` times the last squeeze that held."""
+        self.phase, self.force = "hold", min(self.slip_margin * self.held, self.finger_force)
+        return self.force
+
     def squeeze(self, obs: np.ndarray) -> float:
         i = self.index
         if self.phase == "lift":
@@ -269,7 +275,7 @@ class ShearLagGripPolicy(TactileGripPolicy):
                 # gross slip in the steps right after a drop, caught there rather than at the next
                 # judging step (a slide left for one more step took a heavy cylinder a centimetre
                 # down the pads), at a tolerance above the traction's dip as the pads relax
-                self.phase, self.force = "hold", min(self.slip_margin * self.held, self.finger_force)
+                self._slipped()
             elif self.since_drop > self.wait:  # the pads have settled since the last drop: judge
                 taxels = tactile_view(obs, self.names)
                 # the lag's rise as a share of the way from its level at the lift to 1 (a pad that
@@ -282,11 +288,10 @@ class ShearLagGripPolicy(TactileGripPolicy):
                     self.judged = 1
                     reading = self.traction(obs)
                     if reading < (1.0 - self.drop_tolerance) * self.weight:
-                        self.phase, self.force = "hold", min(self.slip_margin * self.held, self.finger_force)
-                        return self.force
+                        return self._slipped()
                     self.weight = reading
                 if self.traction(obs) < (1.0 - self.tolerance) * self.weight:  # gross slip came first
-                    self.phase, self.force = "hold", min(self.slip_margin * self.held, self.finger_force)
+                    self._slipped()
                 elif (rise >= self.rise).any():  # the edges slide: slip is coming
                     # the sliding edges sit at the cone: they read mu, and the least squeeze that
                     # holds the weight a pad carries, W_pad, is W_pad / mu (Coulomb)
