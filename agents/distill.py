@@ -25,10 +25,10 @@ imitating the script.
   34-44 % of its episodes and taught the student without the taxels a margin that made it as
   good as the one with them (30 against 26 % of the cards' episodes); on clean episodes, over
   three seeds, the students with the taxels carry 36-51 % and their blind twins 0-35 % (pooled
-  44 against 23 %). DAgger (Ross et al. 2011) labels the
-  learner's own states instead, but the script is a search over the squeeze that keeps its own
-  state: run in the shadow of a learner's actions it labels with the squeeze its own search
-  reached, not one that fits the state (a student fell from 27 to 12 of 50 after one such round).
+  44 against 23 %). DAgger (Ross et al. 2011) labels the learner's own states instead, but the
+  script is a search over the squeeze that keeps its own state: run in the shadow of a
+  learner's actions it labels with the squeeze its own search reached, not one that fits the
+  state (a student fell from 27 to 12 of 50 after one such round).
 - **The student** is SAC's actor (:func:`agents.baselines.make_model`, the ``sac`` preset with
   ``net_arch`` hidden layers, 256 x 256 by default: the preset's 128 x 128 carried 20 against
   35 % of 40 episodes on the same data): its deterministic action fitted to the labels by mean
@@ -40,10 +40,10 @@ imitating the script.
   200 passes over 300 episodes) carried only 40 %, and 200 episodes with noise on the arm's
   actions (DART's on the arm alone, std 0.03) added to 300 clean ones 34 %. The outcome swings
   with the data and the fit's seed: three runs at the defaults read 28-36 % of the same
-  evaluation episodes. A SAC
-  model, so that it is saved, loaded, evaluated and published as any run of ``train.py``
-  (``agents.evaluate``, ``agents.cards publish``), and a start for RL to fine-tune (TacSL's
-  second half, not built here: ``train.py --resume`` does not take a distilled run yet).
+  evaluation episodes. A SAC model, so that it is saved, loaded, evaluated and published as any
+  run of ``train.py`` (``agents.evaluate``, ``agents.cards publish``), and a start for RL to
+  fine-tune (TacSL's second half, not built here: ``train.py --resume`` does not take a
+  distilled run yet).
 - After each round the student is evaluated on ``eval_episodes`` episodes from train.py's
   evaluation seeds (10,000 on): a row of ``progress.csv``, at the env steps of data so far.
 

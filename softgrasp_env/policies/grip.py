@@ -229,9 +229,8 @@ class ShearLagGripPolicy(TactileGripPolicy):
     relaxing dips the traction by a few per cent, a fall of more than ``drop_tolerance`` is that
     slip too (caught a step before the next judging one: a heavy, slippery cylinder left to slide
     that step went a centimetre down the pads and out of the task's lift). At ``deadline`` [s]
-    (default: just
-    before the carry) the search stops where it is. After the episode: ``fired_lag`` (the rise that
-    warned, NaN if none) and ``mu_read``.
+    (default: just before the carry) the search stops where it is. After the episode:
+    ``fired_lag`` (the rise that warned, NaN if none) and ``mu_read``.
 
     On rigid pads, which do not shear, it never warns and falls back to the gross-slip rule."""
 
