@@ -33,6 +33,8 @@ DATA_V4 = Path(__file__).parent / "data" / "trajectories_v4.npz"
 DATA_MORE = Path(__file__).parent / "data" / "trajectories_more.npz"
 DATA_V4_AVX512 = Path(__file__).parent / "data" / "trajectories_v4_avx512.npz"
 DATA_GLOBAL_AVX512 = Path(__file__).parent / "data" / "trajectories_global_avx512.npz"
+DATA_V4_ZNVER4 = Path(__file__).parent / "data" / "trajectories_v4_znver4.npz"
+DATA_GLOBAL_ZNVER4 = Path(__file__).parent / "data" / "trajectories_global_znver4.npz"
 
 INFO_FLAGS = ("is_success", "held", "carrying", "diverged", "action_clipped")
 """Boolean info entries recorded per step."""
@@ -123,10 +125,15 @@ code before the solve was split by pad (for its threads), so that the replay sho
 every bit."""
 
 SETS = {"v3": (V3_CASES, DATA_V3), "more": (MORE_CASES, DATA_MORE), "v4": (V4_CASES, DATA_V4),
-        "v4-avx512": (V4_CASES, DATA_V4_AVX512), "global-avx512": (GLOBAL_CASES, DATA_GLOBAL_AVX512)}
-"""The v4 cases are recorded twice, without AVX-512 (``v4``) and with it (``v4-avx512``), so that
-both kinds of machine replay them bit for bit (each replays the other's prefix within tolerance):
-the continuum group solve, which only the v4 tissue runs, is then checked whole on either."""
+        "v4-avx512": (V4_CASES, DATA_V4_AVX512), "global-avx512": (GLOBAL_CASES, DATA_GLOBAL_AVX512),
+        "v4-znver4": (V4_CASES, DATA_V4_ZNVER4), "global-znver4": (GLOBAL_CASES, DATA_GLOBAL_ZNVER4)}
+"""The v4 cases are recorded without AVX-512 (``v4``), with it on an Intel Xeon (``v4-avx512``) and
+on an AMD EPYC of LLVM's ``znver4`` (``v4-znver4``), so that each kind of machine replays them bit
+for bit (and the others' prefix within tolerance): the continuum group solve, which only the v4
+tissue runs, is then checked whole on each. The global solve's cases likewise on the two AVX-512
+CPUs. numba compiles for the host CPU by name, and two CPUs with the same vector units round
+differently where LLVM vectorises a reassociated sum for each its own way (the global solve's
+substitutions): the Intel recordings replay on ``znver4`` within the prefix tolerance only."""
 
 
 def _kwargs(kwargs: dict) -> dict:
@@ -186,9 +193,14 @@ def record(env_id: str, kwargs: dict, policy: str, steps: int, *, seed: int = 7)
 
 
 def fingerprint() -> str:
-    """The instruction set and libraries a recording was made on: bit-identity is promised on the
-    same ones (a CPU with other vector units may take another code path in a library's sin or
-    exp and round differently; the CPU's model name does not matter)."""
+    """The instruction set, the CPU numba compiles for and the libraries a recording was made on:
+    bit-identity is promised on the same ones (a CPU with other vector units may take another code
+    path in a library's sin or exp and round differently, and numba compiles for the host CPU by
+    LLVM's name for it, whose vector code rounds reassociated sums its own way). Recordings made
+    before the CPU was part of it (``tests/data/*_avx512.npz``, ``trajectories_v3`` / ``more`` /
+    ``v4``) end without it, and are replayed bit for bit only where the CPU's name is not known to
+    differ (``matches``)."""
+    import llvmlite.binding as llvm
     import numba
     import pybullet
 
@@ -202,7 +214,38 @@ def fingerprint() -> str:
     except OSError:
         pass
     return (f"{platform.machine()} [{flags}] python {sys.version.split()[0]} numpy {np.__version__} "
-            f"numba {numba.__version__} pybullet {pybullet.getAPIVersion()}")  # fmt: skip
+            f"numba {numba.__version__} pybullet {pybullet.getAPIVersion()} cpu {llvm.get_host_cpu_name()}")  # fmt: skip
+
+
+CPU_RECORDED = {DATA_V4_AVX512.name: "intel", DATA_GLOBAL_AVX512.name: "intel"}
+"""The vendor of the CPU a recording made without the CPU's name in its fingerprint ran on, where
+known (the AVX-512 recordings: an Intel Xeon); such a recording is not replayed bit for bit on
+another vendor's CPU."""
+
+
+def matches(recorded: str, here: str, file_name: str = "") -> bool:
+    """True if a recording with fingerprint ``recorded`` (in file ``file_name``) replays bit for
+    bit here (``here``: fingerprint()): the same fingerprint, or one recorded before the CPU's name
+    was part of it that equals this one without it, on a CPU of the same vendor where known."""
+    if recorded == here:
+        return True
+    head = here.rpartition(" cpu ")[0]
+    if " cpu " in recorded or recorded != head:
+        return False
+    vendor = CPU_RECORDED.get(file_name)
+    return vendor is None or _vendor() == vendor
+
+
+def _vendor() -> str:
+    """'intel', 'amd' or '' (unknown), from /proc/cpuinfo."""
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("vendor_id"):
+                v = line.split(":", 1)[1].strip()
+                return {"GenuineIntel": "intel", "AuthenticAMD": "amd"}.get(v, "")
+    except OSError:
+        pass
+    return ""
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -225,7 +268,7 @@ def main(argv: list[str] | None = None) -> None:
         if unknown:
             parser.error(f"--cases: {unknown} are not cases of the {ns.set} set")
         old = dict(np.load(path))
-        if str(old["fingerprint"]) != fingerprint():
+        if not matches(str(old["fingerprint"]), fingerprint(), path.name):
             parser.error(f"--cases: {path.name} was recorded on {old['fingerprint']}, the one running is {fingerprint()}; "
                          "record the whole set instead")  # fmt: skip
         out.update({k: v for k, v in old.items() if k != "fingerprint" and k.rsplit("/", 1)[0] not in wanted})
