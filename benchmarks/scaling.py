@@ -3,7 +3,7 @@ steps per physics step, env steps/s, the tissue kernel's time per call and per p
 iteration, and the exponent of each in the particle count (a least-squares fit of the logs).
 
     PYTHONPATH=. python benchmarks/scaling.py [--densities 4000,16000,64000,256000] [--steps 20]
-        [--repeats 2] [--threads 1] [--material-solve global]
+        [--repeats 2] [--threads 1] [--material-solve global] [--global-linear-solve multigrid]
 
 SoftGraspEasy-v4 (the v4 tissue, layers 'auto': 1 / 1 / 2 / 4 at the four densities), random
 actions (seed 0), resets inside the loop. The kernel's time is the solver's step timed around each
@@ -12,7 +12,8 @@ call (TissueSolver.step: the compiled step and its few microseconds of Python). 
 1; the env step's exponent is the kernel's plus the world steps', which grow as the groups
 stiffen (compliant.substeps_for: kappa ~ G / (rho l^2)). ``--material-solve global`` solves the
 material across its groups (gym.make's material_solve): the world steps are then the coupling's
-alone, and the kernel's cost is the factor's solve's.
+alone, and the kernel's cost is the factor's solve's; ``--global-linear-solve multigrid`` solves
+that system by a V-cycle a pass instead (gym.make's global_linear_solve).
 """
 
 from __future__ import annotations
@@ -26,8 +27,10 @@ import numpy as np
 import softgrasp_env  # noqa: F401  (registers the ids)
 
 
-def measure(density: float, steps: int, threads: int, material_solve: str | None = None) -> dict:
-    env = gym.make("SoftGraspEasy-v4", particle_density=density, threads=threads, material_solve=material_solve)
+def measure(density: float, steps: int, threads: int, material_solve: str | None = None,
+            linear_solve: str | None = None) -> dict:  # fmt: skip
+    env = gym.make("SoftGraspEasy-v4", particle_density=density, threads=threads, material_solve=material_solve,
+                   global_linear_solve=linear_solve)  # fmt: skip
     try:
         env.reset(seed=0)
         world = env.unwrapped.scene.world
@@ -69,15 +72,18 @@ def main() -> None:
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--material-solve", choices=("groups", "global"), default=None,
                         help="how the material is solved (gym.make's material_solve; default: the id's)")
+    parser.add_argument("--global-linear-solve", choices=("direct", "multigrid"), default=None,
+                        help="how the global solve's passes solve their system (gym.make's global_linear_solve)")
     args = parser.parse_args()
     rows = []
-    print(f"threads {args.threads}; best of {args.repeats}; material solve {args.material_solve or 'the id default'}")
+    print(f"threads {args.threads}; best of {args.repeats}; material solve {args.material_solve or 'the id default'}"
+          f"{'; linear solve ' + args.global_linear_solve if args.global_linear_solve else ''}")  # fmt: skip
     print(f"{'density':>9} {'particles':>9} {'world steps':>11} {'env steps/s':>11} {'kernel us':>10} "
           f"{'us/particle/iter':>16} {'kernel share':>12}")  # fmt: skip
     for d in (float(x) for x in args.densities.split(",")):
         best = None
         for _ in range(args.repeats):
-            r = measure(d, args.steps, args.threads, args.material_solve)
+            r = measure(d, args.steps, args.threads, args.material_solve, args.global_linear_solve)
             if best is None or r["rate"] > best["rate"]:
                 best = r
         rows.append(best)

@@ -165,6 +165,10 @@ KEYWORDS: tuple[Keyword, ...] = (
         "over the element groups, or 'global', one prefactored solve across all of them, whose passes do not grow "
         "with the resolution and whose world steps are the coupling's alone (the continuum energy; no effect on "
         "fingers without tissue); None: the sim's, 'groups'"),
+    _kw("global_linear_solve", "physics", "str", None,
+        "How each pass of material_solve='global' solves its system (SimConfig.global_linear_solve): 'direct', the "
+        "prefactored Cholesky factor (exact), or 'multigrid', one smoothed-aggregation V-cycle (a cost linear in the "
+        "particles, the faster past a few thousand particles a pad; needs scipy); None: the sim's, 'direct'"),
     # cylinder
     _kw("cylinder_radius", "cylinder", "float", 0.03,
         "Cylinder radius [m]"),
@@ -330,7 +334,8 @@ class PhysicsConfig:
            shear_modulus: float | None = None, group_energy: str | None = None,
            hourglass_stiffness: float | None = None, layers: int | str | None = None,
            tissue_min_rows: int | None = None, tissue: TissueConfig | None = None, sim: SimConfig | None = None,
-           threads: int | None = None, material_solve: str | None = None) -> PhysicsConfig:  # fmt: skip
+           threads: int | None = None, material_solve: str | None = None,
+           global_linear_solve: str | None = None) -> PhysicsConfig:  # fmt: skip
         """The configs the keywords mean: the kind's config with its own keywords folded in, the
         preset's tissue and solver (or the whole ones given) with the tissue keywords over them.
         ``layers="auto"`` (given, or the preset's when neither ``layers`` nor ``tissue`` is given)
@@ -376,6 +381,8 @@ class PhysicsConfig:
             # finger: the soft ids carry it, and gym.make(SoftGrasp-v5, fingers="rigid") is the rigid
             # twin, whose sim no tissue reads
             sim = replace(sim, material_solve=material_solve)  # validated by SimConfig
+        if global_linear_solve is not None:
+            sim = replace(sim, global_linear_solve=global_linear_solve)  # validated by SimConfig
         return cls(fingers, tissue, sim)
 
 
@@ -701,7 +708,7 @@ class EnvArguments:
                                                          "tissue_contact_cone", "friction_law", "shear_modulus",
                                                          "group_energy", "hourglass_stiffness", "layers",
                                                          "tissue_min_rows", "tissue", "sim", "threads",
-                                                         "material_solve")})  # fmt: skip
+                                                         "material_solve", "global_linear_solve")})  # fmt: skip
         lift = LiftConfig(v["start"], v["reward_type"], v["success_height"], v["reach_weight"], v["max_tilt"],
                           _tuple(v["approach_range"]))  # fmt: skip
         defaults = STARTS[lift.start].defaults  # None: the start's

@@ -49,7 +49,7 @@ coupling rule's steps only (compliant.world_substeps).
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numba as nb
 import numpy as np
@@ -58,6 +58,7 @@ from .compliant import deliver_to_core
 from .contacts import contact_reach
 from .jit import KERNEL
 from .model import TissueModel
+from .multigrid import Hierarchy, build_levels, pack, probed_compliance, rigid_modes, v_cycle
 from .rigid import generalized_inv_mass, rigid_apply
 from .rotation import polar_rotation_unit_t, qmat
 from .shape_matching import _turn_centre, group_pack
@@ -236,7 +237,8 @@ class GlobalSystem:
     ptr: np.ndarray
     """(3F + 1,) int64: row i of the factor at factor[ptr[i]:ptr[i + 1]]."""
     factor: np.ndarray
-    """The envelope Cholesky factor of (M + dt^2 K0)_ff, in the bodies' rest frames."""
+    """The envelope Cholesky factor of (M + dt^2 K0)_ff, in the bodies' rest frames (under
+    ``linear_solve`` 'multigrid' none: empty, ``first`` every row's own column, ``ptr`` zeros)."""
     held: np.ndarray
     """(H,) int64: the particles held by their cores."""
     displacement: np.ndarray
@@ -250,7 +252,8 @@ class GlobalSystem:
     compliance: np.ndarray
     """(N, 6) each free particle's block of (M + dt^2 K0)^-1 in its body's rest frame (xx, xy, xz,
     yy, yz, zz) [1/kg]: how far the whole pad lets it move under a unit impulse; zeros for the
-    held."""
+    held. From the factor (_diagonal_blocks), or under 'multigrid' probed through the levels
+    (multigrid.probed_compliance: within 0.3 % on the diagonal)."""
     friction_w: np.ndarray
     """(N,) scratch: each particle's compliance across its contact's normal, which friction moves
     it by (friction_weights) [1/kg]."""
@@ -260,10 +263,23 @@ class GlobalSystem:
     reaches."""
     body_held: np.ndarray
     """(B + 1,) int64: body b's held particles are held[body_held[b]:body_held[b + 1]]."""
+    linear_solve: str = "direct"
+    """How a pass solves the system (SimConfig.global_linear_solve): 'direct', by the factor;
+    'multigrid', by ``cycles`` V-cycles of ``multigrid`` (multigrid.py), each body's block on its own."""
+    multigrid: Hierarchy = field(default_factory=Hierarchy.empty)
+    """Each body's block of (M + dt^2 K0)_ff in the factor's row order: its smoothed-aggregation
+    levels (matrix b: body b; no levels where the solve is direct or a body has no free rows)."""
+    body_levels: np.ndarray = field(default_factory=lambda: np.zeros(1, dtype=np.int64))
+    """(B + 1,) int64: body b's levels in ``multigrid`` (none: the factor solves its block)."""
+    cycles: np.ndarray = field(default_factory=lambda: np.ones(1, dtype=np.int64))
+    """(1,) int64: V-cycles a pass."""
 
     def arrays(self) -> tuple:
         return (self.order, self.first, self.ptr, self.factor, self.held, self.displacement, self.gradient, self.rhs,
-                self.frames, self.compliance, self.friction_w, self.body_rows, self.body_held)  # fmt: skip
+                self.frames, self.compliance, self.friction_w, self.body_rows, self.body_held,
+                *self.multigrid.arrays(), self.body_levels, self.cycles)  # fmt: skip
+    # (the multigrid's arrays flat, entries 13 to 24: numba's parallel loops take a tuple of arrays
+    # but not a tuple holding another)
 
     @property
     def envelope(self) -> int:
@@ -271,13 +287,19 @@ class GlobalSystem:
         return int(self.factor.shape[0])
 
 
-def build_global_system(model: TissueModel, dt: float) -> GlobalSystem:
+def build_global_system(model: TissueModel, dt: float, linear_solve: str = "direct", cycles: int = 1) -> GlobalSystem:
     """Assemble K0, order the free particles (reverse Cuthill-McKee on the particles, a particle's
-    three coordinates together) and factor (M + dt^2 K0)_ff for a step of ``dt`` [s]. Held
-    particles: attached, of a body with a core (anchors.mark_fixed). Raises ValueError unless
-    every group has the continuum energy, or if the matrix is not positive definite."""
+    three coordinates together) and factor (M + dt^2 K0)_ff for a step of ``dt`` [s]; under
+    ``linear_solve`` 'multigrid' instead each body's block's smoothed-aggregation levels,
+    ``cycles`` V-cycles a pass, and the compliances probed through them (no factor). Held particles: attached, of a body
+    with a core (anchors.mark_fixed). Raises ValueError unless every group has the continuum
+    energy, or if the matrix is not positive definite."""
     if not dt > 0.0:
         raise ValueError(f"dt must be positive, got {dt!r}")
+    if linear_solve not in LINEAR_SOLVES:
+        raise ValueError(f"linear_solve must be one of {LINEAR_SOLVES}, got {linear_solve!r}")
+    if not (isinstance(cycles, int) and 1 <= cycles <= 20):
+        raise ValueError(f"cycles must be an integer from 1 to 20, got {cycles!r}")
     r, c, v = rest_hessian(model)
     n = model.particle_count
     held_mask = model.particle_attached & (model.body_core_shape[model.particle_body] >= 0)
@@ -319,28 +341,68 @@ def build_global_system(model: TissueModel, dt: float) -> GlobalSystem:
     nd = 3 * order.size
     first = np.arange(nd, dtype=np.int64)
     np.minimum.at(first, fr, fc)
-    eptr = np.zeros(nd + 1, dtype=np.int64)
-    eptr[1:] = np.cumsum(np.arange(nd) - first + 1)
-    factor = np.zeros(int(eptr[-1]))
-    np.add.at(factor, eptr[fr] + (fc - first[fr]), fv)
-    factor[eptr[:-1] + (np.arange(nd) - first)] += np.repeat(model.particle_mass[order], 3)
     row_body = np.repeat(model.particle_body[order], 3)
     if row_body.size and (row_body[first] != row_body).any():
         raise ValueError("the global material solve needs every group inside one body (a group spans two)")
-    bad = _envelope_factor(first, eptr, factor)
-    if bad >= 0:
-        raise ValueError(f"the material's matrix is not positive definite at particle {int(order[bad // 3])}")
     compliance = np.zeros((n, 6))
-    _diagonal_blocks(first, eptr, factor, order.astype(np.int64), compliance)
+    multigrid, body_levels = Hierarchy.empty(), np.zeros(model.body_count + 1, dtype=np.int64)
+    if linear_solve == "multigrid":
+        # no factor: each body's levels, and the compliances probed through them (linear in the
+        # particles, where the factor's fill grows faster); the envelope left empty, every row its
+        # own first column (the kernel solves no body's rows through it)
+        multigrid, body_levels = _body_levels(model, order, body_rows, fr, fc, fv)
+        for b in range(model.body_count):
+            if body_levels[b + 1] > body_levels[b]:
+                w = probed_compliance(multigrid, int(np.searchsorted(np.flatnonzero(np.diff(body_levels)), b)))
+                rows = order[body_rows[b] : body_rows[b + 1]]
+                compliance[rows] = w[:, [0, 0, 0, 1, 1, 2], [0, 1, 2, 1, 2, 2]]
+        first, eptr, factor = np.arange(nd, dtype=np.int64), np.zeros(nd + 1, dtype=np.int64), np.zeros(0)
+    else:
+        eptr = np.zeros(nd + 1, dtype=np.int64)
+        eptr[1:] = np.cumsum(np.arange(nd) - first + 1)
+        factor = np.zeros(int(eptr[-1]))
+        np.add.at(factor, eptr[fr] + (fc - first[fr]), fv)
+        factor[eptr[:-1] + (np.arange(nd) - first)] += np.repeat(model.particle_mass[order], 3)
+        bad = _envelope_factor(first, eptr, factor)
+        if bad >= 0:
+            raise ValueError(f"the material's matrix is not positive definite at particle {int(order[bad // 3])}")
+        _diagonal_blocks(first, eptr, factor, order.astype(np.int64), compliance)
     return GlobalSystem(dt=float(dt), order=order.astype(np.int64), first=first, ptr=eptr, factor=factor,
                         held=held.astype(np.int64), displacement=np.zeros((n, 3)), gradient=np.zeros((n, 3)),
                         rhs=np.zeros(nd), frames=np.zeros((model.body_count, 9)), compliance=compliance,
-                        friction_w=np.zeros(n), body_rows=body_rows, body_held=body_held)  # fmt: skip
+                        friction_w=np.zeros(n), body_rows=body_rows, body_held=body_held, linear_solve=linear_solve,
+                        multigrid=multigrid, body_levels=body_levels, cycles=np.array([cycles], dtype=np.int64))  # fmt: skip
+
+
+def _body_levels(model: TissueModel, order, body_rows, fr, fc, fv) -> tuple[Hierarchy, np.ndarray]:
+    """Each body's block of (M + dt^2 K0)_ff (its rows of the factor, in the factor's order and the
+    body's rest frame) as smoothed-aggregation levels, the rigid motions of its free particles' rest
+    positions as their near-null space; and each body's first level (body_levels)."""
+    from .multigrid import _scipy_sparse
+
+    sp = _scipy_sparse()
+    nd = 3 * order.size
+    # the lower triangle (fr >= fc) with the masses on the diagonal, made whole
+    mass = np.repeat(model.particle_mass[order], 3)
+    lower = sp.coo_matrix((np.concatenate([fv, mass]), (np.concatenate([fr, np.arange(nd)]),
+                                                          np.concatenate([fc, np.arange(nd)]))), shape=(nd, nd)).tocsr()  # fmt: skip
+    whole = (lower + sp.triu(lower.T, k=1)).tocsr()
+    levels, body_levels = [], [0]
+    for b in range(model.body_count):
+        r0, r1 = 3 * int(body_rows[b]), 3 * int(body_rows[b + 1])
+        if r1 > r0:
+            levels.append(build_levels(whole[r0:r1, r0:r1], rigid_modes(model.particle_rest_x[order[r0 // 3 : r1 // 3]])))
+        body_levels.append(body_levels[-1] + (len(levels[-1][0]) if r1 > r0 else 0))
+    return pack(levels), np.array(body_levels, dtype=np.int64)
 
 
 _FACTORS: dict[tuple, GlobalSystem] = {}
 """The factors made in this process, by model content and dt (global_system)."""
 _FACTOR_CACHE_SIZE = 8
+
+
+LINEAR_SOLVES: tuple[str, ...] = ("direct", "multigrid")
+"""How a pass solves the material's system (SimConfig.global_linear_solve)."""
 
 
 def _model_key(model: TissueModel, dt: float) -> tuple:
@@ -354,20 +416,22 @@ def _model_key(model: TissueModel, dt: float) -> tuple:
     return (float(dt), digest.hexdigest())
 
 
-def global_system(model: TissueModel, dt: float) -> GlobalSystem:
+def global_system(model: TissueModel, dt: float, linear_solve: str = "direct", cycles: int = 1) -> GlobalSystem:
     """build_global_system, its factor shared with every earlier call in this process on a model of
     the same content and the same dt (an env rebuilds its pads at every reset; the factor takes
     0.04 / 0.2 / 10 s at 24 / 450 / 3,000 particles), its scratch arrays its own."""
-    key = _model_key(model, dt)
+    key = (*_model_key(model, dt), linear_solve, cycles)
     base = _FACTORS.get(key)
     if base is None:
-        base = build_global_system(model, dt)
+        base = build_global_system(model, dt, linear_solve, cycles)
         if len(_FACTORS) >= _FACTOR_CACHE_SIZE:
             _FACTORS.pop(next(iter(_FACTORS)))
         _FACTORS[key] = base
     n = model.particle_count
+    mg = base.multigrid
+    mg = replace(mg, x=np.zeros_like(mg.x), b=np.zeros_like(mg.b), r=np.zeros_like(mg.r))
     return replace(base, displacement=np.zeros((n, 3)), gradient=np.zeros((n, 3)), rhs=np.zeros_like(base.rhs),
-                   frames=np.zeros_like(base.frames), friction_w=np.zeros(n))  # fmt: skip
+                   frames=np.zeros_like(base.frames), friction_w=np.zeros(n), multigrid=mg)  # fmt: skip
 
 
 @nb.njit(cache=True, error_model="numpy", fastmath={"contract", "reassoc"})
@@ -566,7 +630,9 @@ def global_body_pass(b, gsys, rot_iters, dt, g_turn, body_off, g_off, g_mem, g_p
     free group centre's turn toward quat(R) q_bar (as the sweep turns them: sweep_body). It reads
     and writes body b's particles, groups, rows and core only, so the bodies' passes give the same
     result in any order or side by side (the solver's threads: where no two bodies share a core)."""
-    order, first, ptr, factor, _, u, grad, rhs, frames, _, _, body_rows, _ = gsys
+    order, first, ptr, factor, u, grad, rhs, frames, body_rows = (gsys[0], gsys[1], gsys[2], gsys[3], gsys[5], gsys[6],
+                                                                   gsys[7], gsys[8], gsys[11])  # fmt: skip
+    body_levels, cycles = gsys[25], gsys[26]
     lo, hi = body_off[b], body_off[b + 1]
     material_gradient_of(lo, hi, max(rot_iters, POLAR_ITERATIONS), g_off, g_mem, g_pack, g_cont, xp, group_q, mass,
                          grad)  # fmt: skip
@@ -585,7 +651,11 @@ def global_body_pass(b, gsys, rot_iters, dt, g_turn, body_off, g_off, g_mem, g_p
         rhs[3 * r] = f[0] * ex + f[3] * ey + f[6] * ez  # R^T e: into the body's rest frame
         rhs[3 * r + 1] = f[1] * ex + f[4] * ey + f[7] * ez
         rhs[3 * r + 2] = f[2] * ex + f[5] * ey + f[8] * ez
-    envelope_solve_rows(first, ptr, factor, rhs, 3 * r0, 3 * r1)
+    if body_levels[b + 1] > body_levels[b]:  # V-cycles on the body's levels (multigrid.py)
+        v_cycle(body_levels[b], body_levels[b + 1], gsys[13], gsys[14], gsys[15], gsys[16], gsys[17], gsys[18],
+                gsys[19], gsys[20], gsys[21], gsys[22], gsys[23], gsys[24], rhs, 3 * r0, cycles[0])  # fmt: skip
+    else:
+        envelope_solve_rows(first, ptr, factor, rhs, 3 * r0, 3 * r1)
     for r in range(r0, r1):
         j = order[r]
         a, bb, c = rhs[3 * r], rhs[3 * r + 1], rhs[3 * r + 2]

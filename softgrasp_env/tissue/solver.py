@@ -660,8 +660,11 @@ class TissueSolver:
         if self.sim.material_solve != "global":
             return None
         # (SimConfig refuses the global solve with any coupling but the thesis one)
-        if self._global is None or self._global.dt != self.sim.dt:
-            self._global = global_system(self.model, self.sim.dt)
+        sim = self.sim
+        g = self._global
+        if (g is None or g.dt != sim.dt or g.linear_solve != sim.global_linear_solve
+                or int(g.cycles[0]) != sim.multigrid_cycles):  # fmt: skip
+            self._global = global_system(self.model, sim.dt, sim.global_linear_solve, sim.multigrid_cycles)
         return self._global.arrays()
 
     def step(self, state: TissueState, col: Colliders) -> StepOutput:

@@ -32,7 +32,8 @@ import softgrasp_env
 from softgrasp_env.config import SimConfig
 
 def run(threads, coupling, steps, solve="groups", **kwargs):
-    sim = SimConfig(threads=threads, coupling=coupling, material_solve=solve)
+    solve, _, linear = solve.partition("+")  # "global+multigrid": the global solve by V-cycles
+    sim = SimConfig(threads=threads, coupling=coupling, material_solve=solve, global_linear_solve=linear or "direct")
     env = gym.make("SoftGraspEasy-v4", sim=sim, **kwargs)
     obs, _ = env.reset(seed=5)
     rng = np.random.default_rng(5)
@@ -107,6 +108,14 @@ def test_two_threads_give_one_threads_result_to_the_bit(coupling, solve, density
     the consistent coupling each core slides inside its own pad's sweep; under the global material
     solve each pad's block of the factor is solved on its own thread."""
     _child("same", coupling, str(density), str(steps), solve)
+
+
+@needs_two
+def test_two_threads_give_one_threads_result_to_the_bit_under_the_multigrid_solve():
+    """The global solve by V-cycles (global_linear_solve="multigrid") at 64,000 per m^2, where each
+    pad's system has two levels: each pad's cycles on its own thread, its own stretch of the
+    levels' scratch, the same result to the bit as one thread (8 random steps)."""
+    _child("same", "thesis", "64000", "8", "global+multigrid")
 
 
 def test_one_thread_never_loads_parallel_code():
