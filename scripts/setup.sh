@@ -21,7 +21,7 @@ make_venv() {  # make_venv DIR EXTRAS
     "$1/bin/python" -m pip install -q "torch==2.13.0"
     "$1/bin/python" -m pip install -q -e ".[$2]"
 }
-make_venv .venv "train,plots,video,offline,reference,peers,test"
+make_venv .venv "train,plots,video,offline,reference,multigrid,peers,test"
 # numba compiles the solver's kernels on first use (about a minute) and caches them on disk:
 # do it now, so that the first demo, test or training run starts at once.
 .venv/bin/python -m softgrasp_env.compile

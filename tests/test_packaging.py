@@ -36,6 +36,7 @@ def test_the_core_install_is_lean_and_the_rest_are_extras():
     assert _names(extras["plots"]) == {"matplotlib"} and _names(extras["video"]) == {"moviepy"}
     assert _names(extras["offline"]) == {"minari"} and _names(extras["rllib"]) == {"ray"}
     assert _names(extras["reference"]) == {"scikit-fem", "scipy"} and _names(extras["peers"]) == {"mujoco"}
+    assert _names(extras["multigrid"]) == {"scipy"}
     assert _names(extras["docs"]) >= {"sphinx", "myst-parser"}
     # the CPU build on disk (2.13.0) satisfies the torch range, so pip keeps it (no CUDA download)
     (torch,) = [r for r in extras["train"] if r.startswith("torch")]
@@ -45,7 +46,7 @@ def test_the_core_install_is_lean_and_the_rest_are_extras():
     # the setup script installs every extra but Ray (which gets a venv of its own) and the docs
     # toolchain (.ci/run adds it for the site's build)
     setup = (ROOT / "scripts" / "setup.sh").read_text()
-    assert 'make_venv .venv "train,plots,video,offline,reference,peers,test"' in setup
+    assert 'make_venv .venv "train,plots,video,offline,reference,multigrid,peers,test"' in setup
     assert setup.index('"torch==2.13.0"') < setup.index('-e ".[$2]"')
 
 

@@ -291,9 +291,10 @@ def build_global_system(model: TissueModel, dt: float, linear_solve: str = "dire
     """Assemble K0, order the free particles (reverse Cuthill-McKee on the particles, a particle's
     three coordinates together) and factor (M + dt^2 K0)_ff for a step of ``dt`` [s]; under
     ``linear_solve`` 'multigrid' instead each body's block's smoothed-aggregation levels,
-    ``cycles`` V-cycles a pass, and the compliances probed through them (no factor). Held particles: attached, of a body
-    with a core (anchors.mark_fixed). Raises ValueError unless every group has the continuum
-    energy, or if the matrix is not positive definite."""
+    ``cycles`` V-cycles a pass, and the compliances probed through them (no factor). Held
+    particles: attached, of a body with a core (anchors.mark_fixed). Raises ValueError unless
+    every group has the continuum energy, if the matrix is not positive definite, or if
+    ``linear_solve`` or ``cycles`` is not one the solver takes."""
     if not dt > 0.0:
         raise ValueError(f"dt must be positive, got {dt!r}")
     if linear_solve not in LINEAR_SOLVES:

@@ -137,3 +137,12 @@ def test_the_linear_solve_is_refused_by_name_where_it_means_nothing():
         SimConfig(global_linear_solve="multigrid")
     with pytest.raises(ValueError, match="multigrid_cycles"):
         SimConfig(material_solve="global", global_linear_solve="multigrid", multigrid_cycles=0)
+
+
+def test_without_scipy_the_setup_says_which_extra_it_needs(monkeypatch):
+    import sys
+
+    model, a = pad_matrix(4_000.0, 1 / 480)
+    monkeypatch.setitem(sys.modules, "scipy.sparse", None)  # an import of it now fails
+    with pytest.raises(ImportError, match=r"softgrasp-env\[multigrid\]"):
+        build_hierarchy(a, rigid_modes(model.particle_rest_x))
