@@ -72,8 +72,8 @@ class Hierarchy:
     1]`` (entry indices into ``a_idx`` / ``a_val`` absolute, column indices the level's own), its
     prolongator to the next level likewise in ``p_*``, its vectors at ``lev[k, 1]`` of the scratch
     ``x``, ``b``, ``r`` and of ``diag`` (its diagonal); a coarsest level's dense lower Cholesky
-    factor, row-major, in ``coarse``, and its transpose after it. ``arrays()`` is what v_cycle takes after the level range.
-    ``empty()``: no matrices."""
+    factor, row-major, in ``coarse``, and its transpose after it. ``arrays()`` is what v_cycle
+    takes after the level range; ``empty()`` holds no matrices."""
 
     lev: np.ndarray
     """(levels, 5) int64 (the class docstring)."""
@@ -137,7 +137,7 @@ def rigid_modes(rest_x: np.ndarray) -> np.ndarray:
 def aggregate(a: sp.csr_matrix, block: int) -> np.ndarray:
     """(nodes,) int64: each node's aggregate (nodes of ``block`` rows each, neighbours where the
     matrix couples them), by the greedy passes of the module docstring, in node order."""
-    import scipy.sparse as sp
+    sp = _scipy_sparse()
 
     n = a.shape[0] // block
     # (copies: summing the duplicates rewrites the pointers in place)
@@ -181,7 +181,7 @@ def _aggregate(ptr, idx, n):
 def tentative(agg: np.ndarray, block: int, near_null: np.ndarray) -> tuple[sp.csr_matrix, np.ndarray]:
     """(P_t, the coarse near-null space): per aggregate, Q R = its rows of ``near_null``; Q its
     columns of P_t, R its rows of the coarse near-null space (the module docstring)."""
-    import scipy.sparse as sp
+    sp = _scipy_sparse()
 
     k = near_null.shape[1]
     count = int(agg.max()) + 1
